@@ -1,0 +1,347 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""``throwmap`` command line: grasp, throw, orbit, limit-set, basin, design, plot."""
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+import warnings
+
+import numpy as np
+
+from .dynamics import analyse, basin, default_grid, design_radii, limit_set, orbit
+from .errors import ThrowmapError
+from .scene import load_scene
+
+
+def _json_default(obj):
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (np.floating,)):
+        return float(obj)
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, tuple):
+        return list(obj)
+    raise TypeError(f'not JSON serialisable: {type(obj).__name__}')
+
+
+def _clean(value):
+    """JSON has no inf/nan: write them as null."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    return value
+
+
+def _dump(obj, out):
+    out.write(json.dumps(_clean(json.loads(json.dumps(obj, default=_json_default))),
+                         allow_nan=False) + '\n')
+
+
+def _table(rows, columns, out):
+    widths = [max(len(c), *(len(str(r.get(c, ''))) for r in rows)) for c in columns]
+    out.write('  '.join(c.rjust(w) for c, w in zip(columns, widths)) + '\n')
+    for r in rows:
+        out.write('  '.join(str(r.get(c, '')).rjust(w) for c, w in zip(columns, widths)) + '\n')
+
+
+def _fmt_cm(x):
+    return '-' if x is None or not math.isfinite(x) else f'{x * 100:.3f}'
+
+
+class Progress:
+    """Progress on stderr for long runs, at most twice a second."""
+
+    def __init__(self, label, quiet=False):
+        self.label = label
+        self.quiet = quiet
+        self.last = 0.0
+        self.start = time.monotonic()
+
+    def __call__(self, done, total):
+        now = time.monotonic()
+        if self.quiet or (now - self.last < 0.5 and done < total):
+            return
+        self.last = now
+        sys.stderr.write(f'{self.label}: {done}/{total} ({now - self.start:.1f} s)\n')
+        sys.stderr.flush()
+
+
+# --------------------------------------------------------------------------------- commands
+def cmd_grasp(scene, args, out):
+    rows, r_all, mu_all = scene.model.grasp_table()
+    if args.json:
+        _dump({'scene': scene.name, 'offset': scene.h, 'mu': scene.model.mu,
+               'edges': [{'edge': g.edge, 'stable': g.stable,
+                          'R_grasp': g.R_grasp if g.stable else None,
+                          'mu_min': g.mu_min if g.stable else None,
+                          'binding_bound': g.binding if g.stable else None,
+                          'bounds': list(g.bounds) if g.stable else None,
+                          'd': float(scene.part.d[g.edge]),
+                          'u_l': float(scene.part.u_l[g.edge]),
+                          'u_r': float(scene.part.u_r[g.edge])} for g in rows],
+               'R_grasp': r_all, 'mu_min': mu_all}, out)
+        return 0
+    out.write(f'{scene.name}: dynamic grasp (impulse cone, constraints (1)-(4)), h = '
+              f'{scene.h * 100:g} cm\n')
+    table = [{'edge': g.edge, 'stable': 'yes' if g.stable else 'no',
+              'd (cm)': f'{scene.part.d[g.edge] * 100:.3f}',
+              'R_grasp (cm)': _fmt_cm(g.R_grasp) if g.stable else '-',
+              'mu_min': f'{g.mu_min:.3f}' if g.stable else '-',
+              'binding': f'({g.binding})' if g.stable else '-'} for g in rows]
+    _table(table, ['edge', 'stable', 'd (cm)', 'R_grasp (cm)', 'mu_min', 'binding'], out)
+    out.write(f'all stable edges: R >= {r_all * 100:.3f} cm with mu >= {mu_all:.3f}\n')
+    return 0
+
+
+def _throw_row(model, edge, R):
+    res = model.throw(edge, R)
+    return {'edge': res.edge, 'R': res.R, 'kind': res.kind, 'flight_time': res.flight_time,
+            'net_rotation': res.net_rotation, 'impacts': len(res.impacts),
+            'first_contact_vertex': res.first_contact_vertex}
+
+
+def cmd_throw(scene, args, out):
+    model = scene.model
+    if args.edge is not None or args.R is not None:
+        if args.edge is None or args.R is None:
+            raise ThrowmapError('--edge and --R go together; give both, or neither to read '
+                                'states from stdin')
+        res = model.throw(args.edge, args.R)
+        if args.json:
+            _dump(res.as_dict(), out)
+        else:
+            out.write(f'({res.edge0}, {res.R0 * 100:.4f} cm) -> ({res.edge}, '
+                      f'{res.R * 100:.4f} cm): {res.kind}, flight {res.flight_time * 1000:.2f} '
+                      f'ms, net rotation {math.degrees(res.net_rotation):.2f} deg\n')
+            _table([{'impact': k, 'kind': i.kind, 'vertex': i.vertex,
+                     'edge landed': i.edge if i.edge >= 0 else '-',
+                     'x (cm)': f'{i.x * 100:.3f}', 'omega- (rad/s)': f'{i.omega_before:.3f}',
+                     'omega+ (rad/s)': f'{i.omega_after:.3f}',
+                     'E- (J/kg)': f'{i.energy_before:.5f}', 'E+ (J/kg)': f'{i.energy_after:.5f}'}
+                    for k, i in enumerate(res.impacts)],
+                   ['impact', 'kind', 'vertex', 'edge landed', 'x (cm)', 'omega- (rad/s)',
+                    'omega+ (rad/s)', 'E- (J/kg)', 'E+ (J/kg)'], out)
+        return 0
+    # Batch: one JSON object per line on stdin, one answer per line, in order.
+    status = 0
+    rows = []
+    for lineno, line in enumerate(sys.stdin, 1):
+        if not line.strip():
+            continue
+        try:
+            state = json.loads(line)
+            if not isinstance(state, dict) or 'edge' not in state or 'R' not in state:
+                raise ValueError('expected an object with "edge" and "R"')
+            unknown = set(state) - {'edge', 'R'}
+            if unknown:
+                raise ValueError(f'unknown keys {sorted(unknown)}; allowed: edge, R')
+            row = _throw_row(model, state['edge'], state['R'])
+        except ThrowmapError as exc:
+            row = {'error': str(exc)}
+            status = 1
+        except ValueError as exc:
+            row = {'error': f'line {lineno}: {exc}'}
+            status = 1
+        if args.json:
+            _dump(row, out)
+            out.flush()
+        else:
+            rows.append(row)
+    if not args.json:
+        _table([{k: (f'{v:.6g}' if isinstance(v, float) else v) for k, v in r.items()}
+                for r in rows], ['edge', 'R', 'kind', 'flight_time', 'net_rotation', 'error'],
+               out)
+    return status
+
+
+def _start(scene, args):
+    if (args.edge is None) != (args.R is None):
+        raise ThrowmapError('--edge and --R go together; give both, or neither to use the '
+                            "scene's start")
+    if args.edge is None:
+        return scene.default_start()
+    return args.edge, args.R
+
+
+def cmd_orbit(scene, args, out):
+    edge, R = _start(scene, args)
+    orb = orbit(scene.model, edge, R, args.throws)
+    if args.json:
+        _dump({'scene': scene.name, 'states': orb.rows()}, out)
+        return 0
+    _table([{'throw': r['throw'], 'edge': r['edge'], 'R (cm)': f'{r["R"] * 100:.3f}',
+             'kind': r['kind'] or 'start'} for r in orb.rows()],
+           ['throw', 'edge', 'R (cm)', 'kind'], out)
+    return 0
+
+
+def cmd_limit_set(scene, args, out):
+    edge, R = _start(scene, args)
+    ls = limit_set(scene.model, edge, R, args.throws)
+    d = ls.as_dict()
+    d.update({'scene': scene.name, 'start': {'edge': edge, 'R': R}, 'throws': args.throws})
+    if args.json:
+        _dump(d, out)
+        return 0
+    out.write(f'{scene.name}: limit set from ({edge}, {R * 100:.2f} cm), {args.throws} throws\n')
+    out.write(f'  edge pattern (flips): {" -> ".join(map(str, ls.pattern))} '
+              f'({"periodic" if ls.periodic else "not periodic"})\n')
+    cl = d['cycle_length']
+    out.write(f'  cycle length: {cl["min"]:.0f}..{cl["max"]:.0f} throws, mean {cl["mean"]:.2f}\n')
+    out.write(f'  transient: {ls.transient} throws\n')
+    _table([{'edge': e, 'R min (cm)': f'{lo * 100:.3f}', 'R max (cm)': f'{hi * 100:.3f}',
+             'jogs per visit': '{}..{}'.format(*ls.jogs.get(e, ('-', '-')))}
+            for e, (lo, hi) in sorted(ls.bands.items())],
+           ['edge', 'R min (cm)', 'R max (cm)', 'jogs per visit'], out)
+    return 0
+
+
+def cmd_basin(scene, args, out):
+    model = scene.model
+    start = scene.default_start()
+    ref = limit_set(model, start[0], start[1], 10_000)
+    e, r = default_grid(model, args.radii)
+    bas = basin(model, e, r, args.throws, reference=ref,
+                progress=Progress('basin', args.quiet))
+    if args.json:
+        _dump({'scene': scene.name, 'throws': args.throws, 'reference': list(ref.pattern),
+               'summary': bas.summary(),
+               'starts': [{'edge': int(a), 'R': float(b), 'limit': s, 'transient': int(t)}
+                          for a, b, s, t in zip(bas.start_edges, bas.start_radii,
+                                                bas.signatures, bas.transients)]}, out)
+        return 0
+    out.write(f'{scene.name}: {len(e)} starts x {args.throws} throws; reference limit set '
+              f'{"-".join(map(str, ref.pattern))}\n')
+    for sig, n in sorted(bas.summary().items()):
+        out.write(f'  {n:5d} starts -> {sig}\n')
+    t = bas.transients[bas.transients >= 0]
+    if t.size:
+        out.write(f'  transient: median {np.median(t):.0f}, 90th percentile '
+                  f'{np.percentile(t, 90):.0f}, max {t.max()} throws\n')
+    return 0
+
+
+def cmd_design(scene, args, out):
+    an = analyse(scene, progress=Progress('design', args.quiet))
+    if args.json:
+        d = an.as_dict()
+        d['scene'] = scene.name
+        _dump(d, out)
+        return 0
+    out.write(f'{scene.name}: design quantities (Proposition IV.4, section V.B)\n')
+    _table([{'edge': row['edge'], 'R_grasp (cm)': _fmt_cm(row['R_grasp']),
+             'R_flip (cm)': _fmt_cm(row['R_flip']), 'R_max (cm)': _fmt_cm(row['R_max'])}
+            for row in an.radii['edges']], ['edge', 'R_grasp (cm)', 'R_flip (cm)', 'R_max (cm)'],
+           out)
+    out.write(f'  invariant set Z found: {"yes" if an.radii["invariant"] else "no"}\n')
+    s = an.sensor
+    out.write(f'  goal edge {s.goal_edge}: a sensor beyond {s.guarantee_radius * 100:.2f} cm '
+              f'sees no other edge of the limit set; the goal edge reaches '
+              f'{s.reach_radius * 100:.2f} cm\n')
+    out.write(f'  sensor at {s.radius * 100:.2f} cm: fires on {s.detection_rate * 100:.1f} % of '
+              f'limit-set throws; trust it after {s.warmup_throws} warm-up throws\n')
+    return 0
+
+
+def cmd_plot(scene, args, out):
+    from .plots import plot_all
+    an = analyse(scene, grid_throws=args.throws + 1, progress=Progress('plot', args.quiet))
+    edge, R = an.start
+    orb = orbit(scene.model, edge, R, args.orbit_throws)
+    paths = plot_all(scene, args.out, orb, an.limit_set, an.basin, an.sensor)
+    if args.json:
+        _dump({'scene': scene.name, 'plots': paths}, out)
+    else:
+        for p in paths:
+            out.write(f'wrote {p}\n')
+    return 0
+
+
+COMMANDS = {'grasp': cmd_grasp, 'throw': cmd_throw, 'orbit': cmd_orbit,
+            'limit-set': cmd_limit_set, 'basin': cmd_basin, 'design': cmd_design,
+            'plot': cmd_plot}
+
+
+def build_parser():
+    parser = argparse.ArgumentParser(
+        prog='throwmap', description='Throw map of a dynamic parts feeder (Lynch, Northrop, '
+        'Pan). Lengths in metres, angles in radians, g < 0 as in the paper.')
+    sub = parser.add_subparsers(dest='command', required=True, metavar='COMMAND')
+
+    def add(name, help_text):
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        p.add_argument('scene', help='scene YAML file (e.g. scenes/triangle.yaml)')
+        p.add_argument('--json', action='store_true', help='print JSON instead of a table')
+        p.add_argument('--quiet', action='store_true', help='no progress on stderr')
+        return p
+
+    add('grasp', 'R_grasp and mu_min per edge (impulse cone)')
+    p = add('throw', 'one throw from --edge/--R, or JSON lines {"edge": 1, "R": 0.12} on stdin')
+    p.add_argument('--edge', type=int)
+    p.add_argument('--R', type=float, help='throwing radius, m')
+    for name, text in (('orbit', 'iterate f: the states after each throw'),
+                       ('limit-set', 'forward limit set: edge pattern, R bands, cycle lengths')):
+        p = add(name, text)
+        p.add_argument('--edge', type=int, help="start edge (default: the scene's start)")
+        p.add_argument('--R', type=float, help='start radius, m')
+        p.add_argument('--throws', type=int, default=100 if name == 'orbit' else 10_000)
+    p = add('basin', 'orbits from a grid of starts: which limit set each reaches')
+    p.add_argument('--radii', type=int, default=50, help='radii per stable edge (default 50)')
+    p.add_argument('--throws', type=int, default=100)
+    add('design', 'R_flip, R_max, the sensor radius and the warm-up throws')
+    p = add('plot', 'write PNGs like Figures 5, 6 and 7')
+    p.add_argument('--out', default='plots', help='output directory (default: plots)')
+    p.add_argument('--throws', type=int, default=100, help='throws per basin start')
+    p.add_argument('--orbit-throws', type=int, default=300, help='throws in the orbit plot')
+    return parser
+
+
+def _positive(args):
+    for name in ('throws', 'radii', 'orbit_throws'):
+        value = getattr(args, name, None)
+        if value is not None and value < 1:
+            raise ThrowmapError(f'--{name.replace("_", "-")} must be >= 1, got {value}')
+
+
+def main(argv=None, out=None):
+    out = out or sys.stdout
+    args = build_parser().parse_args(argv)
+    try:
+        _positive(args)
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore')   # the scene's warnings are printed below, once
+            scene = load_scene(args.scene)
+        for msg in scene.warnings:
+            sys.stderr.write(f'throwmap: warning: {args.scene}: {msg}\n')
+        return COMMANDS[args.command](scene, args, out)
+    except ThrowmapError as exc:
+        sys.stderr.write(f'throwmap: error: {exc}\n')
+        return 2
+    except BrokenPipeError:   # e.g. `throwmap orbit ... | head`
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,309 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The throw map f(i, R) -> (i', R') for one part, arm offset, release speed and gravity."""
+
+from dataclasses import dataclass, field
+import math
+import warnings
+
+import numpy as np
+
+from . import kernel
+from .errors import DomainError, InputError, NumericalError
+from .grasp import edge_grasp, grasp_table
+
+SETTLE_RULES = ('full', 'first_stable')
+
+
+@dataclass(frozen=True)
+class Accuracy:
+    """Accuracy knobs of the base model (docs/accuracy.md says what each one costs).
+
+    contact_time_tol : s. Conservative advancement stops once the next guaranteed-safe step is
+        shorter than this; the contact time is then exact to about this much.
+    flat_landing_tol : rad. An edge within this angle of the arm at impact lands flat (two-point
+        sticking impact: the part stops) instead of corner first.
+    max_flight_steps : cap on advancement steps per vertex (a NumericalError beyond it).
+    max_impacts : cap on impacts while settling (a NumericalError beyond it).
+    """
+
+    contact_time_tol: float = 1e-12
+    flat_landing_tol: float = 1e-9
+    max_flight_steps: int = 100_000
+    max_impacts: int = 100_000
+
+    def __post_init__(self):
+        for name in ('contact_time_tol', 'flat_landing_tol'):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise InputError(f'accuracy.{name}', f'must be a number > 0, got {value!r}',
+                                 f'use e.g. the default {getattr(Accuracy, name)}')
+        for name in ('max_flight_steps', 'max_impacts'):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 10):
+                raise InputError(f'accuracy.{name}', f'must be an integer >= 10, got {value!r}',
+                                 f'use e.g. the default {getattr(Accuracy, name)}')
+
+
+@dataclass(frozen=True)
+class Impact:
+    """One event of a catch. Energies are per unit mass (J/kg) over the arm surface."""
+
+    kind: str               # 'flight' | 'landing' | 'flat_landing' | 'tip_from_rest'
+    vertex: int             # the vertex that hits the arm (or the pivot for tip_from_rest)
+    edge: int               # the edge that lands (-1 for the first, corner-first impact)
+    x: float                # arm coordinate of the contact vertex, m
+    omega_before: float     # rad/s, CCW positive
+    omega_after: float
+    energy_before: float
+    energy_after: float
+
+
+_EVENT_NAMES = {kernel.EV_FLIGHT_IMPACT: 'flight', kernel.EV_LANDING: 'landing',
+                kernel.EV_FLAT_LANDING: 'flat_landing', kernel.EV_TIP_FROM_REST: 'tip_from_rest'}
+
+
+@dataclass(frozen=True)
+class ThrowResult:
+    """Outcome of one throw and catch from (edge0, R0)."""
+
+    edge0: int
+    R0: float
+    edge: int
+    R: float
+    kind: str               # 'jog' or 'flip'
+    flight_time: float      # s
+    net_rotation: float     # rad, flight plus rolling, CCW positive
+    first_contact_vertex: int
+    impacts: tuple
+    release_energy: float   # J/kg over the arm surface, right after release
+    trajectory: object = field(default=None, compare=False)
+
+    def as_dict(self):
+        return {'edge0': self.edge0, 'R0': self.R0, 'edge': self.edge, 'R': self.R,
+                'kind': self.kind, 'flight_time': self.flight_time,
+                'net_rotation': self.net_rotation,
+                'first_contact_vertex': self.first_contact_vertex,
+                'impacts': [vars(i) for i in self.impacts]}
+
+
+def classify(edge0, edge, net_rotation):
+    """Jog: same edge after zero net rotation; anything else is a flip (section III.C)."""
+    return 'jog' if edge == edge0 and abs(net_rotation) < math.pi else 'flip'
+
+
+class ThrowModel:
+    """f(i, R) for a part on an arm with offset h, release speed w and gravity g (< 0).
+
+    Units are SI: metres, seconds, radians. ``g`` follows the paper: the acceleration along y,
+    negative (e.g. -9.66 for the paper's inclined plate). ``mu``, when given, adds the friction
+    bounds (2) and (4) to the grasp domain; without it only the geometric bounds (1) and (3)
+    apply and the required mu_min is reported instead.
+    """
+
+    def __init__(self, part, offset, release_speed, gravity, mu=None, settle_rule='full',
+                 accuracy=None, field_prefix=''):
+        self.part = part
+        self.h = self._number(offset, f'{field_prefix}arm.offset', 'the arm offset h in metres')
+        self.w = self._number(release_speed, f'{field_prefix}throw.release_speed',
+                              'the release speed in rad/s')
+        self.g = self._number(gravity, f'{field_prefix}gravity', 'g in m/s^2')
+        if self.w <= 0:
+            raise InputError(f'{field_prefix}throw.release_speed',
+                             f'must be > 0 rad/s, got {release_speed!r}',
+                             'give the arm speed at release, e.g. 5.5851 (320 deg/s)')
+        if self.g >= 0:
+            raise InputError(f'{field_prefix}gravity', f'must be < 0 (the paper\'s sign: y up, '
+                             f'gravity down), got {gravity!r}', 'use e.g. -9.81 or -9.66')
+        if mu is not None:
+            mu = self._number(mu, f'{field_prefix}contact.mu', 'the friction coefficient')
+            if mu <= 0:
+                raise InputError(f'{field_prefix}contact.mu', f'must be > 0, got {mu!r}',
+                                 'give the part-arm Coulomb friction coefficient, or omit it')
+        self.mu = mu
+        if settle_rule not in SETTLE_RULES:
+            raise InputError(f'{field_prefix}settle_rule', f'unknown rule {settle_rule!r}',
+                             f'use one of {", ".join(SETTLE_RULES)}')
+        self.settle_rule = settle_rule
+        self.accuracy = accuracy or Accuracy()
+        if not -part.d_min < self.h < 0:
+            warnings.warn(f'{field_prefix}arm.offset h = {self.h:g} m is outside Proposition '
+                          f'IV.4\'s range 0 > h > -d_min = {-part.d_min:g} m: the limit-set '
+                          'guarantee does not apply (f is still computed)', stacklevel=2)
+        self.grasp = [edge_grasp(part, i, self.h, mu) for i in range(part.n)]
+        self.r_grasp = np.array([gr.R_grasp for gr in self.grasp])
+        self._args = (self.w, self.g, self.h, part.n, part.rho2, part.d, part.u_l, part.u_r,
+                      part.stable, part.edge_length, part.vertex_radius, part.alpha_cw_end,
+                      part.alpha_ccw_end, part.k_cw, part.k_ccw, part.U, part.V, self.r_grasp,
+                      settle_rule == 'first_stable', self.accuracy.contact_time_tol,
+                      self.accuracy.flat_landing_tol, self.accuracy.max_flight_steps,
+                      self.accuracy.max_impacts)
+        self._no_record = np.empty((0, kernel.REC_COLS))
+
+    @staticmethod
+    def _number(value, name, what):
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
+            raise InputError(name, f'must be a number, got {value!r}', f'give {what}')
+        value = float(value)
+        if not math.isfinite(value):
+            raise InputError(name, f'must be finite, got {value!r}', f'give {what}')
+        return value
+
+    # ----------------------------------------------------------------------------- grasp
+    def grasp_table(self):
+        return grasp_table(self.part, self.h, self.mu)
+
+    def domain_error(self, edge, R):
+        """The DomainError f would raise at (edge, R), or None inside the domain."""
+        part = self.part
+        if isinstance(edge, bool) or not isinstance(edge, (int, np.integer)):
+            return DomainError('edge_index', f'edge must be an integer, got {edge!r}')
+        if not 0 <= edge < part.n:
+            return DomainError('edge_index', f'edge {edge} does not exist: the part has edges '
+                               f'0..{part.n - 1}')
+        if not part.stable[edge]:
+            return DomainError('stable_edge', f'edge {edge} is not stable (u_l = '
+                               f'{part.u_l[edge]:.4g} m, u_r = {part.u_r[edge]:.4g} m; stable '
+                               f'needs u_l < 0 < u_r): f is defined only on stable edges '
+                               f'{part.stable_edges}')
+        if not (isinstance(R, (int, float, np.floating)) and math.isfinite(R)):
+            return DomainError('radius', f'R must be a finite number of metres, got {R!r}')
+        gr = self.grasp[edge]
+        if R < gr.R_grasp:
+            names = {1: 'line of force passes left of the left vertex',
+                     2: 'impulse outside the right edge of the friction cone',
+                     3: 'line of force passes right of the right vertex',
+                     4: 'impulse outside the left edge of the friction cone'}
+            return DomainError(f'grasp_bound_{gr.binding}',
+                               f'no dynamic grasp on edge {edge} at R = {R:.6g} m: bound '
+                               f'({gr.binding}) ({names[gr.binding]}) needs R >= '
+                               f'{gr.R_grasp:.6g} m (short by {gr.R_grasp - R:.3g} m); throw '
+                               f'from R >= R_grasp', margin=gr.R_grasp - R)
+        if not R + part.u_l[edge] > 0:
+            need = -part.u_l[edge]
+            return DomainError('toe_stub', f'at R = {R:.6g} m the left vertex of edge {edge} '
+                               f'sits at x = {R - need:.3g} m, not right of the pivot: it would '
+                               f'stub its toe (move down) at release; need R > {need:.6g} m',
+                               margin=need - R)
+        return None
+
+    # ----------------------------------------------------------------------------- the map
+    def f(self, edge, R):
+        """(edge', R', kind) of one throw; raises DomainError outside the domain."""
+        out = kernel.throw_one(edge, R, *self._args, self._no_record)
+        status = out[0]
+        if status != kernel.OK:
+            self._raise(status, edge, R)
+        return out[1], out[2], classify(edge, out[1], out[4])
+
+    def throw(self, edge, R, trajectory=False, samples=60):
+        """Full ThrowResult; with ``trajectory`` the sampled poses (throwmap.trajectory)."""
+        rec = np.empty((64, kernel.REC_COLS))
+        status, j, r1, t, rot, nimp, k0, nrec = kernel.throw_one(edge, R, *self._args, rec)
+        if status != kernel.OK:
+            self._raise(status, edge, R)
+        if nrec > rec.shape[0]:     # rare long rolls: run again with room for every event
+            rec = np.empty((nrec, kernel.REC_COLS))
+            kernel.throw_one(edge, R, *self._args, rec)
+        impacts = tuple(Impact(_EVENT_NAMES[int(row[0])], int(row[1]), int(row[2]),
+                               float(row[3]), float(row[4]), float(row[5]), float(row[6]),
+                               float(row[7])) for row in rec[:nrec])
+        hd = self.h + self.part.d[edge]
+        e0 = 0.5 * self.w ** 2 * (hd * hd + R * R + self.part.rho2) - self.g * self.part.d[edge]
+        traj = None
+        if trajectory:
+            from .trajectory import throw_trajectory
+            traj = throw_trajectory(self, edge, R, t, rec[:nrec], samples)
+        return ThrowResult(int(edge), float(R), int(j), float(r1), classify(edge, j, rot),
+                           float(t), float(rot), int(k0), impacts, float(e0), traj)
+
+    def f_batch(self, edges, radii):
+        """Vectorised f. Returns dict of arrays: edge, R, kind ('jog'/'flip'/''), status,
+        flight_time, net_rotation. States outside the domain get status != 0 and NaN R;
+        ``error_message(status, edge, R)`` gives the text."""
+        edges = np.ascontiguousarray(np.asarray(edges, dtype=np.int64).ravel())
+        radii = np.ascontiguousarray(np.asarray(radii, dtype=float).ravel())
+        if edges.shape != radii.shape:
+            raise InputError('states', f'{edges.size} edges but {radii.size} radii',
+                             'give one edge per radius')
+        m = edges.size
+        out_edge = np.empty(m, dtype=np.int64)
+        out_r = np.empty(m)
+        out_status = np.empty(m, dtype=np.int64)
+        out_t = np.empty(m)
+        out_rot = np.empty(m)
+        kernel.throw_many(edges, radii, *self._args, out_edge, out_r, out_status, out_t, out_rot)
+        jog = (out_edge == edges) & (np.abs(out_rot) < math.pi) & (out_status == kernel.OK)
+        kind = np.where(out_status != kernel.OK, '', np.where(jog, 'jog', 'flip'))
+        return {'edge': out_edge, 'R': out_r, 'status': out_status, 'kind': kind,
+                'flight_time': out_t, 'net_rotation': out_rot}
+
+    def orbit_arrays(self, edge, R, throws):
+        """Iterate f: arrays of edges, radii and net rotations (index 0 is the start)."""
+        self.check(edge, R)
+        out_edge = np.empty(throws + 1, dtype=np.int64)
+        out_r = np.empty(throws + 1)
+        out_rot = np.empty(throws + 1)
+        status, done = kernel.orbit(edge, float(R), throws, *self._args, out_edge, out_r,
+                                    out_rot)
+        if status != kernel.OK:
+            self._raise(status, int(out_edge[done]), float(out_r[done]), after=done)
+        return out_edge, out_r, out_rot
+
+    def orbits(self, edges, radii, throws):
+        """Many orbits (shape (starts, throws + 1)); status per start, throws completed."""
+        edges = np.ascontiguousarray(np.asarray(edges, dtype=np.int64).ravel())
+        radii = np.ascontiguousarray(np.asarray(radii, dtype=float).ravel())
+        m = edges.size
+        out_edge = np.full((m, throws + 1), -1, dtype=np.int64)
+        out_r = np.full((m, throws + 1), np.nan)
+        out_rot = np.zeros((m, throws + 1))
+        out_status = np.empty(m, dtype=np.int64)
+        out_done = np.empty(m, dtype=np.int64)
+        kernel.orbit_many(edges, radii, throws, *self._args, out_edge, out_r, out_rot,
+                          out_status, out_done)
+        return out_edge, out_r, out_rot, out_status, out_done
+
+    def check(self, edge, R):
+        err = self.domain_error(edge, R)
+        if err is not None:
+            raise err
+
+    def error_message(self, status, edge, R):
+        if status in (kernel.ERR_FLIGHT_CAP, kernel.ERR_SETTLE_CAP, kernel.ERR_NONFINITE):
+            return str(self._numerical(status, edge, R))
+        err = self.domain_error(int(edge), float(R))
+        return str(err) if err is not None else f'status {status}'
+
+    def _numerical(self, status, edge, R):
+        acc = self.accuracy
+        if status == kernel.ERR_FLIGHT_CAP:
+            return NumericalError(f'flight from ({edge}, {R:.6g} m): no contact found within '
+                                  f'accuracy.max_flight_steps = {acc.max_flight_steps} steps; '
+                                  'raise it or contact_time_tol')
+        if status == kernel.ERR_SETTLE_CAP:
+            return NumericalError(f'catch after ({edge}, {R:.6g} m) did not settle within '
+                                  f'accuracy.max_impacts = {acc.max_impacts} impacts; raise it')
+        return NumericalError(f'throw from ({edge}, {R:.6g} m) produced a non-finite state')
+
+    def _raise(self, status, edge, R, after=None):
+        if status in (kernel.ERR_FLIGHT_CAP, kernel.ERR_SETTLE_CAP, kernel.ERR_NONFINITE):
+            raise self._numerical(status, edge, R)
+        err = self.domain_error(edge, R)
+        if err is None:   # pragma: no cover - kernel and Python checks disagree
+            err = DomainError('unknown', f'kernel status {status} at ({edge}, {R})')
+        if after is not None:
+            err.args = (f'after {after} throws the orbit left the domain of f: {err}',)
+        raise err

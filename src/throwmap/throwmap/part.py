@@ -1,0 +1,211 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Planar part: convex hull, mass properties and the per-edge frame quantities of section II.
+
+Conventions (paper section II): vertices V^0..V^{n-1} counterclockwise; edge E^i runs from V^i to
+V^{i+1}. Resting on E^i, V^i is the left vertex and V^{i+1} the right one. The frame F^i sits at
+the centre of mass with u^i along E^i and v^i pointing away from the edge (up when resting).
+"""
+
+import math
+
+import numpy as np
+
+from .errors import InputError
+
+# Relative tolerance (of the part's size) under which a vertex counts as lying on a hull edge.
+_COLLINEAR_REL = 1e-12
+
+
+def _signed_area_and_centroid(pts):
+    x, y = pts[:, 0], pts[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    area = cross.sum() / 2.0
+    if area == 0.0:
+        return 0.0, np.zeros(2), 0.0
+    cx = ((x + xn) * cross).sum() / (6.0 * area)
+    cy = ((y + yn) * cross).sum() / (6.0 * area)
+    # Polar second moment about the origin, then shifted to the centroid.
+    jo = ((x * x + x * xn + xn * xn + y * y + y * yn + yn * yn) * cross).sum() / 12.0
+    j_cm = jo - area * (cx * cx + cy * cy)
+    return area, np.array([cx, cy]), j_cm
+
+
+def _hull_indices(pts):
+    """Indices of strict convex-hull vertices (collinear boundary points dropped), CCW."""
+    order = sorted(range(len(pts)), key=lambda k: (pts[k, 0], pts[k, 1]))
+    scale = float(np.ptp(pts, axis=0).max())
+    eps = _COLLINEAR_REL * scale * scale
+
+    def cross(o, a, b):
+        return ((pts[a, 0] - pts[o, 0]) * (pts[b, 1] - pts[o, 1])
+                - (pts[a, 1] - pts[o, 1]) * (pts[b, 0] - pts[o, 0]))
+
+    lower, upper = [], []
+    for k in order:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], k) <= eps:
+            lower.pop()
+        lower.append(k)
+    for k in reversed(order):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], k) <= eps:
+            upper.pop()
+        upper.append(k)
+    return lower[:-1] + upper[:-1]
+
+
+class Part:
+    """A rigid planar part treated as its convex hull (paper section II).
+
+    Parameters
+    ----------
+    vertices : (n, 2) array-like, metres, counterclockwise, in the paper's numbering.
+        A non-convex outline is allowed: mass properties come from the outline (uniform lamina),
+        contact geometry from its convex hull. Hull vertices keep the input's order; V^0 is the
+        first input vertex that lies on the hull.
+    cm : optional (2,) centre of mass in the same frame (default: centroid of the outline).
+    radius_of_gyration : optional rho > 0 about the centre of mass, metres (default: lamina).
+    field : name used in error messages (e.g. ``part``).
+    """
+
+    def __init__(self, vertices, cm=None, radius_of_gyration=None, field='part'):
+        self.field = field
+        pts = self._validate_points(vertices, field)
+        area, centroid, j_cm = _signed_area_and_centroid(pts)
+        scale = float(np.ptp(pts, axis=0).max())
+        if abs(area) <= 1e-12 * scale * scale:
+            raise InputError(f'{field}.vertices', 'the outline has zero area (all points on one '
+                             'line)', 'give at least 3 points that are not collinear')
+        if area < 0:
+            raise InputError(f'{field}.vertices', 'the outline is listed clockwise',
+                             'list the vertices counterclockwise (paper numbering), e.g. '
+                             f'reversed: {pts[::-1].tolist()}')
+        hull = _hull_indices(pts)
+        if len(hull) < 3:
+            raise InputError(f'{field}.vertices', 'the convex hull has fewer than 3 corners',
+                             'give at least 3 points that are not collinear')
+        # Keep the caller's numbering: hull vertices in input order, starting at the first one.
+        hull_set = set(hull)
+        self.outline = pts
+        self.hull_input_index = np.array([k for k in range(len(pts)) if k in hull_set])
+        self.vertices = pts[self.hull_input_index].copy()
+        if cm is None:
+            cm_arr = centroid
+        else:
+            cm_arr = np.asarray(cm, dtype=float)
+            if cm_arr.shape != (2,) or not np.all(np.isfinite(cm_arr)):
+                raise InputError(f'{field}.cm', f'must be two finite numbers, got {cm!r}',
+                                 'give the centre of mass as [x, y] in metres')
+        if radius_of_gyration is None:
+            rho2 = j_cm / area
+        else:
+            rho = radius_of_gyration
+            if (not isinstance(rho, (int, float)) or isinstance(rho, bool)
+                    or not math.isfinite(rho) or rho <= 0):
+                raise InputError(f'{field}.radius_of_gyration', f'must be > 0, got {rho!r}',
+                                 'give rho = sqrt(I_cm / m) in metres, or omit it for a '
+                                 'uniform lamina')
+            rho2 = float(rho) ** 2
+        self.cm = cm_arr
+        self.rho2 = float(rho2)
+        self.area = float(area)
+        self._compute_edge_frames(scale)
+
+    @staticmethod
+    def _validate_points(vertices, field):
+        try:
+            pts = np.asarray(vertices, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f'{field}.vertices', f'not a list of [x, y] pairs: {vertices!r}',
+                             'give vertices as [[x0, y0], [x1, y1], ...] in metres') from None
+        if pts.ndim != 2 or pts.shape[1] != 2:
+            raise InputError(f'{field}.vertices', f'expected [[x, y], ...], got shape {pts.shape}',
+                             'give vertices as [[x0, y0], [x1, y1], ...] in metres')
+        if not np.all(np.isfinite(pts)):
+            raise InputError(f'{field}.vertices', 'contains NaN or infinity',
+                             'give finite coordinates in metres')
+        distinct = {tuple(p) for p in pts.tolist()}
+        if len(distinct) < 3:
+            raise InputError(f'{field}.vertices', f'fewer than 3 distinct points ({len(distinct)})',
+                             'give at least 3 distinct points, counterclockwise')
+        if len(distinct) != len(pts):
+            raise InputError(f'{field}.vertices', 'repeats a point',
+                             'list each corner once (the outline closes by itself)')
+        return pts
+
+    def _compute_edge_frames(self, scale):
+        verts = self.vertices
+        n = len(verts)
+        rel = verts - self.cm
+        nxt = np.roll(verts, -1, axis=0)
+        edge_vec = nxt - verts
+        length = np.hypot(edge_vec[:, 0], edge_vec[:, 1])
+        e = edge_vec / length[:, None]
+        normal = np.stack([-e[:, 1], e[:, 0]], axis=1)        # points into the part
+        # u, v of every vertex k in every edge frame i: U[i, k], V[i, k].
+        self.U = e @ rel.T
+        self.V = normal @ rel.T
+        d = -(normal * rel).sum(axis=1)                         # CM height over E^i
+        if np.any(d <= _COLLINEAR_REL * scale):
+            worst = int(np.argmin(d))
+            raise InputError(f'{self.field}.cm', f'the centre of mass {self.cm.tolist()} is not '
+                             f'strictly inside the convex hull (distance {d[worst]:.3g} m to '
+                             f'edge E{worst})', 'move the centre of mass inside the part, or omit '
+                             'it to use the centroid')
+        self.n = n
+        self.d = d
+        self.edge_length = length
+        self.u_l = self.U[np.arange(n), np.arange(n)]
+        self.u_r = self.U[np.arange(n), (np.arange(n) + 1) % n]
+        self.v_l = -d
+        self.v_r = -d
+        self.stable = (self.u_l < 0) & (self.u_r > 0)
+        # Rotation that takes the body frame to the resting pose on E^i (edge along +x).
+        self.rest_angle = -np.arctan2(e[:, 1], e[:, 0])
+        self.vertex_radius = np.hypot(rel[:, 0], rel[:, 1])
+        self.r = float(self.vertex_radius.max())
+        if not self.stable.any():
+            raise InputError(f'{self.field}', 'no edge is stable',
+                             'a convex part always has a stable edge; check the centre of mass')
+        self.d_min = float(d[self.stable].min())
+        self.stable_edges = [int(i) for i in np.flatnonzero(self.stable)]
+        # Angle of (CM - V^p) from the arm when E^p (p is its left vertex) or E^{p-1}
+        # (p is its right vertex) lies flat: the two ends of the rolling range about V^p.
+        idx = np.arange(n)
+        self.alpha_cw_end = np.arctan2(d, -self.u_l)
+        self.alpha_ccw_end = np.arctan2(d[idx - 1], -self.u_r[idx - 1])
+        # Impulse ratio omega+/omega- for a sticking impact at the next vertex while rolling
+        # about V^p (from conservation of angular momentum about the new contact).
+        dots = rel @ rel.T
+        nxt_i, prv_i = (idx + 1) % n, (idx - 1) % n
+        self.k_cw = (self.rho2 + dots[idx, nxt_i]) / (self.rho2 + dots[nxt_i, nxt_i])
+        self.k_ccw = (self.rho2 + dots[idx, prv_i]) / (self.rho2 + dots[prv_i, prv_i])
+
+    def shadow(self, edge):
+        """(u_min, u_max): the part's extent along the arm, relative to R, resting on ``edge``."""
+        return float(self.U[edge].min()), float(self.U[edge].max())
+
+    def pose_vertices(self, edge, R, h):
+        """World coordinates (frame F) of the hull vertices when resting on ``edge`` at radius R."""
+        return np.stack([R + self.U[edge], h + self.d[edge] + self.V[edge]], axis=1)
+
+    def describe(self):
+        rows = []
+        for i in range(self.n):
+            rows.append({'edge': i, 'u_l': float(self.u_l[i]), 'v_l': float(self.v_l[i]),
+                         'u_r': float(self.u_r[i]), 'v_r': float(self.v_r[i]),
+                         'd': float(self.d[i]), 'length': float(self.edge_length[i]),
+                         'stable': bool(self.stable[i])})
+        return rows
