@@ -250,9 +250,10 @@ def cmd_design(scene, args, out):
         return 0
     out.write(f'{scene.name}: design quantities (Proposition IV.4, section V.B)\n')
     _table([{'edge': row['edge'], 'R_grasp (cm)': _fmt_cm(row['R_grasp']),
-             'R_flip (cm)': _fmt_cm(row['R_flip']), 'R_max (cm)': _fmt_cm(row['R_max'])}
-            for row in an.radii['edges']], ['edge', 'R_grasp (cm)', 'R_flip (cm)', 'R_max (cm)'],
-           out)
+             'R_min (cm)': _fmt_cm(row['R_min']), 'R_flip (cm)': _fmt_cm(row['R_flip']),
+             'R_max (cm)': _fmt_cm(row['R_max'])} for row in an.radii['edges']],
+           ['edge', 'R_grasp (cm)', 'R_min (cm)', 'R_flip (cm)', 'R_max (cm)'], out)
+    out.write('  (R_min: R_grasp or the toe-stub bound, whichever is larger)\n')
     out.write(f'  invariant set Z found: {"yes" if an.radii["invariant"] else "no"}\n')
     s = an.sensor
     out.write(f'  goal edge {s.goal_edge}: a sensor beyond {s.guarantee_radius * 100:.2f} cm '

@@ -255,7 +255,9 @@ def _first_flip(model, edge, lo, hi, samples):
 def design_radii(model, samples=400, max_rounds=50):
     """R_grasp, R_flip and R_max per stable edge (Proposition IV.4), computed numerically.
 
-    R_flip^i: smallest R >= R_grasp^i whose throw flips (scan, then bisection).
+    R_min^i: lower end of the domain of f on E^i: R_grasp^i, or the toe-stub bound -u_l^i
+    (the left vertex must start right of the pivot) when that is larger.
+    R_flip^i: smallest R >= R_min^i whose throw flips (scan, then bisection).
     R_max^i: smallest bounds such that Z = U_i [R_grasp^i, R_max^i] is mapped into itself,
     found by growing the bounds until f(Z) lies in Z (dense sampling of each interval).
     ``invariant`` says whether that succeeded and every flip lands inside some grasp range.
@@ -308,8 +310,8 @@ def design_radii(model, samples=400, max_rounds=50):
         invariant = False
     rows = []
     for i in stable:
-        rows.append({'edge': i, 'R_grasp': float(model.r_grasp[i]), 'R_flip': r_flip[i],
-                     'R_max': r_max[i]})
+        rows.append({'edge': i, 'R_grasp': float(model.r_grasp[i]), 'R_min': float(lo[i]),
+                     'R_flip': r_flip[i], 'R_max': r_max[i]})
     return {'edges': rows, 'invariant': invariant, 'escapes': escapes,
             'R_max_all': max(r_max.values())}
 

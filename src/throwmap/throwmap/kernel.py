@@ -121,6 +121,14 @@ def first_vertex_contact(R, w, g, d, u, v, t_limit, tol_t, max_steps):
 
 
 @njit
+def sticking_impact(rx, ry, xdot, ydot, omega, rho2):
+    """Post-impact (xdot, ydot, omega) when the vertex at r = (rx, ry) from the CM sticks
+    (eqs 7-9): the vertex stops and angular momentum about it is conserved."""
+    omega_new = (rho2 * omega - (rx * ydot - ry * xdot)) / (rho2 + rx * rx + ry * ry)
+    return ry * omega_new, -rx * omega_new, omega_new
+
+
+@njit
 def _settle_ke_barrier(rho2, l, d_edge, g_abs):
     return g_abs * (l - d_edge)
 
@@ -291,7 +299,7 @@ def throw_one(edge, R, w, g, h, n, rho2, d, u_l, u_r, stable, edge_len, vrad, ac
     y_rel = di + R * w * T + 0.5 * g * T * T           # CM height over the arm
     e_flight = 0.5 * (xdot * xdot + ydot * ydot + rho2 * w * w) + g_abs * y_rel
     lk = vrad[k_best]
-    omega = (rho2 * w - (rx * ydot - ry * xdot)) / (rho2 + lk * lk)
+    omega = sticking_impact(rx, ry, xdot, ydot, w, rho2)[2]
     alpha = math.atan2(-ry, -rx)
     a_lo = acw[k_best]
     a_hi = accw[k_best]
