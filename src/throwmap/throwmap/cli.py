@@ -233,7 +233,9 @@ def cmd_basin(scene, args, out):
     out.write(f'{scene.name}: {len(e)} starts x {args.throws} throws; reference limit set '
               f'{"-".join(map(str, ref.pattern))}\n')
     for sig, n in sorted(bas.summary().items()):
-        out.write(f'  {n:5d} starts -> {sig}\n')
+        note = ' (no flip in the last half: still jogging; try more --throws)' \
+            if sig == 'no-flip' else ''
+        out.write(f'  {n:5d} starts -> {sig}{note}\n')
     t = bas.transients[bas.transients >= 0]
     if t.size:
         out.write(f'  transient: median {np.median(t):.0f}, 90th percentile '

@@ -93,7 +93,7 @@ class LimitSet:
 
     @property
     def signature(self):
-        return '-'.join(str(e) for e in self.pattern) if self.pattern else 'fixed'
+        return '-'.join(str(e) for e in self.pattern) if self.pattern else 'no-flip'
 
     def as_dict(self):
         cl = np.array(self.cycle_lengths) if self.cycle_lengths else np.array([np.nan])
@@ -187,16 +187,19 @@ class Basin:
 
 
 def default_grid(model, radii_per_edge=50, r_max=None):
-    """Starts: every stable edge x radii from R_grasp to r_max (default: 2x the largest R_flip
-    bound found by a quick scan, which covers the invariant set of Prop. IV.4)."""
+    """Starts: every stable edge x ``radii_per_edge`` radii from just above R_min (R_grasp or the
+    toe-stub bound) to r_max (default: the largest R_max of design_radii, which bounds the
+    invariant set Z of Prop. IV.4)."""
     part = model.part
     if r_max is None:
         r_max = design_radii(model)['R_max_all']
     starts_e, starts_r = [], []
     for i in part.stable_edges:
-        lo = max(model.r_grasp[i], -part.u_l[i] * (1 + 1e-9) + 1e-12)
+        lo = max(model.r_grasp[i], -part.u_l[i])
         hi = max(r_max, lo * 1.5)
-        rs = np.linspace(lo, hi, radii_per_edge)
+        # Start 1 % of the range inside R_min: right at the toe-stub bound the hop, and with it
+        # the jog, shrinks to nothing (an unstable fixed point that takes ages to leave).
+        rs = np.linspace(lo + 0.01 * (hi - lo), hi, radii_per_edge)
         starts_e.extend([i] * radii_per_edge)
         starts_r.extend(rs.tolist())
     return np.array(starts_e), np.array(starts_r)
