@@ -12,16 +12,9 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-import math
-import pathlib
-
 import pytest
 from throwmap import load_scene, Part, ThrowModel
-
-REPO = pathlib.Path(__file__).resolve().parents[3]
-SCENES = REPO / 'scenes'
-TRIANGLE_VERTICES = [[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]]
-PAPER_W = math.radians(320.0)
+from throwmap_testing import PAPER_W, SCENES, TRIANGLE_VERTICES
 
 
 @pytest.fixture(scope='session')
@@ -32,28 +25,3 @@ def triangle_scene():
 @pytest.fixture(scope='session')
 def triangle():
     return ThrowModel(Part(TRIANGLE_VERTICES), -0.005, PAPER_W, -9.66)
-
-
-def random_convex_vertices(rng, n_max=8, scale=0.05):
-    """A random convex polygon (counterclockwise) of 3..n_max corners around the origin."""
-    import numpy as np
-    while True:
-        n = int(rng.integers(3, n_max + 1))
-        angles = np.sort(rng.uniform(0, 2 * np.pi, n))
-        radii = scale * rng.uniform(0.4, 1.0, n)
-        pts = np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1)
-        try:
-            part = Part(pts)
-        except ValueError:
-            continue
-        if part.n >= 3 and part.d_min > 0.02 * scale:
-            return part.vertices
-
-
-def random_state(model, rng, spread=3.0):
-    """A random (edge, R) inside the domain of f."""
-    part = model.part
-    edge = int(rng.choice(part.stable_edges))
-    lo = max(model.r_grasp[edge], -part.u_l[edge]) * 1.0001 + 1e-9
-    R = lo + rng.uniform(0, spread) * max(lo, part.r)
-    return edge, float(R)

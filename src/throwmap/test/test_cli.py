@@ -19,7 +19,7 @@ import json
 import subprocess
 import sys
 
-from conftest import SCENES
+from throwmap_testing import SCENES
 import pytest
 from throwmap.cli import main
 

@@ -16,7 +16,7 @@
 
 import math
 
-from conftest import TRIANGLE_VERTICES
+from throwmap_testing import TRIANGLE_VERTICES
 import pytest
 from throwmap import DomainError, InputError, Part, Scene, ThrowModel
 
@@ -114,7 +114,7 @@ def test_domain_errors_say_which_condition_and_by_how_much(triangle):
 
 
 def test_unstable_edge_is_outside_the_domain():
-    from conftest import SCENES
+    from throwmap_testing import SCENES
     from throwmap import load_scene
     bracket = load_scene(str(SCENES / 'bracket.yaml'))
     with pytest.raises(DomainError) as err:

@@ -16,7 +16,7 @@
 
 import math
 
-from conftest import PAPER_W, random_convex_vertices, random_state, TRIANGLE_VERTICES
+from throwmap_testing import PAPER_W, random_convex_vertices, random_state, TRIANGLE_VERTICES
 import numpy as np
 import pytest
 from throwmap import in_dynamic_grasp, Part, ThrowModel

@@ -46,7 +46,7 @@ def test_triangle_grasp_matches_paper(triangle):
 
 def test_bracket_placeholder_matches_printed_grasp_numbers():
     from throwmap import load_scene
-    from conftest import SCENES
+    from throwmap_testing import SCENES
     scene = load_scene(str(SCENES / 'bracket.yaml'))
     rows, r_grasp, mu_min = scene.model.grasp_table()
     assert [g.stable for g in rows] == [True, True, False, True, True]   # "edge 2 unstable"
@@ -56,7 +56,7 @@ def test_bracket_placeholder_matches_printed_grasp_numbers():
 
 def test_bracket_cycle_is_figure_8():
     from throwmap import load_scene
-    from conftest import SCENES
+    from throwmap_testing import SCENES
     scene = load_scene(str(SCENES / 'bracket.yaml'))
     ls = limit_set(scene.model, *scene.default_start(), throws=4000)
     # Figure 8: jogs on E4, flip to E3, jogs on E3, flip to E1, flip to E0, flip to E4.

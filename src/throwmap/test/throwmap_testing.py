@@ -1,0 +1,51 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Shared helpers of the throwmap tests (a module of its own: every package's tests have a
+conftest.py, so `from conftest import ...` would be ambiguous when all suites run together)."""
+
+import math
+import pathlib
+
+import numpy as np
+from throwmap import Part
+
+REPO = pathlib.Path(__file__).resolve().parents[3]
+SCENES = REPO / 'scenes'
+TRIANGLE_VERTICES = [[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]]
+PAPER_W = math.radians(320.0)
+
+
+def random_convex_vertices(rng, n_max=8, scale=0.05):
+    """A random convex polygon (counterclockwise) of 3..n_max corners around the origin."""
+    while True:
+        n = int(rng.integers(3, n_max + 1))
+        angles = np.sort(rng.uniform(0, 2 * np.pi, n))
+        radii = scale * rng.uniform(0.4, 1.0, n)
+        pts = np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=1)
+        try:
+            part = Part(pts)
+        except ValueError:
+            continue
+        if part.n >= 3 and part.d_min > 0.02 * scale:
+            return part.vertices
+
+
+def random_state(model, rng, spread=3.0):
+    """A random (edge, R) inside the domain of f."""
+    part = model.part
+    edge = int(rng.choice(part.stable_edges))
+    lo = max(model.r_grasp[edge], -part.u_l[edge]) * 1.0001 + 1e-9
+    R = lo + rng.uniform(0, spread) * max(lo, part.r)
+    return edge, float(R)
