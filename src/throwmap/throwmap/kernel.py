@@ -24,6 +24,8 @@ Method (docs/physics.md has the derivations):
   root can never jump over a root of F_k ("conservative advancement"). Steps shrink near a root
   (quadratic convergence) and near a graze; a graze that misses the arm by more than
   M * tol_t^2 / 2 (about 1e-23 m at the default) is stepped over, never taken for a contact.
+  The shortest step is tol_t or two units in the last place of t, whichever is longer, so the
+  advancement always moves (a tiny tol_t, or a flight of hours, cannot stall it).
 * Impacts are sticking (eqs 7-9): angular momentum about the contact vertex is conserved and
   the vertex stops.
 * Rolling about a vertex is a rigid pendulum, so which edge lands next and how fast follows from
@@ -72,6 +74,9 @@ EV_FLAT_LANDING = 2       # an edge lands flat from flight (two-point impact): t
 EV_TIP_FROM_REST = 3      # stopped on an unstable edge, the part tips over from rest
 
 HALF_PI = 0.5 * math.pi
+# a * TIME_RESOLUTION is at least two units in the last place of a (a > 0 normal), so
+# a + a * TIME_RESOLUTION > a always.
+TIME_RESOLUTION = 2.0 ** -51
 
 
 @njit
@@ -100,10 +105,14 @@ def first_vertex_contact(R, w, g, d, u, v, t_limit, tol_t, max_steps):
         if a >= t_limit:
             return math.inf
         fp = _flight_height_rate(a, R, w, g, u, v)
+        # Shortest step: tol_t, or the spacing of doubles at a when that is coarser (a + tau
+        # must move a, else the loop stalls until the cap; late in a long flight, or with a
+        # tiny tol_t, the safe step can be smaller than the time resolution).
+        t_min = max(tol_t, a * TIME_RESOLUTION)
         if f <= 0.0 and a > 0.0:
             if fp < 0.0:
                 return a
-            a += tol_t   # touching while not approaching: a graze, not an impact
+            a += t_min   # touching while not approaching: a graze, not an impact
             f = flight_height(a, R, w, g, d, u, v)
             continue
         sq = math.sqrt(fp * fp + 2.0 * m * f)
@@ -111,10 +120,10 @@ def first_vertex_contact(R, w, g, d, u, v, t_limit, tol_t, max_steps):
             tau = (fp + sq) / m
         else:
             tau = 2.0 * f / (sq - fp)
-        if tau <= tol_t:
+        if tau <= t_min:
             if fp < 0.0:
                 return a + tau
-            tau = tol_t  # at a tangency the vertex is not approaching: step past it
+            tau = t_min  # at a tangency the vertex is not approaching: step past it
         a += tau
         f = flight_height(a, R, w, g, d, u, v)
     return -1.0

@@ -32,7 +32,8 @@ class Accuracy:
     """Accuracy knobs of the base model (docs/accuracy.md says what each one costs).
 
     contact_time_tol : s. Conservative advancement stops once the next guaranteed-safe step is
-        shorter than this; the contact time is then exact to about this much.
+        shorter than this; the contact time is then exact to about this much (or to the
+        spacing of doubles at that time, about 4.4e-16 t, when that is coarser).
     flat_landing_tol : rad. An edge within this angle of the arm at impact lands flat (two-point
         sticking impact: the part stops) instead of corner first.
     max_flight_steps : cap on advancement steps per vertex (a NumericalError beyond it).
