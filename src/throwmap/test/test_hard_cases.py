@@ -83,3 +83,32 @@ def test_regression_flight_of_hours_does_not_stall():
         assert abs(heights[res.first_contact_vertex]) < 1e-8
         assert heights.min() > -1e-8
         assert math.isfinite(res.R) and model.part.stable[res.edge]
+
+
+def test_regression_short_hop_is_not_rounded_to_an_ulp_of_d():
+    """
+    Regression: a short hop's flight time was set by rounding, not by the physics.
+
+    F(t) was evaluated as d + R w t + ... + v cos(wt): with the hop height below an ulp of d
+    (3.5e-18 m for the bracket) the sum was rounding noise, and for the bracket's edge 1 d + v
+    itself is +3.5e-18 m, so the left vertex 'started above the arm' and fell 20 times longer
+    than it flies (w = 1e-8 rad/s). The resting edge's vertices now start at exactly 0 and F
+    is f0 plus terms that vanish at t = 0, so the time stays exact to an ulp.
+    """
+    from throwmap import load_scene
+    from throwmap_testing import SCENES
+    scene = load_scene(str(SCENES / 'bracket.yaml'))
+    part = scene.part
+    assert part.d[1] + part.V[1, 1] > 0      # the rounding that used to bite
+    for edge in part.stable_edges:
+        R = 1.2 * max(scene.model.r_grasp[edge], -part.u_l[edge])
+        for w in (1e-3, 1e-5, 1e-7, 1e-8, 1e-10):
+            model = ThrowModel(part, scene.h, w, scene.gravity)
+            res = model.throw(edge, R)
+            # The left vertex flies a parabola to first order: 2 w (R + u_l) / |g + w^2 d|.
+            hop = 2 * w * (R + part.u_l[edge]) / abs(scene.gravity + w * w * part.d[edge])
+            if hop > 10 * model.accuracy.contact_time_tol:
+                assert res.flight_time == pytest.approx(hop, rel=1e-9, abs=0), (edge, w)
+            else:   # below the documented resolution: exact to contact_time_tol
+                assert abs(res.flight_time - hop) <= model.accuracy.contact_time_tol
+            assert res.first_contact_vertex == edge

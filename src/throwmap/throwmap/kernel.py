@@ -80,10 +80,16 @@ TIME_RESOLUTION = 2.0 ** -51
 
 
 @njit
-def flight_height(t, R, w, g, d, u, v):
-    """F(t): height over the arm of a vertex at (u, v) in F^i during flight (eqs 5-6)."""
+def flight_height(t, R, w, g, f0, u, v):
+    """F(t): height over the arm of a vertex at (u, v) in F^i during flight (eqs 5-6).
+
+    f0 = F(0) = d + v, exactly 0 for the two vertices of the resting edge. Written as f0 plus
+    terms that vanish at t = 0 (v cos(wt) = v - 2 v sin^2(wt / 2)), so that a short hop keeps
+    full relative precision instead of being rounded to units of the last place of d.
+    """
     wt = w * t
-    return d + R * w * t + 0.5 * g * t * t + u * math.sin(wt) + v * math.cos(wt)
+    sh = math.sin(0.5 * wt)
+    return f0 + ((R * w * t + u * math.sin(wt)) + (0.5 * g * t * t - 2.0 * v * sh * sh))
 
 
 @njit
@@ -93,14 +99,15 @@ def _flight_height_rate(t, R, w, g, u, v):
 
 
 @njit
-def first_vertex_contact(R, w, g, d, u, v, t_limit, tol_t, max_steps):
-    """First t in (0, t_limit) with F(t) = 0 and F decreasing, or inf; negative on cap."""
+def first_vertex_contact(R, w, g, f0, u, v, t_limit, tol_t, max_steps):
+    """First t in (0, t_limit) with F(t) = 0 and F decreasing, or inf; negative on cap.
+
+    f0 = F(0) >= 0: 0 for the resting edge's vertices, d + v for the others.
+    """
     s = math.sqrt(u * u + v * v)
     m = abs(g) + w * w * s
     a = 0.0
-    f = d + v
-    if f < 0.0:
-        f = 0.0       # the resting edge's vertices start on the arm; rounding may say -1e-18
+    f = f0
     for _ in range(max_steps):
         if a >= t_limit:
             return math.inf
@@ -113,7 +120,7 @@ def first_vertex_contact(R, w, g, d, u, v, t_limit, tol_t, max_steps):
             if fp < 0.0:
                 return a
             a += t_min   # touching while not approaching: a graze, not an impact
-            f = flight_height(a, R, w, g, d, u, v)
+            f = flight_height(a, R, w, g, f0, u, v)
             continue
         sq = math.sqrt(fp * fp + 2.0 * m * f)
         if fp >= 0.0:
@@ -125,7 +132,7 @@ def first_vertex_contact(R, w, g, d, u, v, t_limit, tol_t, max_steps):
                 return a + tau
             tau = t_min  # at a tangency the vertex is not approaching: step past it
         a += tau
-        f = flight_height(a, R, w, g, d, u, v)
+        f = flight_height(a, R, w, g, f0, u, v)
     return -1.0
 
 
@@ -285,8 +292,12 @@ def throw_one(edge, R, w, g, h, n, rho2, d, u_l, u_r, stable, edge_len, vrad, ac
     di = d[edge]
     t_best = math.inf
     k_best = -1
+    right = (edge + 1) % n
     for k in range(n):
-        t = first_vertex_contact(R, w, g, di, U[edge, k], V[edge, k], t_best, tol_t, max_steps)
+        # The resting edge's vertices start exactly on the arm (d + v there is only rounding,
+        # up to an ulp of d, which would dominate a short hop); the others strictly above it.
+        f0 = 0.0 if (k == edge or k == right) else max(di + V[edge, k], 0.0)
+        t = first_vertex_contact(R, w, g, f0, U[edge, k], V[edge, k], t_best, tol_t, max_steps)
         if t < 0.0:
             return ERR_FLIGHT_CAP, -1, math.nan, math.nan, math.nan, 0, -1, 0
         if t < t_best:
