@@ -1,0 +1,197 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+bag_recorder: records the feeder graph's topics to a rosbag2 MCAP directory.
+
+    bag_recorder OUTPUT_DIR [--topics T ...] [--exclude REGEX] [--duration S]
+                 [--max-messages N] [--discovery-period S] [--ros-args ...]
+
+It subscribes to every topic it discovers (or those given, resolved in its namespace) with
+``raw=True``, so the bytes it stores are the CDR the publishers sent, with the QoS the
+publishers offer (a latched topic is subscribed transient local and recorded so). It stops on
+SIGINT or SIGTERM, after ``--duration`` seconds or ``--max-messages`` messages, always closing
+the bag (metadata.yaml written) and printing a summary.
+"""
+
+import argparse
+import importlib
+import re
+import signal
+import sys
+
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
+import rclpy.utilities
+
+from .bag import BagWriter, qos
+
+NODE_NAME = 'feeder_bag_recorder'
+ALWAYS_EXCLUDED = ('/rosout', '/parameter_events')
+
+
+def parse_args(argv):
+    p = argparse.ArgumentParser(
+        prog='bag_recorder', description='Record feeder topics to a rosbag2 MCAP directory '
+        '(give --ros-args -r __ns:=/feeder to resolve relative topic names there).')
+    p.add_argument('output', help='bag directory to create (must not exist)')
+    p.add_argument('--topics', nargs='+', default=None, metavar='TOPIC',
+                   help="topics to record (relative names resolve in the node's namespace); "
+                   'default: every topic discovered except /rosout and /parameter_events')
+    p.add_argument('--exclude', default=None, metavar='REGEX',
+                   help='do not record topics whose full name matches this regular expression')
+    p.add_argument('--duration', type=float, default=None, metavar='S',
+                   help='stop after S seconds')
+    p.add_argument('--max-messages', type=int, default=None, metavar='N',
+                   help='stop after N messages in total')
+    p.add_argument('--discovery-period', type=float, default=0.2, metavar='S',
+                   help='seconds between looks for new topics (default 0.2)')
+    args = p.parse_args(argv)
+    if args.duration is not None and args.duration <= 0:
+        p.error('--duration must be > 0')
+    if args.max_messages is not None and args.max_messages <= 0:
+        p.error('--max-messages must be > 0')
+    if args.discovery_period <= 0:
+        p.error('--discovery-period must be > 0')
+    return args
+
+
+def message_class(msgtype):
+    """Import the Python class of 'pkg/msg/Type'."""
+    pkg, kind, name = msgtype.split('/')
+    return getattr(importlib.import_module(f'{pkg}.{kind}'), name)
+
+
+def offered_qos(endpoint_qos):
+    """Convert an rclpy QoSProfile reported by graph discovery to a rosbags Qos."""
+    q = endpoint_qos
+    return qos(q.history, q.depth, q.reliability, q.durability, q.deadline.nanoseconds,
+               q.lifespan.nanoseconds, q.liveliness, q.liveliness_lease_duration.nanoseconds,
+               q.avoid_ros_namespace_conventions)
+
+
+def subscription_qos(publisher_qos):
+    """Pick a QoS that receives from every publisher (reliable, latched only if all are)."""
+    reliable = all(q.reliability == ReliabilityPolicy.RELIABLE for q in publisher_qos)
+    latched = all(q.durability == DurabilityPolicy.TRANSIENT_LOCAL for q in publisher_qos)
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
+                      reliability=(ReliabilityPolicy.RELIABLE if reliable
+                                   else ReliabilityPolicy.BEST_EFFORT),
+                      durability=(DurabilityPolicy.TRANSIENT_LOCAL if latched
+                                  else DurabilityPolicy.VOLATILE))
+
+
+class BagRecorder(Node):
+    """Subscribes (raw) to the selected topics as they appear and writes them to a bag."""
+
+    def __init__(self, writer, topics=None, exclude=None, discovery_period=0.2,
+                 max_messages=None, **kwargs):
+        super().__init__(NODE_NAME, **kwargs)
+        self.writer = writer
+        self.wanted = None if topics is None else {self.resolve_topic_name(t) for t in topics}
+        self.exclude = re.compile(exclude) if exclude else None
+        self.max_messages = max_messages
+        self.done = False
+        self._subs = {}
+        self._skipped = set()
+        self.create_timer(discovery_period, self._discover)
+        self._discover()
+
+    def _selected(self, topic):
+        if topic in ALWAYS_EXCLUDED and (self.wanted is None or topic not in self.wanted):
+            return False
+        if self.exclude is not None and self.exclude.search(topic):
+            return False
+        return self.wanted is None or topic in self.wanted
+
+    def _discover(self):
+        for topic, types in self.get_topic_names_and_types():
+            if topic in self._subs or topic in self._skipped or not self._selected(topic):
+                continue
+            pubs = self.get_publishers_info_by_topic(topic)
+            if not pubs:
+                continue        # subscribers only so far: no QoS to match yet
+            msgtype = types[0]
+            if len(types) > 1 or not self.writer.knows(msgtype):
+                self._skipped.add(topic)
+                self.get_logger().warning(f'not recording {topic}: type {types} unknown to the '
+                                          'Kilted type store or ambiguous')
+                continue
+            try:
+                cls = message_class(msgtype)
+            except (ImportError, AttributeError, ValueError) as exc:
+                self._skipped.add(topic)
+                self.get_logger().warning(f'not recording {topic}: {exc}')
+                continue
+            profiles = [p.qos_profile for p in pubs]
+            self.writer.add_topic(topic, msgtype, [offered_qos(q) for q in profiles])
+            self._subs[topic] = self.create_subscription(
+                cls, topic, lambda data, t=topic: self._record(t, data),
+                subscription_qos(profiles), raw=True)
+            self.get_logger().info(f'recording {topic} ({msgtype})')
+
+    def _record(self, topic, data):
+        if self.done:
+            return
+        self.writer.write(topic, self.get_clock().now().nanoseconds, data)
+        if self.max_messages is not None and self.writer.total >= self.max_messages:
+            self.done = True
+
+
+def main(argv=None):
+    argv = sys.argv if argv is None else argv
+    args = parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
+    try:
+        writer = BagWriter(args.output)
+    except (FileExistsError, OSError) as exc:
+        print(f'bag_recorder: {exc}', file=sys.stderr)
+        return 2
+    stop = {'signal': None}
+
+    def on_signal(signum, frame):
+        stop['signal'] = signal.Signals(signum).name
+
+    try:
+        with rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO):
+            signal.signal(signal.SIGINT, on_signal)
+            signal.signal(signal.SIGTERM, on_signal)
+            node = BagRecorder(writer, args.topics, args.exclude, args.discovery_period,
+                               args.max_messages)
+            executor = SingleThreadedExecutor()
+            executor.add_node(node)
+            start = node.get_clock().now()
+            reason = None
+            while reason is None:
+                executor.spin_once(timeout_sec=0.05)
+                elapsed = (node.get_clock().now() - start).nanoseconds * 1e-9
+                if stop['signal']:
+                    reason = stop['signal']
+                elif node.done:
+                    reason = f'{args.max_messages} messages'
+                elif args.duration is not None and elapsed >= args.duration:
+                    reason = f'{args.duration} s'
+            node.destroy_node()
+    finally:
+        writer.close()
+    counts = ', '.join(f'{t}: {n}' for t, n in sorted(writer.counts.items()))
+    print(f'bag_recorder: stopped ({reason}); {writer.total} messages on {len(writer.counts)} '
+          f'topics in {writer.path}' + (f' ({counts})' if counts else ''), flush=True)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,45 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Parameter table of monitor_node (ROS-free; the spec type is feeder_sim.params.ParamSpec)."""
+
+from feeder_sim.params import ParamSpec
+
+MONITOR_PARAMS = (
+    ParamSpec('scene', '', "scene YAML the feeder runs (the same file as the sim's); must load",
+              read_only=True, constraints='a file throwmap.load_scene accepts'),
+    ParamSpec('sensor_radius', 0.0, 'arm coordinate x of the proximity sensor, m; 0: the '
+              "analysis's choice (as the sim's default)", minimum=0.0, maximum=10.0),
+    ParamSpec('warmup_cycles', -1, 'completed throws after a (re)start before a detection '
+              'counts; -1: the proven warm-up of the analysis', minimum=-1, maximum=1_000_000,
+              constraints='-1 or >= the proven warm-up at sensor_radius'),
+    ParamSpec('settle_cycles', -1, 'throws after a (re)start before the detection-pattern '
+              'checks apply; -1: the longest transient of the analysis basin', minimum=-1,
+              maximum=1_000_000),
+    ParamSpec('silence_margin', 1.5, 'a stretch without detection may last this factor times '
+              'the longest one in the limit-set orbit before it is an anomaly', minimum=1.0,
+              maximum=100.0),
+    ParamSpec('early_margin_cycles', 2, 'a detection may come this many cycles sooner than '
+              'the shortest gap of the orbit', minimum=0, maximum=1000),
+    ParamSpec('run_margin_cycles', 0, 'a run of detections may be this much longer than the '
+              'longest run of the orbit', minimum=0, maximum=1000),
+    ParamSpec('orbit_throws', 20000, 'length of the limit-set orbit the pattern rules are read '
+              'from', minimum=1000, maximum=1_000_000, read_only=True),
+    ParamSpec('stamp_tolerance', 0.001, 'proximity and cycle_status of one cycle match when '
+              'their stamps differ by at most this, s', minimum=1e-6, maximum=0.002),
+    ParamSpec('pair_timeout', 0.5, 'a cycle_status waits this long for its proximity, s (then '
+              'its own sensor bit is used)', minimum=0.01, maximum=10.0),
+    ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages', minimum=0.1,
+              maximum=60.0, read_only=True),
+)

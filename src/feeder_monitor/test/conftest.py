@@ -1,0 +1,35 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+import pathlib
+import sys
+
+import pytest
+from throwmap import analyse, load_scene
+
+HERE = pathlib.Path(__file__).resolve()
+REPO = HERE.parents[3]
+SCENES = REPO / 'scenes'
+# Test the source trees (also when installed copies are on PYTHONPATH).
+sys.path[:0] = [str(HERE.parents[1]), str(HERE.parents[2] / 'feeder_sim')]
+
+
+@pytest.fixture(scope='session')
+def triangle():
+    return load_scene(str(SCENES / 'triangle.yaml'))
+
+
+@pytest.fixture(scope='session')
+def triangle_analysis(triangle):
+    return analyse(triangle)

@@ -1,0 +1,59 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+from feeder_monitor.bag_recorder import (message_class, offered_qos, parse_args,
+                                         subscription_qos)
+import pytest
+from rclpy.qos import (DurabilityPolicy, qos_profile_sensor_data, QoSProfile,
+                       ReliabilityPolicy)
+from rosbags.interfaces import QosDurability, QosReliability
+from std_msgs.msg import Bool
+
+
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+DEFAULT = QoSProfile(depth=10)
+
+
+def test_subscription_qos_matches_every_publisher():
+    q = subscription_qos([LATCHED])
+    assert q.durability == DurabilityPolicy.TRANSIENT_LOCAL
+    assert q.reliability == ReliabilityPolicy.RELIABLE
+    q = subscription_qos([LATCHED, DEFAULT])
+    assert q.durability == DurabilityPolicy.VOLATILE
+    q = subscription_qos([qos_profile_sensor_data, DEFAULT])
+    assert q.reliability == ReliabilityPolicy.BEST_EFFORT
+
+
+def test_offered_qos_keeps_durability_and_reliability():
+    q = offered_qos(LATCHED)
+    assert q.durability == QosDurability.TRANSIENT_LOCAL and q.depth == 1
+    assert q.reliability == QosReliability.RELIABLE
+    assert offered_qos(qos_profile_sensor_data).reliability == QosReliability.BEST_EFFORT
+
+
+def test_message_class():
+    assert message_class('std_msgs/msg/Bool') is Bool
+    with pytest.raises(ImportError):
+        message_class('no_such_pkg/msg/X')
+
+
+def test_cli():
+    a = parse_args(['out', '--topics', 'proximity', 'edge1_ready', '--duration', '3',
+                    '--max-messages', '10'])
+    assert (a.output, a.topics) == ('out', ['proximity', 'edge1_ready'])
+    assert (a.duration, a.max_messages) == (3.0, 10)
+    for bad in (['out', '--duration', '0'], ['out', '--max-messages', '-1'], []):
+        with pytest.raises(SystemExit):
+            parse_args(bad)

@@ -1,0 +1,259 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+import random
+
+from feeder_monitor.readiness import (ANOMALY, CyclePairer, detection_pattern, limit_set_orbit,
+                                      ReadinessMonitor, READY, Rules, rules_from_analysis,
+                                      TRACKING, WARMING_UP)
+from feeder_sim.analysis import scene_analysis
+import numpy as np
+import pytest
+from throwmap import sees
+
+
+def make_rules(**kw):
+    base = {'goal_edge': 1, 'sensor_radius': 0.27, 'guarantee_radius': 0.25, 'provable': True,
+            'warmup_cycles': 2, 'proven_warmup': 2, 'settle_cycles': 0,
+            'pattern': detection_pattern([1, 0, 0, 0, 1]), 'max_run': 1, 'min_gap': 3,
+            'max_silence': 6}
+    base.update(kw)
+    return Rules(**base)
+
+
+def feed(monitor, bits, seq0=1):
+    return [monitor.completed(seq0 + k, bool(b)) for k, b in enumerate(bits)]
+
+
+# ------------------------------------------------------------------ detection patterns
+def test_detection_pattern():
+    p = detection_pattern([0, 1, 1, 0, 0, 0, 1, 0, 1, 1, 1, 0])
+    assert (p.throws, p.detections, p.max_run, p.min_gap, p.max_gap) == (12, 6, 3, 1, 3)
+    assert detection_pattern([0, 0, 0]) == detection_pattern(np.zeros(3, bool))
+    assert detection_pattern([0, 0, 0]).max_run == 0
+    one = detection_pattern([0, 1, 0])
+    assert (one.max_run, one.min_gap, one.max_gap) == (1, None, None)
+    assert detection_pattern([1, 1]).rate == 1.0
+
+
+@pytest.fixture(scope='module')
+def orbit(triangle, triangle_analysis):
+    return limit_set_orbit(triangle, triangle_analysis, 20000)
+
+
+def test_rules_of_the_triangle(triangle, triangle_analysis, orbit):
+    r = rules_from_analysis(triangle, triangle_analysis, orbit)
+    bits = sees(triangle.part, orbit[0], orbit[1], r.sensor_radius, 0.0)
+    pat = detection_pattern(bits)
+    assert r.provable and r.goal_edge == 1
+    assert r.warmup_cycles == triangle_analysis.sensor.warmup_throws
+    assert (r.max_run, r.min_gap) == (pat.max_run, pat.min_gap - 2)
+    assert r.max_silence == int(np.ceil(1.5 * pat.max_gap))
+    assert 0.03 < pat.rate < 0.1
+    # Every detection in the orbit is on the goal edge (the point of the guarantee radius).
+    assert set(orbit[0][bits].tolist()) == {1}
+
+
+def test_rules_reject_a_warmup_below_the_proven_one(triangle, triangle_analysis, orbit):
+    near = scene_analysis(triangle, 0.24, triangle_analysis)     # inside the guarantee
+    r = rules_from_analysis(triangle, near, orbit)
+    assert not r.provable
+    with pytest.raises(ValueError, match='below the proven warm-up'):
+        rules_from_analysis(triangle, near, orbit, warmup_cycles=r.proven_warmup - 1)
+    assert rules_from_analysis(triangle, triangle_analysis, orbit, warmup_cycles=50)\
+        .warmup_cycles == 50
+
+
+# ------------------------------------------------------------------ state machine
+def test_ready_only_after_warmup():
+    m = ReadinessMonitor(make_rules(warmup_cycles=3, settle_cycles=100))
+    v = feed(m, [1, 0, 1, 0, 1])
+    assert [x.ready for x in v] == [False, False, True, False, True]
+    assert [x.state for x in v] == [WARMING_UP, WARMING_UP, READY, TRACKING, READY]
+    assert m.counts['ready'] == 2 and m.counts['detections'] == 3
+
+
+def test_not_provable_never_ready():
+    m = ReadinessMonitor(make_rules(provable=False, warmup_cycles=0, settle_cycles=100))
+    assert not any(v.ready for v in feed(m, [1, 0, 0, 1, 1, 0]))
+
+
+def test_too_many_consecutive_detections_is_an_anomaly_until_the_run_ends():
+    m = ReadinessMonitor(make_rules(warmup_cycles=1, min_gap=None))
+    v = feed(m, [0, 0, 1, 1, 1, 1, 0, 1, 0, 0, 0, 1])
+    assert v[2].ready and v[2].anomaly is None
+    assert 'consecutive detections' in v[3].anomaly and not v[3].ready
+    assert [x.state for x in v[3:6]] == [ANOMALY] * 3 and not any(x.ready for x in v[3:6])
+    # The run ended at cycle 7 (first throw of the new warm-up), so 8 may count again.
+    assert v[6].state == TRACKING and v[7].ready
+    assert m.counts['anomalies'] == 1
+
+
+def test_stuck_sensor_is_never_ready_after_the_anomaly():
+    m = ReadinessMonitor(make_rules(warmup_cycles=1, settle_cycles=5))
+    v = feed(m, [1] * 50)
+    first = next(k for k, x in enumerate(v) if x.anomaly)
+    assert first <= 7
+    assert not any(x.ready for x in v[first:])
+    assert v[-1].state == ANOMALY
+
+
+def test_early_detection_is_an_anomaly():
+    m = ReadinessMonitor(make_rules(warmup_cycles=1, min_gap=3))
+    v = feed(m, [1, 0, 0, 0, 1, 0, 1])
+    assert v[4].ready and v[4].anomaly is None
+    assert 'after only 1 cycles' in v[6].anomaly and not v[6].ready
+
+
+def test_silence_is_an_anomaly_and_the_next_detection_restarts_the_warmup():
+    m = ReadinessMonitor(make_rules(warmup_cycles=2, max_silence=6, min_gap=None))
+    v = feed(m, [0] * 6 + [0] + [0] * 3 + [1, 0, 1])
+    assert all(x.anomaly is None for x in v[:6])
+    assert 'no detection for 7 cycles' in v[6].anomaly
+    assert [x.state for x in v[6:10]] == [ANOMALY] * 4 and v[7].anomaly is None
+    assert not v[10].ready          # first detection after the silence: part may be new
+    assert v[12].ready              # two throws later the warm-up is over
+    assert m.counts['anomalies'] == 1
+
+
+def test_failed_cycles_and_seq_gaps_restart_the_warmup():
+    m = ReadinessMonitor(make_rules(warmup_cycles=2, settle_cycles=100))
+    feed(m, [0, 0, 0])
+    v = m.failed(4, 'timeout')
+    assert v.state == ANOMALY and 'cycle 4 failed: timeout' in v.anomaly and not v.ready
+    assert [x.ready for x in feed(m, [1, 1], seq0=5)] == [False, True]
+    v = m.completed(9, True)        # 7 and 8 are missing
+    assert 'seq jumped from 6 to 9 (2 missing)' in v.anomaly and not v.ready
+    assert m.completed(10, True).ready
+    v = m.completed(3, True)
+    assert 'went back' in v.anomaly and not v.ready
+    assert m.counts == {'cycles': 9, 'completed': 8, 'failed': 1, 'detections': 5, 'ready': 2,
+                        'anomalies': 3}
+
+
+def test_sensor_disagreement_is_an_anomaly():
+    m = ReadinessMonitor(make_rules(warmup_cycles=0, settle_cycles=100))
+    v = m.completed(1, True, note='sensor disagreement')
+    assert not v.ready and 'disagree' in v.anomaly
+
+
+def test_new_rules_restart_without_an_anomaly():
+    m = ReadinessMonitor(make_rules(warmup_cycles=1, min_gap=None))
+    feed(m, [0, 0])
+    m.set_rules(make_rules(warmup_cycles=3, min_gap=None))
+    v = feed(m, [1, 0, 1], seq0=3)
+    assert [x.ready for x in v] == [False, False, True]
+    assert m.counts['anomalies'] == 0
+
+
+def test_on_real_orbits_every_ready_is_on_the_goal_edge(triangle, triangle_analysis, orbit):
+    """From random starts: ready only on the goal edge; every later goal detection caught."""
+    model = triangle.model
+    rules = rules_from_analysis(triangle, triangle_analysis, orbit)
+    rng = random.Random(5)
+    ready_total = 0
+    for _ in range(12):
+        edge = rng.choice(triangle.part.stable_edges)
+        R = rng.uniform(model.r_grasp[edge] + 0.002, 0.25)
+        if model.domain_error(edge, R) is not None:
+            continue
+        m = ReadinessMonitor(rules)
+        edges, radii, _ = model.orbit_arrays(edge, R, 400)
+        for k in range(1, len(edges)):
+            bit = bool(sees(triangle.part, edges[k], radii[k], rules.sensor_radius, 0.0))
+            v = m.completed(k, bit)
+            if v.ready:
+                ready_total += 1
+                assert edges[k] == rules.goal_edge
+            if bit and k >= rules.warmup_cycles and edges[k] == rules.goal_edge and \
+                    m.counts['anomalies'] == 0:
+                assert v.ready
+    assert ready_total > 100
+
+
+def test_scene_start_orbit_has_no_anomaly(triangle, triangle_analysis, orbit):
+    rules = rules_from_analysis(triangle, triangle_analysis, orbit)
+    m = ReadinessMonitor(rules)
+    edges, radii, _ = triangle.model.orbit_arrays(*triangle.default_start(), 3000)
+    bits = sees(triangle.part, edges[1:], radii[1:], rules.sensor_radius, 0.0)
+    verdicts = feed(m, bits)
+    assert m.counts['anomalies'] == 0
+    assert sum(v.ready for v in verdicts) == int(bits[rules.warmup_cycles - 1:].sum())
+
+
+def test_a_misplaced_sensor_is_caught(triangle, triangle_analysis, orbit):
+    """The monitor assumes the designed radius; the real sensor sits inside the guarantee."""
+    rules = rules_from_analysis(triangle, triangle_analysis, orbit)
+    m = ReadinessMonitor(rules)
+    edges, radii, _ = triangle.model.orbit_arrays(*triangle.default_start(), 400)
+    bits = sees(triangle.part, edges[1:], radii[1:], 0.21, 0.0)
+    verdicts = feed(m, bits)
+    assert m.counts['anomalies'] > 0
+    assert any(v.state == ANOMALY for v in verdicts)
+
+
+# ------------------------------------------------------------------ pairing
+def test_pairs_by_stamp_in_either_order():
+    p = CyclePairer(tolerance=1e-3, timeout=0.5)
+    assert p.add_proximity(10.0, True, now=0.0) == []
+    (c,) = p.add_status(1, True, True, 10.0, 'completed', now=0.001)
+    assert (c.seq, c.completed, c.detected, c.note) == (1, True, True, '')
+    assert p.add_status(2, True, False, 10.5, 'completed', now=0.5) == []
+    (c,) = p.add_proximity(10.5004, False, now=0.501)
+    assert (c.seq, c.detected) == (2, False)
+    assert p.pending == (0, 0)
+
+
+def test_failed_status_needs_no_proximity_and_keeps_order():
+    p = CyclePairer()
+    assert p.add_status(1, True, True, 1.0, 'completed', now=0.0) == []
+    assert p.add_status(2, False, None, None, 'timeout', now=0.01) == []   # waits behind 1
+    out = p.add_proximity(1.0, True, now=0.02)
+    assert [(c.seq, c.completed) for c in out] == [(1, True), (2, False)]
+    assert out[1].reason == 'timeout'
+
+
+def test_lost_proximity_uses_the_status_bit():
+    p = CyclePairer(timeout=0.5)
+    p.add_status(1, True, True, 1.0, 'completed', now=0.0)
+    out = p.add_proximity(2.0, False, now=0.1)         # proximity of seq 1 never came
+    assert [(c.seq, c.detected, c.note) for c in out] == [(1, True, 'proximity lost')]
+    p.add_status(2, True, False, 2.0, 'completed', now=0.11)
+    p.add_status(3, True, True, 3.0, 'completed', now=0.2)
+    assert p.expire(now=0.6) == []
+    (c,) = p.expire(now=0.71)
+    assert (c.seq, c.detected, c.note) == (3, True, 'proximity lost')
+    assert p.counts['proximity_lost'] == 2
+
+
+def test_disagreement_and_orphans():
+    p = CyclePairer()
+    p.add_proximity(0.5, True, now=0.0)                 # before the monitor saw any status
+    assert p.add_status(1, True, False, 1.0, 'completed', now=0.0) == []
+    (c,) = p.add_proximity(1.0, True, now=0.01)
+    assert c.note == 'sensor disagreement' and c.detected is True
+    assert p.counts['orphans'] == 1 and p.counts['disagreements'] == 1
+    p.add_proximity(5.0, False, now=1.0)
+    assert p.expire(now=1.2) == [] and p.pending == (0, 1)
+    p.expire(now=1.6)
+    assert p.pending == (0, 0) and p.counts['orphans'] == 2
+
+
+def test_statuses_without_stamp_pair_in_order():
+    p = CyclePairer()
+    p.add_proximity(7.0, False, now=0.0)
+    p.add_proximity(8.0, True, now=0.0)
+    out = p.add_status(1, True, None, None, 'completed', now=0.0)
+    out += p.add_status(2, True, None, None, 'completed', now=0.0)
+    assert [(c.seq, c.detected) for c in out] == [(1, False), (2, True)]

@@ -1,0 +1,446 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+sim_node: predicted part states; with ``hardware_mode:=true`` it stands in for the driver.
+
+ROS glue only: the throw map is throwmap's, the state is feeder_sim.predictor's, the marker
+geometry feeder_sim.markers'. Interfaces: docs/interfaces.md; parameters: docs/nodes.md.
+"""
+
+import sys
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import PoseStamped
+import rclpy
+from rclpy.exceptions import InvalidParameterValueException
+from rclpy.executors import ExternalShutdownException
+from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
+from rclpy.time import Time
+from sensor_msgs.msg import JointState, Range
+from std_msgs.msg import Float64, Float64MultiArray, Int32, MultiArrayDimension, String
+from std_srvs.srv import SetBool, Trigger
+from throwmap import analyse, ThrowmapError
+from visualization_msgs.msg import MarkerArray
+
+from . import analysis as scene_analysis_mod
+from .markers import feeder_markers
+from .params import check_scene, check_start, SIM_PARAMS
+from .predictor import Predictor, yaw_quaternion
+from .ros_glue import (CYCLE_STATUS_QOS, declare, DEFAULT_DEPTH, diagnostic_array,
+                       diagnostic_status, DIAGNOSTICS_QOS, LATCHED_QOS, marker_array,
+                       ParameterGate, stamp_seconds)
+
+FRAME = 'feeder_base'
+SENSOR_FRAME = 'feeder_sensor'
+JOINT = 'feeder_arm_joint'
+HARDWARE_ID = 'sim'
+
+
+class SimNode(LifecycleNode):
+    """Lifecycle node: predicts the part's state; optionally offers the driver's interface."""
+
+    def __init__(self, **kwargs):
+        super().__init__('feeder_sim', **kwargs)
+        self._specs = {s.name: s for s in SIM_PARAMS}
+        self._scenes = {}
+        self._scene = None
+        self._active = False
+        self._lifecycle = 'unconfigured'
+        self._base_analysis = None
+        self._analysis = None
+        self._predictor = None
+        self._pubs = {}
+        self._sub = None
+        self._cycle_timer = None
+        self._last_throw = None
+        self._seq = 0
+        self._counts = {'completed': 0, 'failed': 0, 'missed': 0, 'agree': 0, 'disagree': 0,
+                        'bad_status': 0}
+        self._rate_mark = (0, self.get_clock().now())
+        self._last_followed_seq = None
+        ParameterGate(self, self._validate, self._apply)
+        autostart = declare(self, self._specs['autostart'])
+        self._hardware = declare(self, self._specs['hardware_mode'])
+        self._scene = self._scenes[declare(self, self._specs['scene'])]
+        edge0, r0 = self._scene.default_start()
+        declare(self, self._specs['start_edge'], edge0)
+        declare(self, self._specs['start_radius'], r0)
+        declare(self, self._specs['sensor_radius'])
+        declare(self, self._specs['cycle_period'])
+        period = declare(self, self._specs['diagnostics_period'])
+
+        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', DIAGNOSTICS_QOS)
+        self._diag_timer = self.create_timer(period, self._publish_diagnostics)
+        if self._hardware:
+            self.create_service(Trigger, '~/trigger_cycle', self._on_trigger)
+            self.create_service(SetBool, '~/enable', self._on_enable)
+        if autostart:
+            if self.trigger_configure() == TransitionCallbackReturn.SUCCESS:
+                self.trigger_activate()
+
+    # ------------------------------------------------------------------ parameters
+    def _load_scene(self, path):
+        if path not in self._scenes:
+            self._scenes[path] = scene_analysis_mod.load(path)
+        return self._scenes[path]
+
+    def _value(self, changes, name):
+        if name in changes:
+            return changes[name]
+        return self.get_parameter(name).value if self.has_parameter(name) else None
+
+    def _validate(self, changes):
+        """On-set: reasons for rejecting ``changes``; never changes the node's state."""
+        for name, value in changes.items():
+            spec = self._specs.get(name)
+            if spec is None:
+                continue
+            if not isinstance(value, (bool, str)):
+                reason = spec.check_range(value)
+                if reason:
+                    return reason
+            if name == 'scene':
+                reason = check_scene(value, self._load_scene)
+                if reason:
+                    return reason
+        if ('start_edge' in changes or 'start_radius' in changes) and self._scene is not None:
+            edge = self._value(changes, 'start_edge')
+            R = self._value(changes, 'start_radius')
+            if edge is not None and R is not None:
+                return check_start(self._scene.model, edge, R)
+        return None
+
+    def _apply(self, changes):
+        """Post-set: apply accepted changes to a configured node."""
+        if self._predictor is None:
+            return
+        if 'start_edge' in changes or 'start_radius' in changes:
+            edge = self.get_parameter('start_edge').value
+            R = self.get_parameter('start_radius').value
+            self._predictor.reset(edge, R)
+            self._last_throw = None
+            self.get_logger().info(f'prediction restarted at edge {edge}, R {R:.4f} m')
+            self._publish_markers()
+        if 'sensor_radius' in changes:
+            self._analysis = scene_analysis_mod.scene_analysis(
+                self._scene, changes['sensor_radius'], self._base_analysis)
+            self._predictor.sensor_radius = self._analysis.sensor.radius
+            self.get_logger().info(f'sensor at {self._analysis.sensor.radius:.4f} m')
+            self._publish_latched()
+        if 'cycle_period' in changes and self._cycle_timer is not None:
+            self._stop_cycling()
+            self._start_cycling()
+
+    def _param(self, name):
+        return self.get_parameter(name).value
+
+    # ------------------------------------------------------------------ lifecycle
+    def on_configure(self, state):
+        try:
+            self._base_analysis = analyse(self._scene)
+            self._analysis = scene_analysis_mod.scene_analysis(
+                self._scene, self._param('sensor_radius'), self._base_analysis)
+            self._predictor = Predictor(self._scene, self._param('start_edge'),
+                                        self._param('start_radius'),
+                                        self._analysis.sensor.radius,
+                                        self._analysis.sensor.footprint)
+        except ThrowmapError as exc:
+            self.get_logger().error(f'configure failed: {exc}')
+            return TransitionCallbackReturn.FAILURE
+        pub = self.create_lifecycle_publisher
+        self._pubs = {
+            'pose': pub(PoseStamped, 'predicted/part_pose', DEFAULT_DEPTH),
+            'edge': pub(Int32, 'predicted/edge', DEFAULT_DEPTH),
+            'kind': pub(String, 'predicted/throw_kind', DEFAULT_DEPTH),
+            'radius': pub(Float64, 'predicted/radius', DEFAULT_DEPTH),
+            'limit_set': pub(Float64MultiArray, 'predicted/limit_set', LATCHED_QOS),
+            'analysis': pub(String, 'predicted/analysis', LATCHED_QOS),
+            'markers': pub(MarkerArray, 'markers', LATCHED_QOS),
+        }
+        if self._hardware:
+            self._pubs['proximity'] = pub(Range, 'proximity', DEFAULT_DEPTH)
+            self._pubs['cycle_status'] = pub(DiagnosticStatus, 'cycle_status', CYCLE_STATUS_QOS)
+            self._pubs['joint_states'] = pub(JointState, 'joint_states', DEFAULT_DEPTH)
+        else:
+            self._sub = self.create_subscription(DiagnosticStatus, 'cycle_status',
+                                                 self._on_cycle_status, CYCLE_STATUS_QOS)
+        sensor = self._analysis.sensor
+        self.get_logger().info(
+            f'{self._scene.name}: limit set {self._analysis.limit_set.signature}, goal edge '
+            f'{sensor.goal_edge}, sensor at {sensor.radius:.4f} m (guarantee '
+            f'{sensor.guarantee_radius:.4f} m), start {self._predictor.state}')
+        self._lifecycle = 'inactive'
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_activate(self, state):
+        result = super().on_activate(state)
+        self._active = True
+        self._lifecycle = 'active'
+        self._publish_latched()
+        return result
+
+    def on_deactivate(self, state):
+        self._stop_cycling()
+        self._active = False
+        self._lifecycle = 'inactive'
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state):
+        self._release()
+        self._lifecycle = 'unconfigured'
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_shutdown(self, state):
+        self._stop_cycling()
+        self._active = False
+        self._release()
+        self._lifecycle = 'finalized'
+        return TransitionCallbackReturn.SUCCESS
+
+    def _release(self):
+        for p in self._pubs.values():
+            self.destroy_lifecycle_publisher(p)
+        self._pubs = {}
+        if self._sub is not None:
+            self.destroy_subscription(self._sub)
+            self._sub = None
+        self._predictor = None
+        self._analysis = None
+
+    # ------------------------------------------------------------------ hardware mode
+    def _on_trigger(self, request, response):
+        if not self._active:
+            response.success = False
+            response.message = f'refused: node is {self._lifecycle}, not active'
+        elif self._cycle_timer is not None:
+            response.success = False
+            response.message = 'refused: enabled (cycling continuously); call ~/enable false first'
+        else:
+            seq, error = self._fire()
+            response.success = True
+            response.message = f'fired cycle seq={seq}' + (f' (failed: {error})' if error else '')
+        return response
+
+    def _on_enable(self, request, response):
+        if request.data:
+            if not self._active:
+                response.success = False
+                response.message = f'refused: node is {self._lifecycle}, not active'
+                return response
+            if self._cycle_timer is None:
+                self._start_cycling()
+            response.success = True
+            response.message = f'enabled: one cycle every {self._param("cycle_period")} s'
+        else:
+            self._stop_cycling()
+            response.success = True
+            response.message = f'disabled after seq={self._seq}'
+        return response
+
+    def _start_cycling(self):
+        self._cycle_timer = self.create_timer(self._param('cycle_period'), self._fire)
+
+    def _stop_cycling(self):
+        if self._cycle_timer is not None:
+            self.destroy_timer(self._cycle_timer)
+            self._cycle_timer = None
+
+    def _fire(self):
+        """One cycle: release, throw (prediction), catch, sensor sample. Returns (seq, error)."""
+        self._seq += 1
+        stamp = self.get_clock().now().to_msg()
+        self._publish_joint(stamp, self._scene.release_speed)
+        try:
+            throw = self._predictor.step()
+        except ThrowmapError as exc:
+            self._counts['failed'] += 1
+            self._publish_joint(stamp, 0.0)
+            self._pubs['cycle_status'].publish(self._cycle_status(stamp, False, str(exc), 'none'))
+            self.get_logger().error(f'cycle {self._seq} failed: {exc}',
+                                    throttle_duration_sec=5.0)
+            return self._seq, str(exc)
+        self._counts['completed'] += 1
+        self._publish_joint(stamp, 0.0)
+        rng = Range()
+        rng.header.stamp = stamp
+        rng.header.frame_id = SENSOR_FRAME
+        rng.radiation_type = Range.INFRARED
+        rng.field_of_view = 0.0
+        rng.min_range = rng.max_range = float(self._analysis.sensor.radius)
+        rng.range = float('-inf') if throw.detected else float('inf')
+        self._pubs['proximity'].publish(rng)
+        self._pubs['cycle_status'].publish(
+            self._cycle_status(stamp, True, 'completed', '1' if throw.detected else '0'))
+        self._publish_prediction(stamp, throw)
+        return self._seq, None
+
+    def _cycle_status(self, stamp, ok, message, sensor):
+        return DiagnosticStatus(
+            level=DiagnosticStatus.OK if ok else DiagnosticStatus.ERROR, name='cycle',
+            message=message, hardware_id=HARDWARE_ID,
+            values=[KeyValue(key='seq', value=str(self._seq)),
+                    KeyValue(key='sensor', value=sensor),
+                    KeyValue(key='stamp', value=f'{stamp_seconds(stamp):.9f}')])
+
+    def _publish_joint(self, stamp, velocity):
+        js = JointState()
+        js.header.stamp = stamp
+        js.name = [JOINT]
+        js.position = [0.0]
+        js.velocity = [float(velocity)]
+        js.effort = []
+        self._pubs['joint_states'].publish(js)
+
+    # ------------------------------------------------------------------ predictor mode
+    def _on_cycle_status(self, msg):
+        if not self._active:
+            return
+        values = {kv.key: kv.value for kv in msg.values}
+        try:
+            seq = int(values['seq'])
+        except (KeyError, ValueError):
+            self._counts['bad_status'] += 1
+            self.get_logger().warning(f'cycle_status without a valid seq: {values}',
+                                      throttle_duration_sec=5.0)
+            return
+        last = self._last_followed_seq
+        self._last_followed_seq = seq
+        self._seq = seq
+        if msg.level != DiagnosticStatus.OK:
+            self._counts['failed'] += 1
+            self.get_logger().warning(f'cycle {seq} failed ({msg.message}): prediction kept; '
+                                      'the part may have moved', throttle_duration_sec=5.0)
+            return
+        missed = seq - last - 1 if last is not None and seq > last + 1 else 0
+        self._counts['missed'] += missed
+        try:
+            for _ in range(missed + 1):
+                throw = self._predictor.step()
+        except ThrowmapError as exc:
+            self.get_logger().error(f'prediction stopped at cycle {seq}: {exc}',
+                                    throttle_duration_sec=5.0)
+            return
+        self._counts['completed'] += 1
+        sensor = values.get('sensor')
+        if sensor in ('0', '1'):
+            self._counts['agree' if (sensor == '1') == throw.detected else 'disagree'] += 1
+        try:
+            sec = float(values['stamp'])
+            stamp = Time(nanoseconds=int(round(sec * 1e9))).to_msg()
+        except (KeyError, ValueError):
+            stamp = self.get_clock().now().to_msg()
+        self._publish_prediction(stamp, throw)
+
+    # ------------------------------------------------------------------ outputs
+    def _publish_prediction(self, stamp, throw):
+        self._last_throw = throw
+        x, y, yaw = self._predictor.pose()
+        pose = PoseStamped()
+        pose.header.stamp = stamp
+        pose.header.frame_id = FRAME
+        pose.pose.position.x, pose.pose.position.y = x, y
+        q = pose.pose.orientation
+        q.x, q.y, q.z, q.w = yaw_quaternion(yaw)
+        self._pubs['pose'].publish(pose)
+        self._pubs['edge'].publish(Int32(data=throw.edge))
+        self._pubs['kind'].publish(String(data=throw.kind))
+        self._pubs['radius'].publish(Float64(data=throw.R))
+        self._publish_markers(stamp)
+
+    def _publish_markers(self, stamp=None):
+        if not self._active:
+            return
+        stamp = stamp or self.get_clock().now().to_msg()
+        edge, R = self._predictor.state
+        detected = self._predictor.sees(edge, R)
+        specs = feeder_markers(self._scene, self._analysis, self._analysis.sensor.radius, edge,
+                               R, detected)
+        self._pubs['markers'].publish(marker_array(specs, FRAME, stamp))
+
+    def _publish_latched(self):
+        if not self._active:
+            return
+        rows = scene_analysis_mod.limit_set_rows(self._analysis.limit_set)
+        fields = len(scene_analysis_mod.LIMIT_SET_FIELDS)
+        msg = Float64MultiArray()
+        msg.layout.dim = [
+            MultiArrayDimension(label='edges', size=len(rows), stride=len(rows) * fields),
+            MultiArrayDimension(label='fields', size=fields, stride=fields)]
+        msg.data = [v for row in rows for v in row]
+        self._pubs['limit_set'].publish(msg)
+        self._pubs['analysis'].publish(
+            String(data=scene_analysis_mod.analysis_json(self._analysis)))
+        self._publish_markers()
+
+    def _publish_diagnostics(self):
+        name = self.get_name()
+        now = self.get_clock().now()
+        statuses = [diagnostic_status(
+            f'{name}: lifecycle', 'ok' if self._active else 'warn', self._lifecycle,
+            HARDWARE_ID, {'hardware_mode': self._hardware, 'scene': self._scene.source})]
+        if self._predictor is not None:
+            edge, R = self._predictor.state
+            an = self._analysis
+            kind = self._last_throw.kind if self._last_throw else 'none'
+            statuses.append(diagnostic_status(
+                f'{name}: prediction', 'ok',
+                f'edge {edge}, R {100 * R:.2f} cm after {self._predictor.count} throws',
+                HARDWARE_ID,
+                {'edge': edge, 'R': f'{R:.6f}', 'throws': self._predictor.count,
+                 'last_kind': kind, 'in_limit_set': an.limit_set.contains(edge, R),
+                 'goal_edge': an.sensor.goal_edge, 'sensor_radius': f'{an.sensor.radius:.6f}',
+                 'guarantee_radius': f'{an.sensor.guarantee_radius:.6f}',
+                 'warmup_throws': an.sensor.warmup_throws}))
+        c = self._counts
+        done, mark_time = self._rate_mark
+        total = c['completed'] + c['failed']
+        dt = (now - mark_time).nanoseconds * 1e-9
+        rate = (total - done) / dt if dt > 0 else 0.0
+        self._rate_mark = (total, now)
+        if self._hardware:
+            level = 'warn' if c['failed'] else 'ok'
+            msg = 'enabled' if self._cycle_timer is not None else 'idle'
+            statuses.append(diagnostic_status(
+                f'{name}: actuator', level, msg, HARDWARE_ID,
+                {'seq': self._seq, 'completed': c['completed'], 'failed': c['failed'],
+                 'cycle_period': self._param('cycle_period'), 'cycles_per_s': f'{rate:.2f}'}))
+        else:
+            bad = c['disagree'] or c['missed'] or c['failed'] or c['bad_status']
+            msg = (f'{c["agree"]} of {c["agree"] + c["disagree"]} sensor bits as predicted'
+                   if c['agree'] + c['disagree'] else 'no cycle followed yet')
+            statuses.append(diagnostic_status(
+                f'{name}: sensor agreement', 'warn' if bad else 'ok', msg, HARDWARE_ID,
+                {'last_seq': self._seq, 'followed': c['completed'], 'missed': c['missed'],
+                 'failed': c['failed'], 'agree': c['agree'], 'disagree': c['disagree'],
+                 'bad_status': c['bad_status'], 'cycles_per_s': f'{rate:.2f}'}))
+        self._diag_pub.publish(diagnostic_array(now.to_msg(), statuses))
+
+
+def main(args=None):
+    try:
+        with rclpy.init(args=args):
+            try:
+                node = SimNode()
+            except InvalidParameterValueException as exc:
+                print(f'sim_node: {exc}', file=sys.stderr)
+                return 2
+            rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

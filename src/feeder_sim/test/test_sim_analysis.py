@@ -1,0 +1,56 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+import json
+import math
+
+from feeder_sim.analysis import analysis_json, limit_set_rows, scene_analysis
+import pytest
+
+
+def test_limit_set_rows(triangle_analysis):
+    ls = triangle_analysis.limit_set
+    rows = limit_set_rows(ls)
+    assert [int(r[0]) for r in rows] == sorted(ls.bands)
+    for edge, lo, hi, jmin, jmax in rows:
+        assert (lo, hi) == ls.bands[int(edge)]
+        assert lo <= hi
+        if int(edge) in ls.jogs:
+            assert (jmin, jmax) == ls.jogs[int(edge)]
+        else:
+            assert math.isnan(jmin) and math.isnan(jmax)
+
+
+def test_moving_the_sensor_redoes_the_sensor_design(triangle, triangle_analysis):
+    base = triangle_analysis
+    same = scene_analysis(triangle, 0.0, base)
+    assert same is base
+    near = scene_analysis(triangle, 0.20, base)
+    assert near.sensor.radius == 0.20
+    assert near.sensor.guarantee_radius == pytest.approx(base.sensor.guarantee_radius)
+    assert near.limit_set is base.limit_set
+    # Inside the guarantee radius other edges are seen: the warm-up cannot end within the grid.
+    assert near.sensor.warmup_throws > base.sensor.warmup_throws
+    assert near.sensor.detection_rate > base.sensor.detection_rate
+
+
+def test_analysis_json_is_strict(triangle_analysis):
+    def no_constants(name):
+        raise AssertionError(f'non-strict JSON constant {name}')
+
+    text = analysis_json(triangle_analysis)
+    data = json.loads(text, parse_constant=no_constants)
+    assert data['limit_set']['pattern'] == list(triangle_analysis.limit_set.pattern)
+    assert data['sensor']['goal_edge'] == triangle_analysis.sensor.goal_edge
+    assert data['sensor']['radius'] == pytest.approx(triangle_analysis.sensor.radius)

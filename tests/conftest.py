@@ -1,0 +1,233 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Graph-level test fixtures: DDS on loopback, a free domain id per test, node processes.
+
+Every test in tests/ runs with ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and a
+``ROS_DOMAIN_ID`` of its own (autouse fixture ``ros_domain``): an id whose Fast DDS discovery
+ports are free, held with a lock file for the test's duration, so concurrent test runs on one
+machine never share a graph. Fixtures for the tests:
+
+* ``graph``: starts colcon-installed executables (ros2_ws/install/<pkg>/lib/<pkg>/<exe>) as
+  processes with that environment; every one is stopped (SIGINT, then SIGTERM, then SIGKILL)
+  when the test ends; ``graph.log(proc)`` returns what a process printed.
+* ``ros``: a test node in its own rclpy context, with ``spin_until(predicate, timeout)``,
+  ``call(srv_type, name, request)`` and ``set_parameters(node_name, {name: value})``.
+"""
+
+import errno
+import fcntl
+import os
+import pathlib
+import random
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+import pytest
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+INSTALL = REPO / 'ros2_ws' / 'install'
+
+# Before anything in this process calls rclpy.init: discovery stays on this machine.
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+
+# Fast DDS default ports (RTPS well-known ports): PB 7400, DG 250, PG 2, d1 10, d3 11.
+_PB, _DG, _PG = 7400, 250, 2
+
+
+def _ports_free(domain, participants=6):
+    for p in range(participants):
+        for offset in (10, 11):
+            port = _PB + _DG * domain + offset + _PG * p
+            with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+                try:
+                    s.bind(('127.0.0.1', port))
+                except OSError as exc:
+                    if exc.errno == errno.EADDRINUSE:
+                        return False
+                    raise
+    return True
+
+
+def _claim_domain():
+    """(domain id, open lock file): a domain no other test holds and no participant uses."""
+    lock_dir = pathlib.Path(tempfile.gettempdir())
+    own = os.environ.get('ROS_DOMAIN_ID')
+    candidates = [d for d in range(1, 102) if str(d) != own]
+    random.shuffle(candidates)
+    for d in candidates:
+        fh = open(lock_dir / f'feeder-ros-domain-{d}.lock', 'w')
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            fh.close()
+            continue
+        if _ports_free(d):
+            return d, fh
+        fh.close()
+    raise RuntimeError('no free ROS_DOMAIN_ID in 1..101')
+
+
+@pytest.fixture(autouse=True)
+def ros_domain(monkeypatch):
+    """Export a free ROS_DOMAIN_ID for this test (node processes inherit it)."""
+    domain, lock = _claim_domain()
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(domain))
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    try:
+        yield domain
+    finally:
+        lock.close()
+
+
+def _process_env():
+    """Return this environment plus the colcon install (PYTHONPATH, AMENT_PREFIX_PATH)."""
+    env = os.environ.copy()
+    site = f'lib/python{sys.version_info.major}.{sys.version_info.minor}/site-packages'
+    pkgs = sorted(p for p in INSTALL.iterdir() if p.is_dir()) if INSTALL.is_dir() else []
+    paths = [str(p / site) for p in pkgs if (p / site).is_dir()]
+    env['PYTHONPATH'] = os.pathsep.join(paths + [env.get('PYTHONPATH', '')]).strip(os.pathsep)
+    prefixes = [str(p) for p in pkgs] + [sys.prefix]
+    env['AMENT_PREFIX_PATH'] = os.pathsep.join(
+        prefixes + [env.get('AMENT_PREFIX_PATH', '')]).strip(os.pathsep)
+    env['PYTHONUNBUFFERED'] = '1'
+    env['RCUTILS_COLORIZED_OUTPUT'] = '0'
+    return env
+
+
+class Graph:
+    """Node processes of one test; all of them are stopped at the end of the test."""
+
+    def __init__(self, log_dir):
+        self.log_dir = pathlib.Path(log_dir)
+        self.procs = []
+        self._logs = {}
+
+    @staticmethod
+    def executable(pkg, exe):
+        path = INSTALL / pkg / 'lib' / pkg / exe
+        if not path.exists():
+            pytest.fail(f'{path} is missing: build the workspace first (. scripts/setup.sh)')
+        return path
+
+    def start(self, pkg, exe, *args, name=None):
+        name = name or exe
+        log_path = self.log_dir / f'{name}-{len(self.procs)}.log'
+        log = open(log_path, 'w')
+        proc = subprocess.Popen([str(self.executable(pkg, exe)), *map(str, args)], stdout=log,
+                                stderr=subprocess.STDOUT, env=_process_env(), cwd=REPO,
+                                start_new_session=True)
+        log.close()
+        self._logs[proc.pid] = log_path
+        self.procs.append(proc)
+        return proc
+
+    def log(self, proc):
+        return self._logs[proc.pid].read_text(errors='replace')
+
+    def stop(self, proc, timeout=10.0):
+        """SIGINT, then SIGTERM, then SIGKILL; returns the exit code."""
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
+            if proc.poll() is not None:
+                break
+            proc.send_signal(sig)
+            try:
+                proc.wait(timeout=timeout if sig != signal.SIGKILL else None)
+            except subprocess.TimeoutExpired:
+                continue
+        return proc.returncode
+
+    def stop_all(self):
+        for proc in reversed(self.procs):
+            self.stop(proc, timeout=5.0)
+
+
+@pytest.fixture
+def graph(tmp_path):
+    g = Graph(tmp_path)
+    try:
+        yield g
+    finally:
+        g.stop_all()
+
+
+class RosTestNode:
+    """A node of the test's own, in its own context, spun by hand."""
+
+    def __init__(self, name='feeder_test'):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        self.rclpy = rclpy
+        self.context = rclpy.context.Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def spin_for(self, seconds):
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=min(0.05, max(0.0, end - time.monotonic())))
+
+    def spin_until(self, predicate, timeout, what='condition'):
+        end = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() > end:
+                raise AssertionError(f'timed out after {timeout} s waiting for {what}')
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def call(self, srv_type, name, request, timeout=10.0):
+        client = self.node.create_client(srv_type, name)
+        try:
+            self.spin_until(client.service_is_ready, timeout, f'service {name}')
+            future = client.call_async(request)
+            self.spin_until(future.done, timeout, f'answer of {name}')
+            return future.result()
+        finally:
+            self.node.destroy_client(client)
+
+    def set_parameters(self, node_name, values, timeout=10.0):
+        """Set parameters of a remote node; returns {name: SetParametersResult}."""
+        from rcl_interfaces.srv import SetParameters
+        from rclpy.parameter import Parameter
+        req = SetParameters.Request(parameters=[Parameter(k, value=v).to_parameter_msg()
+                                                for k, v in values.items()])
+        res = self.call(SetParameters, f'{node_name}/set_parameters', req, timeout)
+        return dict(zip(values, res.results))
+
+    def get_parameters(self, node_name, names, timeout=10.0):
+        from rcl_interfaces.srv import GetParameters
+        from rclpy.parameter import parameter_value_to_python
+        res = self.call(GetParameters, f'{node_name}/get_parameters',
+                        GetParameters.Request(names=list(names)), timeout)
+        return {n: parameter_value_to_python(v) for n, v in zip(names, res.values)}
+
+    def close(self):
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.rclpy.shutdown(context=self.context)
+
+
+@pytest.fixture
+def ros(ros_domain):
+    node = RosTestNode()
+    try:
+        yield node
+    finally:
+        node.close()
