@@ -1,0 +1,90 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A small stand-in for diagnostic_updater (which has no wheel): periodic /diagnostics.
+
+Same conventions as ros/diagnostics' Python ``Updater``: absolute topic ``/diagnostics``,
+reliable depth 1, status names ``<node name>: <task name>``, ``hardware_id`` on every status,
+values as strings. ``DiagnosticStatus.level`` is a byte field, so levels are the message's
+own constants (``DiagnosticStatus.OK`` is a one-byte bytes value), never ints.
+"""
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+LEVELS = (DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR,
+          DiagnosticStatus.STALE)
+
+
+class Status:
+    """What a task fills in: ``summary(level, message)`` and ``add(key, value)``."""
+
+    def __init__(self, name, hardware_id):
+        self.msg = DiagnosticStatus(name=name, hardware_id=hardware_id,
+                                    level=DiagnosticStatus.OK, message='')
+
+    def summary(self, level, message):
+        if level not in LEVELS:
+            raise ValueError(f'level {level!r}: use DiagnosticStatus.OK/WARN/ERROR/STALE '
+                             '(bytes, not int)')
+        self.msg.level = level
+        self.msg.message = message
+
+    def add(self, key, value):
+        self.msg.values.append(KeyValue(key=str(key), value=str(value)))
+
+
+class Updater:
+    """Publish the tasks' statuses every ``period`` s (and on :meth:`force_update`)."""
+
+    def __init__(self, node, period=1.0, hardware_id='none'):
+        self.node = node
+        self.hardware_id = hardware_id
+        self.tasks = []
+        self.pub = node.create_publisher(DiagnosticArray, '/diagnostics',
+                                         QoSProfile(depth=1,
+                                                    reliability=ReliabilityPolicy.RELIABLE))
+        self.timer = node.create_timer(period, self.update)
+
+    def add(self, name, task):
+        """Register ``task(status)``; it is called once per update."""
+        self.tasks.append((name, task))
+
+    def set_period(self, period):
+        self.node.destroy_timer(self.timer)
+        self.timer = self.node.create_timer(period, self.update)
+
+    def statuses(self):
+        out = []
+        for name, task in self.tasks:
+            stat = Status(f'{self.node.get_name()}: {name}', self.hardware_id)
+            try:
+                task(stat)
+            except Exception as exc:    # noqa: B902 - a broken task must not stop the rest
+                stat.summary(DiagnosticStatus.ERROR, f'diagnostic task failed: {exc!r}')
+            out.append(stat.msg)
+        return out
+
+    def update(self):
+        msg = DiagnosticArray()
+        msg.header.stamp = self.node.get_clock().now().to_msg()
+        msg.status = self.statuses()
+        self.pub.publish(msg)
+
+    force_update = update
+
+    def destroy(self):
+        self.node.destroy_timer(self.timer)
+        self.node.destroy_publisher(self.pub)

@@ -1,0 +1,546 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Feeder controller emulator: speaks the controller side of the protocol on a pty (ROS-free).
+
+The part's state comes from the throw-map library: each accepted FIRE throws the part once
+(``model.f``) and the sensor bit is ``sees(part, edge, R, radius, footprint)`` of the state it
+settles in. A stable symlink (``--link``) points at the pty's slave, so a driver can reopen
+the same path after an emulated unplug. Fault switches drop replies, inject garbage, delay
+replies, reset the controller or unplug the port; ``--truth-log`` writes one JSON line per
+FIRE received so tests can account for every cycle. CLI table: docs/driver.md.
+"""
+
+import argparse
+import heapq
+import itertools
+import json
+import os
+import random
+import select
+import signal
+import sys
+import threading
+import time
+import tty
+
+from . import protocol as p
+
+FIRMWARE = 'feeder-emu-1.0'
+
+
+class EmulatorError(Exception):
+    """Bad emulator option or set-up failure; the text names the problem and the fix."""
+
+
+def _positive_int(name, value):
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise EmulatorError(f'{name}: must be an integer >= 1, got {value!r}')
+    return value
+
+
+def _nonneg(name, value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0 \
+            or value == float('inf'):
+        raise EmulatorError(f'{name}: must be a finite number >= 0, got {value!r}')
+    return float(value)
+
+
+class Pty:
+    """
+    A pty whose slave is reachable through a stable symlink; can be unplugged and replugged.
+
+    The emulator keeps its own slave fd open (in raw mode) so the master never reads EIO while
+    no driver has the port open. Writes to the master are non-blocking; output is dropped
+    when nobody reads, as on a real UART.
+    """
+
+    def __init__(self, link):
+        self.link = os.path.abspath(link)
+        self.master = None
+        self.slave = None
+        self.slave_name = None
+        if os.path.lexists(self.link) and not os.path.islink(self.link):
+            raise EmulatorError(f'--link {self.link}: exists and is not a symlink; refusing to '
+                                'replace it, pick another path')
+        parent = os.path.dirname(self.link)
+        if not os.path.isdir(parent):
+            raise EmulatorError(f'--link {self.link}: directory {parent} does not exist; '
+                                'create it or pick another path')
+
+    @property
+    def plugged(self):
+        return self.master is not None
+
+    def plug(self):
+        master, slave = os.openpty()
+        tty.setraw(slave)
+        os.set_blocking(master, False)
+        self.master, self.slave = master, slave
+        self.slave_name = os.ttyname(slave)
+        tmp = f'{self.link}.tmp{os.getpid()}'
+        if os.path.lexists(tmp):
+            os.unlink(tmp)
+        os.symlink(self.slave_name, tmp)
+        os.replace(tmp, self.link)
+
+    def unplug(self):
+        if os.path.islink(self.link):
+            os.unlink(self.link)
+        for fd in (self.master, self.slave):
+            if fd is not None:
+                try:
+                    os.close(fd)
+                except OSError:
+                    pass
+        self.master = self.slave = None
+
+    def write(self, data):
+        """Write what the pty takes now; return the number of bytes dropped."""
+        if self.master is None:
+            return len(data)
+        try:
+            n = os.write(self.master, data)
+        except BlockingIOError:
+            n = 0
+        except OSError:
+            return len(data)
+        return len(data) - n
+
+    def read(self):
+        try:
+            return os.read(self.master, 4096)
+        except (BlockingIOError, InterruptedError):
+            return b''
+        except OSError:
+            return b''
+
+
+class Faults:
+    """Which cycles get which fault (cycle numbers count accepted FIREs from 1)."""
+
+    def __init__(self, drop_ack_every=None, drop_sens_every=None, garbage_every=None,
+                 delay=0.0, delay_every=None, reset_after=None, unplug_after=None,
+                 unplug_for=1.0, seed=0):
+        self.drop_ack_every = _positive_int('--drop-ack-every', drop_ack_every)
+        self.drop_sens_every = _positive_int('--drop-sens-every', drop_sens_every)
+        self.garbage_every = _positive_int('--garbage-every', garbage_every)
+        self.delay = _nonneg('--delay', delay)
+        self.delay_every = _positive_int('--delay-every', delay_every)
+        if self.delay_every is not None and self.delay == 0:
+            raise EmulatorError('--delay-every: needs --delay S > 0 (the delay to apply)')
+        if reset_after is not None and (isinstance(reset_after, bool) or reset_after < 0):
+            raise EmulatorError(f'--reset-after: must be an integer >= 0, got {reset_after!r}')
+        if unplug_after is not None and (isinstance(unplug_after, bool) or unplug_after < 0):
+            raise EmulatorError(f'--unplug-after: must be an integer >= 0, got '
+                                f'{unplug_after!r}')
+        self.reset_after = reset_after
+        self.unplug_after = unplug_after
+        self.unplug_for = _nonneg('--unplug-for', unplug_for)
+        self.rng = random.Random(seed)
+
+    @staticmethod
+    def _every(n, k):
+        return n is not None and k % n == 0
+
+    def for_cycle(self, k):
+        """Names of the faults injected into cycle k."""
+        names = []
+        if self._every(self.drop_ack_every, k):
+            names.append('drop_ack')
+        if self._every(self.drop_sens_every, k):
+            names.append('drop_sens')
+        if self._every(self.garbage_every, k):
+            names.append('garbage')
+        if self.delay > 0 and (self.delay_every is None or k % self.delay_every == 0):
+            names.append('delay')
+        if self.reset_after is not None and k == self.reset_after + 1:
+            names.append('reset')
+        if self.unplug_after is not None and k == self.unplug_after + 1:
+            names.append('unplug')
+        return names
+
+    def garbage(self):
+        """Noise of the kinds a real line produces: random bytes, a cut frame, a bad sum."""
+        noise = bytes(self.rng.choice([b for b in range(256) if b not in (0x24,)])
+                      for _ in range(self.rng.randint(3, 24)))
+        bad_sum = bytearray(p.encode(p.Sens(self.rng.randrange(p.SEQ_MODULO), 1)))
+        bad_sum[-4:-2] = b'%02X' % ((int(bad_sum[-4:-2], 16) + 1) % 256)
+        cut = p.encode(p.Ack(self.rng.randrange(p.SEQ_MODULO)))[:5]
+        overlong = b'$' + b'X' * (p.MAX_LINE + 10) + b'\r\n'
+        return noise + bytes(bad_sum) + cut + noise[:5] + overlong + b'\xff\xfe\r\n' + cut
+
+
+class _Cycle:
+    def __init__(self, k, seq, faults, now):
+        self.k = k
+        self.seq = seq
+        self.faults = faults
+        self.fired_at = now
+        self.thrown = False
+        self.sent = {'ack': False, 'rel': False, 'sens': False}
+        self.edge = self.R = self.kind = self.bit = None
+
+
+class Controller:
+    """
+    The emulated controller: protocol, cycle timing, part state and faults.
+
+    ``throw()`` returns ``(edge, R, kind)`` of the next resting state and ``sense(edge, R)``
+    its sensor bit; both come from the throw-map library in :func:`from_scene`.
+    """
+
+    def __init__(self, link, throw, sense, release_speed, state=None, cycle_time=0.1,
+                 heartbeat=1.0, faults=None, truth_log=None, firmware=FIRMWARE, header=None,
+                 log=None, clock=time.monotonic):
+        self.pty = Pty(link)
+        self._throw = throw
+        self._sense = sense
+        self.release_speed_mrad_s = int(round(release_speed * 1000.0))
+        self.state = state
+        self.cycle_time = _nonneg('--cycle-time', cycle_time)
+        self.heartbeat = _nonneg('--heartbeat', heartbeat)
+        if self.heartbeat == 0:
+            raise EmulatorError('--heartbeat: must be > 0 s (the protocol needs one)')
+        self.faults = faults or Faults()
+        self.firmware = firmware
+        self.header = header or {}
+        self._log = log or (lambda text: None)
+        self._clock = clock
+        self.parser = p.Parser(p.HOST_MESSAGES)
+        self.cycle = None
+        self.cycles = 0
+        self.unplugs = 0
+        self.resets = 0
+        self.records = []
+        self._boot = 0
+        self._boot_t0 = clock()
+        self._events = []
+        self._counter = itertools.count()
+        self._epoch = 0     # bumps on reset/unplug: scheduled actions of older epochs lapse
+        self._wake_r, self._wake_w = os.pipe()
+        self._stop = threading.Event()
+        self._truth = open(truth_log, 'w', encoding='utf-8') if truth_log else None
+        if self._truth:
+            self._write_truth(dict({'type': 'header', 'firmware': firmware}, **self.header))
+
+    # ---- set-up ------------------------------------------------------------------------------
+
+    @property
+    def boot_id(self):
+        return f'{os.getpid() & 0xffff:04X}{self._boot:04X}'
+
+    def start(self):
+        self.pty.plug()
+        self._power_up()
+
+    def close(self):
+        self.pty.unplug()
+        if self._truth:
+            self._truth.close()
+            self._truth = None
+        for fd in (self._wake_r, self._wake_w):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+    def stop(self):
+        """Ask :meth:`run` to return (thread- and signal-safe)."""
+        self._stop.set()
+        try:
+            os.write(self._wake_w, b'x')
+        except OSError:
+            pass
+
+    def _power_up(self):
+        self._boot += 1
+        self._boot_t0 = self._clock()
+        self.cycle = None
+        self._epoch += 1
+        self._send(p.Hello(self.firmware, self.boot_id))
+        self._schedule(self.heartbeat, self._heartbeat, self._epoch)
+
+    # ---- main loop ---------------------------------------------------------------------------
+
+    def run(self, max_time=None):
+        """Serve until :meth:`stop` (or ``max_time`` s)."""
+        end = None if max_time is None else self._clock() + max_time
+        while not self._stop.is_set():
+            now = self._clock()
+            if end is not None and now >= end:
+                break
+            timeout = 0.5
+            if self._events:
+                timeout = min(timeout, max(0.0, self._events[0][0] - now))
+            fds = [self._wake_r] + ([self.pty.master] if self.pty.plugged else [])
+            try:
+                ready, _, _ = select.select(fds, [], [], timeout)
+            except InterruptedError:
+                continue
+            if self._wake_r in ready:
+                os.read(self._wake_r, 64)
+            if self.pty.plugged and self.pty.master in ready:
+                data = self.pty.read()
+                for event in self.parser.feed(data):
+                    self._on_host(event)
+            self._run_due()
+
+    def _schedule(self, delay, action, epoch, *args):
+        heapq.heappush(self._events, (self._clock() + delay, next(self._counter), action,
+                                      epoch, args))
+
+    def _run_due(self):
+        now = self._clock()
+        while self._events and self._events[0][0] <= now:
+            _, _, action, epoch, args = heapq.heappop(self._events)
+            if epoch == self._epoch:
+                action(*args)
+
+    def _send(self, message):
+        if self.pty.plugged:
+            self.pty.write(p.encode(message))
+
+    def _heartbeat(self):
+        uptime = int((self._clock() - self._boot_t0) * 1000) & p.UINT32_MAX
+        self._send(p.Hb(uptime, 'BUSY' if self.cycle is not None else 'IDLE'))
+        self._schedule(self.heartbeat, self._heartbeat, self._epoch)
+
+    # ---- host commands -----------------------------------------------------------------------
+
+    def _on_host(self, event):
+        if isinstance(event, p.Rejected):
+            self._log(f'rejected host frame ({event.kind}): {event.detail}')
+            self._send(p.Err(None, p.REJECT_CODES[event.kind], event.kind))
+        elif isinstance(event, p.Ping):
+            self._send(p.Pong(event.token))
+        elif isinstance(event, p.Ident):
+            self._send(p.Hello(self.firmware, self.boot_id))
+        elif isinstance(event, p.Stop):
+            self._stop_cycle()
+        elif isinstance(event, p.Fire):
+            self._fire(event.seq)
+
+    def _fire(self, seq):
+        now = self._clock()
+        if self.cycle is not None:
+            self._write_truth({'type': 'fire', 'seq': seq, 'cycle': None, 'outcome': 'busy',
+                               'faults': [], 'throw': False, 't': now})
+            self._send(p.Err(seq, 'BUSY', f'cycle {self.cycle.seq} in progress'))
+            return
+        self.cycles += 1
+        cyc = _Cycle(self.cycles, seq, self.faults.for_cycle(self.cycles), now)
+        self.cycle = cyc
+        delay = self.faults.delay if 'delay' in cyc.faults else 0.0
+        ep = self._epoch
+        self._schedule(delay, self._ack, ep, cyc)
+        self._schedule(delay + self.cycle_time / 2, self._release, ep, cyc)
+        self._schedule(delay + self.cycle_time, self._settled, ep, cyc)
+
+    def _garbage(self, cyc):
+        if 'garbage' in cyc.faults:
+            self.pty.write(self.faults.garbage())
+
+    def _ack(self, cyc):
+        if self.cycle is not cyc:
+            return
+        self._garbage(cyc)
+        if 'drop_ack' not in cyc.faults:
+            self._send(p.Ack(cyc.seq))
+            cyc.sent['ack'] = True
+        if 'reset' in cyc.faults:
+            # The controller resets before the arm moves: no throw, the cycle is forgotten.
+            self.resets += 1
+            self._finish(cyc, 'reset')
+            self._power_up()
+
+    def _release(self, cyc):
+        if self.cycle is not cyc:
+            return
+        cyc.edge, cyc.R, cyc.kind = self._throw()
+        cyc.thrown = True
+        cyc.bit = int(bool(self._sense(cyc.edge, cyc.R)))
+        self._send(p.Rel(cyc.seq, self.release_speed_mrad_s))
+        cyc.sent['rel'] = True
+        if 'unplug' in cyc.faults:
+            # Unplugged while the part is in flight: the throw happens, SENS never leaves.
+            self.unplugs += 1
+            self._finish(cyc, 'unplug')
+            self._epoch += 1
+            self.pty.unplug()
+            self._log(f'unplugged for {self.faults.unplug_for} s')
+            self._schedule(self.faults.unplug_for, self._replug, self._epoch)
+
+    def _replug(self):
+        self.pty.plug()
+        self._log(f'replugged: {self.pty.link} -> {self.pty.slave_name}')
+        self._power_up()
+
+    def _settled(self, cyc):
+        if self.cycle is not cyc:
+            return
+        self._garbage(cyc)
+        if 'drop_sens' in cyc.faults:
+            self._finish(cyc, 'sens_dropped')
+            return
+        # Log before sending, so a reader of the log never sees a SENS it cannot account for.
+        cyc.sent['sens'] = True
+        self._finish(cyc, 'completed')
+        self._send(p.Sens(cyc.seq, cyc.bit))
+
+    def _stop_cycle(self):
+        cyc = self.cycle
+        if cyc is None:
+            return
+        self._finish(cyc, 'aborted')
+        self._send(p.Err(cyc.seq, 'ABORTED', 'stopped by host'))
+
+    def _finish(self, cyc, outcome):
+        self.cycle = None
+        rec = {'type': 'fire', 'seq': cyc.seq, 'cycle': cyc.k, 'outcome': outcome,
+               'faults': cyc.faults, 'throw': cyc.thrown, 'edge': cyc.edge, 'R': cyc.R,
+               'kind': cyc.kind, 'bit': cyc.bit, 'sent': dict(cyc.sent), 't': cyc.fired_at}
+        if not cyc.thrown and self.state is not None:
+            rec['edge'], rec['R'] = self.state()
+        self._write_truth(rec)
+
+    def _write_truth(self, rec):
+        self.records.append(rec)
+        if self._truth:
+            self._truth.write(json.dumps(rec) + '\n')
+            self._truth.flush()
+
+
+def from_scene(scene_path, sensor_radius=None, **kwargs):
+    """Build a Controller whose part follows the scene's throw map from its start state."""
+    import numpy as np
+    from throwmap import analyse, InputError, load_scene, sees
+    try:
+        scene = load_scene(scene_path)
+    except InputError as exc:
+        raise EmulatorError(f'--scene: {exc}') from None
+    model = scene.model
+    footprint = scene.sensor_footprint
+    header = {'scene': os.path.abspath(scene_path), 'goal_edge': scene.goal_edge,
+              'release_speed': scene.release_speed}
+    if sensor_radius is None:
+        an = analyse(scene)
+        sensor_radius = an.sensor.radius
+        footprint = an.sensor.footprint
+        header.update(goal_edge=an.sensor.goal_edge, warmup_throws=an.sensor.warmup_throws,
+                      bands={str(k): list(v) for k, v in an.limit_set.bands.items()},
+                      sensor_feasible=an.sensor.feasible)
+    elif not (isinstance(sensor_radius, (int, float)) and np.isfinite(sensor_radius)
+              and sensor_radius > 0):
+        raise EmulatorError(f'--sensor-radius: must be a number > 0 (m), got {sensor_radius!r}')
+    state = list(scene.default_start())
+    header.update(sensor_radius=float(sensor_radius), footprint=float(footprint),
+                  start=list(state))
+
+    def throw():
+        edge, R, kind = model.f(state[0], state[1])
+        state[0], state[1] = int(edge), float(R)
+        return state[0], state[1], kind
+
+    def sense(edge, R):
+        return bool(sees(scene.part, edge, R, sensor_radius, footprint))
+
+    return Controller(throw=throw, sense=sense, release_speed=scene.release_speed,
+                      state=lambda: (state[0], state[1]), header=header, **kwargs)
+
+
+def build_arg_parser():
+    ap = argparse.ArgumentParser(
+        prog='controller_emulator',
+        description='Emulated feeder controller on a pty: speaks docs/serial-protocol.md, '
+                    'takes its sensor bits from the throw map of a scene.')
+    ap.add_argument('--scene', required=True, help='scene YAML (e.g. scenes/triangle.yaml)')
+    ap.add_argument('--link', default='/tmp/feeder-tty',
+                    help='stable symlink to the pty slave; give it to the driver as `port` '
+                         '(default %(default)s)')
+    ap.add_argument('--sensor-radius', type=float, default=None,
+                    help='sensor position on the arm, m (default: throwmap sensor design)')
+    ap.add_argument('--cycle-time', type=float, default=0.1,
+                    help='FIRE to SENS, s; REL at half of it (default %(default)s)')
+    ap.add_argument('--heartbeat', type=float, default=1.0,
+                    help='HB period, s (default %(default)s)')
+    ap.add_argument('--drop-ack-every', type=int, metavar='N',
+                    help='do not send the ACK of every Nth cycle')
+    ap.add_argument('--drop-sens-every', type=int, metavar='N',
+                    help='do not send the SENS of every Nth cycle (the throw still happens)')
+    ap.add_argument('--garbage-every', type=int, metavar='N',
+                    help='write noise, a cut frame, a bad checksum and an overlong line '
+                         'before the ACK and the SENS of every Nth cycle')
+    ap.add_argument('--delay', type=float, default=0.0, metavar='S',
+                    help='hold every reply of a delayed cycle back by S seconds')
+    ap.add_argument('--delay-every', type=int, metavar='N',
+                    help='delay only every Nth cycle (default: all cycles when --delay > 0)')
+    ap.add_argument('--reset-after', type=int, metavar='N',
+                    help='after N cycles, reset during the next one (HELLO right after its '
+                         'ACK, no throw, cycle forgotten)')
+    ap.add_argument('--unplug-after', type=int, metavar='N',
+                    help='after N cycles, unplug during the next one (after its REL)')
+    ap.add_argument('--unplug-for', type=float, default=1.0, metavar='S',
+                    help='seconds unplugged (default %(default)s)')
+    ap.add_argument('--seed', type=int, default=0, help='seed of the garbage generator')
+    ap.add_argument('--truth-log', metavar='FILE',
+                    help='one JSON line per FIRE received (and a header line)')
+    ap.add_argument('--firmware', default=FIRMWARE, help='firmware name in HELLO')
+    ap.add_argument('--max-time', type=float, default=None,
+                    help='exit after this many seconds (default: run until SIGINT/SIGTERM)')
+    ap.add_argument('-q', '--quiet', action='store_true', help='log nothing to stderr')
+    return ap
+
+
+def main(argv=None):
+    args = build_arg_parser().parse_args(argv)
+
+    def log(text):
+        if not args.quiet:
+            print(f'controller_emulator: {text}', file=sys.stderr, flush=True)
+
+    try:
+        faults = Faults(args.drop_ack_every, args.drop_sens_every, args.garbage_every,
+                        args.delay, args.delay_every, args.reset_after, args.unplug_after,
+                        args.unplug_for, args.seed)
+        ctl = from_scene(args.scene, args.sensor_radius, link=args.link,
+                         cycle_time=args.cycle_time, heartbeat=args.heartbeat, faults=faults,
+                         truth_log=args.truth_log, firmware=args.firmware, log=log)
+    except (EmulatorError, OSError) as exc:
+        print(f'controller_emulator: error: {exc}', file=sys.stderr)
+        return 2
+
+    def on_signal(signum, frame):
+        ctl.stop()
+
+    signal.signal(signal.SIGTERM, on_signal)
+    signal.signal(signal.SIGINT, on_signal)
+    try:
+        ctl.start()
+        h = ctl.header
+        print(f'controller_emulator: ready on {ctl.pty.link} -> {ctl.pty.slave_name} '
+              f'(sensor radius {h["sensor_radius"]:.4f} m, goal edge {h["goal_edge"]})',
+              flush=True)
+        ctl.run(args.max_time)
+    finally:
+        ctl.close()
+    log(f'stopped after {ctl.cycles} cycles')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

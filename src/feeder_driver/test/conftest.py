@@ -1,0 +1,50 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Fixtures of the feeder_driver tests: source on sys.path, DDS on loopback, own domain."""
+
+import os
+import pathlib
+import sys
+
+import pytest
+
+PKG = pathlib.Path(__file__).resolve().parents[1]
+REPO = PKG.parents[1]
+# Test the source tree, not a possibly stale colcon install.
+sys.path.insert(0, str(PKG))
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+
+
+@pytest.fixture(scope='session')
+def domain_id():
+    from feeder_driver.testing import reserve_domain_id
+    return reserve_domain_id()
+
+
+@pytest.fixture(scope='session')
+def scene_path():
+    return str(REPO / 'scenes' / 'triangle.yaml')
+
+
+@pytest.fixture(scope='session')
+def sensor_radius(scene_path):
+    """Return the scene's designed sensor radius (analysed once per session)."""
+    from throwmap import analyse, load_scene
+    return analyse(load_scene(scene_path)).sensor.radius
+
+
+@pytest.fixture
+def link_path(tmp_path):
+    return str(tmp_path / 'feeder-tty')

@@ -1,0 +1,276 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The ROS-free link and cycle state machine, driven with a fake clock."""
+
+from feeder_driver import core as c
+from feeder_driver import protocol as p
+import pytest
+
+CFG = c.CoreConfig(ack_timeout_s=0.5, cycle_timeout_s=3.0, watchdog_timeout_s=2.0,
+                   reconnect_initial_s=0.1, reconnect_max_s=0.8, cycle_period=1.0)
+
+
+def sent(effects):
+    return [e.message for e in effects if isinstance(e, c.Send)]
+
+
+def results(effects):
+    return [e.result for e in effects if isinstance(e, c.CycleFinished)]
+
+
+def connect(core, now=0.0):
+    assert core.start(now) == [c.OpenLink()]
+    ident, ping = sent(core.link_opened(now))
+    assert ident == p.Ident() and isinstance(ping, p.Ping) and core.link == c.HANDSHAKE
+    core.received(now, 0, [p.Hello('fw', 'B1'), p.Pong(ping.token)])
+    assert core.link == c.CONNECTED
+    return core
+
+
+@pytest.fixture
+def core():
+    k = connect(c.DriverCore(CFG))
+    k.set_active(True, 0.0, 0)
+    return k
+
+
+def fire(core, now):
+    ok, msg, eff = core.trigger(now)
+    assert ok, msg
+    (fire_msg,) = sent(eff)
+    assert isinstance(fire_msg, p.Fire)
+    return fire_msg.seq
+
+
+def test_normal_cycle(core):
+    seq = fire(core, 1.0)
+    assert core.trigger(1.01)[0] is False and 'busy' in core.trigger(1.01)[1]
+    assert core.received(1.02, 10, [p.Ack(seq)]) == []
+    rel = core.received(1.1, 11, [p.Rel(seq, 5585)])
+    assert rel == [c.Released(1, 5.585, 11)]
+    (res,) = results(core.received(1.2, 12, [p.Sens(seq, 1)]))
+    assert res.ok and res.sensor == 1 and res.stamp == 12 and res.seq == 1
+    assert res.release_speed == pytest.approx(5.585)
+    assert core.counters['fired'] == core.counters['completed'] == 1
+    assert fire(core, 1.3) == seq + 1
+
+
+def test_handshake_retries_ping_then_gives_up_and_backs_off():
+    core = c.DriverCore(CFG)
+    core.start(0.0)
+    first = sent(core.link_opened(0.0))[1]
+    again = sent(core.tick(0.6, 0))
+    assert isinstance(again[1], p.Ping) and again[1].token != first.token
+    # A PONG with an old token does not complete the handshake.
+    core.received(0.7, 0, [p.Pong(first.token)])
+    assert core.link == c.HANDSHAKE
+    eff = core.tick(2.1, 0)
+    assert c.CloseLink in [type(e) for e in eff] and core.link == c.DISCONNECTED
+    assert 'no PONG' in core.last_link_error
+    assert core.tick(2.15, 0) == []
+    assert core.tick(2.21, 0) == [c.OpenLink()]
+
+
+def test_backoff_doubles_and_caps():
+    core = c.DriverCore(CFG)
+    core.start(0.0)
+    t, delays = 0.0, []
+    for _ in range(6):
+        core.link_open_failed(t, OSError('No such file or directory'))
+        delays.append(round(core.next_open_at - t, 6))
+        t = core.next_open_at
+        assert core.tick(t, 0) == [c.OpenLink()]
+    assert delays == [0.1, 0.2, 0.4, 0.8, 0.8, 0.8]
+    assert core.counters['open_failures'] == 6
+    connect(core, t)
+    core.link_lost(t, 0, 'unplugged')
+    assert core.next_open_at - t == pytest.approx(0.1)    # reset by the successful handshake
+
+
+def test_ack_timeout_fails_the_cycle_and_sends_stop(core):
+    seq = fire(core, 1.0)
+    assert core.tick(1.4, 0) == []
+    core.received(1.45, 0, [p.Err(None, 'BADSUM', 'checksum')])
+    eff = core.tick(1.6, 99)
+    assert p.Stop() in sent(eff)
+    (res,) = results(eff)
+    assert not res.ok and res.sensor is None and 'no ACK within 0.5 s' in res.reason
+    assert 'BADSUM' in res.reason
+    # A late reply for that cycle is stale and changes nothing.
+    assert core.received(1.7, 0, [p.Sens(seq, 1)]) == []
+    assert core.counters['stale_replies'] == 1
+    assert core.counters['fired'] == 1 and core.counters['failed'] == 1
+
+
+def test_sens_timeout(core):
+    seq = fire(core, 1.0)
+    core.received(1.1, 0, [p.Ack(seq), p.Hb(5, 'BUSY')])
+    for t in (1.5, 2.0, 2.5, 3.0, 3.5):
+        core.received(t, 0, [p.Hb(5, 'BUSY')])
+        assert results(core.tick(t, 0)) == []
+    (res,) = results(core.tick(4.1, 0))
+    assert 'no SENS within 3 s' in res.reason and 'ACK at' in res.reason
+
+
+def test_idle_heartbeat_after_ack_means_sens_was_lost(core):
+    seq = fire(core, 1.0)
+    # An IDLE heartbeat before the ACK may predate the FIRE: ignored.
+    assert results(core.received(1.01, 0, [p.Hb(1, 'IDLE')])) == []
+    core.received(1.02, 0, [p.Ack(seq), p.Rel(seq, 5585)])
+    (res,) = results(core.received(1.5, 0, [p.Hb(2, 'IDLE')]))
+    assert not res.ok and 'IDLE' in res.reason and 'SENS' in res.reason
+
+
+def test_missing_ack_is_implied_by_rel_and_counted(core):
+    seq = fire(core, 1.0)
+    core.received(1.1, 0, [p.Rel(seq, 5585)])
+    (res,) = results(core.received(1.2, 0, [p.Sens(seq, 0)]))
+    assert res.ok and res.sensor == 0
+    assert core.counters['acks_missing'] == 1
+
+
+def test_controller_error_for_our_seq_fails_the_cycle(core):
+    seq = fire(core, 1.0)
+    (res,) = results(core.received(1.01, 0, [p.Err(seq, 'BUSY', 'cycle 3 in progress')]))
+    assert 'ERR BUSY' in res.reason and 'cycle 3' in res.reason
+
+
+def test_hello_mid_cycle_is_a_reset(core):
+    seq = fire(core, 1.0)
+    core.received(1.01, 0, [p.Ack(seq)])
+    (res,) = results(core.received(1.02, 0, [p.Hello('fw', 'B2')]))
+    assert 'controller reset during cycle' in res.reason and 'B2' in res.reason
+    assert core.counters['controller_resets'] == 1 and core.boot_id == 'B2'
+    assert core.link == c.CONNECTED
+
+
+def test_link_lost_mid_cycle_fails_it_and_refuses_until_reconnected(core):
+    fire(core, 1.0)
+    eff = core.link_lost(1.1, 5, 'read failed: device disconnected')
+    assert c.CloseLink('read failed: device disconnected') in eff
+    (res,) = results(eff)
+    assert 'serial link lost during cycle' in res.reason
+    ok, msg, _ = core.trigger(1.2)
+    assert not ok and 'disconnected' in msg and 'device disconnected' in msg
+    assert core.link_lost(1.3, 0, 'again') == []    # already down: nothing more
+    assert core.tick(1.21, 0) == [c.OpenLink()]
+
+
+def test_watchdog_declares_a_silent_link_lost(core):
+    core.received(1.0, 0, [p.Hb(1, 'IDLE')])
+    assert core.tick(2.9, 0) == []
+    eff = core.tick(3.1, 0)
+    assert any(isinstance(e, c.CloseLink) for e in eff)
+    assert 'silent' in core.last_link_error and core.counters['watchdog_timeouts'] == 1
+
+
+def test_garbage_does_not_feed_the_watchdog(core):
+    core.received(1.0, 0, [p.Hb(1, 'IDLE')])
+    core.received(2.5, 0, [p.Rejected('checksum', 'bad', b'')])
+    assert any(isinstance(e, c.CloseLink) for e in core.tick(3.1, 0))
+
+
+def test_refusals_say_why():
+    core = c.DriverCore(CFG)
+    ok, msg, eff = core.trigger(0.0)
+    assert not ok and 'not active' in msg and eff == []
+    core.set_active(True, 0.0, 0)
+    ok, msg, _ = core.trigger(0.0)
+    assert not ok and 'serial link is disconnected' in msg
+    ok, msg, _ = core.enable(True, 0.0)
+    assert not ok and 'disconnected' in msg
+    assert core.counters['fired'] == 0
+
+
+def test_enable_fires_every_period_and_refuses_triggers(core):
+    ok, msg, eff = core.enable(True, 1.0)
+    assert ok and 'every 1 s' in msg
+    seq = sent(eff)[0].seq
+    ok, msg, _ = core.trigger(1.1)
+    assert not ok and 'enabled' in msg
+    core.received(1.2, 0, [p.Ack(seq), p.Sens(seq, 0)])
+    assert sent(core.tick(1.5, 0)) == []
+    (nxt,) = sent(core.tick(2.0, 0))
+    assert nxt.seq == seq + 1
+    ok, msg, _ = core.enable(False, 2.1)
+    assert ok and 'still in flight' in msg
+    core.received(2.2, 0, [p.Ack(nxt.seq), p.Sens(nxt.seq, 1)])
+    assert sent(core.tick(5.0, 0)) == []
+
+
+def test_enable_pauses_while_disconnected_and_resumes(core):
+    core.enable(True, 1.0)
+    core.link_lost(1.05, 0, 'unplugged')
+    assert core.counters['failed'] == 1
+    assert core.tick(2.0, 0) == [c.OpenLink()]
+    assert core.tick(2.5, 0) == []
+    core.link_opened(3.0)
+    ping = core._ping_token
+    core.received(3.0, 0, [p.Pong(ping)])
+    assert [type(m) for m in sent(core.tick(3.1, 0))] == [p.Fire]
+
+
+def test_deactivate_aborts_a_cycle_with_stop(core):
+    fire(core, 1.0)
+    eff = core.set_active(False, 1.1, 0, 'node deactivated')
+    assert p.Stop() in sent(eff)
+    (res,) = results(eff)
+    assert res.reason == 'aborted: node deactivated'
+    assert not core.trigger(1.2)[0]
+
+
+def test_stop_closes_the_link_and_stops_reopening(core):
+    eff = core.stop(1.0, 0, 'cleanup')
+    assert c.CloseLink('cleanup') in eff and core.link == c.DISCONNECTED
+    assert core.tick(100.0, 0) == []
+
+
+def test_sequence_numbers_wrap_on_the_wire():
+    core = connect(c.DriverCore(CFG, first_seq=65535))
+    core.set_active(True, 0.0, 0)
+    assert fire(core, 1.0) == 65535
+    core.received(1.1, 0, [p.Ack(65535), p.Sens(65535, 1)])
+    assert fire(core, 1.2) == 0
+    assert core.pending.seq == 65536
+
+
+def test_every_fired_cycle_ends_exactly_once(core):
+    # A mixed run: each cycle ends by SENS, ERR, reset, timeout or link loss.
+    endings = []
+    t = 1.0
+    for k in range(30):
+        seq = fire(core, t)
+        mode = k % 5
+        if mode == 0:
+            endings += results(core.received(t + 0.1, 0, [p.Ack(seq), p.Sens(seq, k % 2)]))
+        elif mode == 1:
+            endings += results(core.received(t + 0.1, 0, [p.Err(seq, 'FAULT', 'stall')]))
+        elif mode == 2:
+            endings += results(core.received(t + 0.1, 0, [p.Ack(seq), p.Hello('fw', 'X')]))
+        elif mode == 3:
+            core.received(t + 0.1, 0, [p.Hb(1, 'BUSY')])
+            endings += results(core.tick(t + 0.6, 0))
+        else:
+            endings += results(core.link_lost(t + 0.1, 0, 'gone'))
+            core.tick(t + 1.0, 0)
+            core.link_opened(t + 1.0)
+            core.received(t + 1.0, 0, [p.Pong(core._ping_token)])
+        # Late or duplicate replies never end a cycle twice.
+        endings += results(core.received(t + 1.1, 0, [p.Sens(seq, 1), p.Ack(seq)]))
+        core.received(t + 1.2, 0, [p.Hb(1, 'IDLE')])
+        t += 2.0
+    assert [r.seq for r in endings] == list(range(1, 31))
+    assert core.counters['completed'] + core.counters['failed'] == core.counters['fired'] == 30
+    assert all(r.reason for r in endings if not r.ok)

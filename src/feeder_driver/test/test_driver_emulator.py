@@ -1,0 +1,252 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The controller emulator on a pty, talked to through pyserial like the driver does."""
+
+import json
+import os
+import subprocess
+import sys
+import time
+
+from feeder_driver import protocol as p
+from feeder_driver.emulator import EmulatorError, Faults
+from feeder_driver.testing import EmulatorThread
+import pytest
+import serial
+from throwmap import load_scene, sees
+
+
+class Client:
+    """Host side: write commands, collect decoded replies."""
+
+    def __init__(self, path):
+        self.ser = serial.serial_for_url(path, baudrate=115200, timeout=0.02, exclusive=True)
+        self.ser.reset_input_buffer()
+        self.parser = p.Parser()
+        self.events = []
+
+    def send(self, msg):
+        self.ser.write(p.encode(msg) if not isinstance(msg, bytes) else msg)
+
+    def wait(self, pred, timeout=3.0):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            for e in self.parser.feed(self.ser.read(4096)):
+                self.events.append(e)
+            hit = [e for e in self.events if pred(e)]
+            if hit:
+                return hit
+        raise AssertionError(f'timed out; got {self.events[-10:]}')
+
+    def close(self):
+        self.ser.close()
+
+
+@pytest.fixture
+def emu_factory(scene_path, sensor_radius, link_path):
+    started = []
+
+    def make(**kw):
+        kw.setdefault('cycle_time', 0.02)
+        kw.setdefault('heartbeat', 0.2)
+        emu = EmulatorThread(scene_path, link_path, sensor_radius=sensor_radius, **kw).start()
+        started.append(emu)
+        return emu
+
+    yield make
+    for emu in started:
+        emu.stop()
+    assert not os.path.lexists(link_path)
+
+
+def test_banner_ping_and_heartbeat(emu_factory, link_path):
+    emu = emu_factory()
+    assert os.path.islink(link_path) and os.readlink(link_path).startswith('/dev/pts/')
+    cl = Client(link_path)
+    cl.send(p.Ping('t1'))
+    assert cl.wait(lambda e: e == p.Pong('t1'))
+    cl.send(p.Ident())
+    assert cl.wait(lambda e: e == p.Hello('feeder-emu-1.0', emu.controller.boot_id))
+    hb = cl.wait(lambda e: isinstance(e, p.Hb))[0]
+    assert hb.state == 'IDLE'
+    assert emu.controller.boot_id
+    cl.close()
+
+
+def test_cycles_follow_the_throw_map(emu_factory, link_path, scene_path, sensor_radius):
+    emu = emu_factory()
+    cl = Client(link_path)
+    scene = load_scene(scene_path)
+    edge, R = scene.default_start()
+    for seq in range(1, 41):
+        cl.send(p.Fire(seq))
+        sens = cl.wait(lambda e, s=seq: isinstance(e, p.Sens) and e.seq == s)[0]
+        edge, R, kind = scene.model.f(edge, R)
+        assert sens.bit == int(bool(sees(scene.part, edge, R, sensor_radius, 0.0)))
+    replies = [type(e).__name__ for e in cl.events if not isinstance(e, p.Hb)]
+    assert replies == ['Ack', 'Rel', 'Sens'] * 40
+    rel = [e for e in cl.events if isinstance(e, p.Rel)][0]
+    assert rel.speed_mrad_s == round(scene.release_speed * 1000)
+    recs = emu.records
+    assert [r['seq'] for r in recs] == list(range(1, 41))
+    assert all(r['outcome'] == 'completed' and r['throw'] for r in recs)
+    assert recs[-1]['edge'] == edge and recs[-1]['R'] == pytest.approx(R)
+    assert any(r['bit'] for r in recs), 'the designed sensor should fire within 40 throws'
+    cl.close()
+
+
+def test_busy_stop_and_bad_frames(emu_factory, link_path):
+    emu = emu_factory(cycle_time=0.5)
+    cl = Client(link_path)
+    cl.send(p.Fire(1))
+    cl.wait(lambda e: e == p.Ack(1))
+    cl.send(p.Fire(2))
+    assert cl.wait(lambda e: isinstance(e, p.Err) and e.seq == 2)[0].code == 'BUSY'
+    cl.send(p.Stop())
+    assert cl.wait(lambda e: isinstance(e, p.Err) and e.seq == 1)[0].code == 'ABORTED'
+    cl.send(b'$FIRE,3*00\r\n')
+    assert cl.wait(lambda e: isinstance(e, p.Err) and e.seq is None)[0].code == 'BADSUM'
+    cl.send(b'$JUMP*%02X\r\n' % p.checksum(b'JUMP'))
+    cl.wait(lambda e: isinstance(e, p.Err) and e.code == 'BADCMD')
+    cl.send(b'$FIRE,x*%02X\r\n' % p.checksum(b'FIRE,x'))
+    cl.wait(lambda e: isinstance(e, p.Err) and e.code == 'BADARG')
+    time.sleep(0.6)
+    outcomes = [(r['seq'], r['outcome']) for r in emu.records]
+    assert outcomes == [(2, 'busy'), (1, 'aborted')]
+    assert emu.controller.cycles == 1
+    cl.close()
+
+
+def test_fault_switches(emu_factory, link_path):
+    emu = emu_factory(faults=Faults(drop_ack_every=2, drop_sens_every=3, garbage_every=4,
+                                    delay=0.1, delay_every=5))
+    cl = Client(link_path)
+    for seq in range(1, 7):
+        cl.send(p.Fire(seq))
+        cl.wait(lambda e, s=seq: isinstance(e, p.Rel) and e.seq == s)
+        time.sleep(0.05)
+        cl.wait(lambda e: isinstance(e, p.Hb) and e.state == 'IDLE')
+    got = {(type(e).__name__, e.seq) for e in cl.events if hasattr(e, 'seq')}
+    assert ('Ack', 2) not in got and ('Ack', 4) not in got and ('Ack', 1) in got
+    assert ('Sens', 3) not in got and ('Sens', 6) not in got and ('Sens', 5) in got
+    assert cl.parser.dropped_frames >= 3 and cl.parser.stats['garbage_bytes'] > 0
+    faults = {r['seq']: r['faults'] for r in emu.records}
+    assert faults[4] == ['drop_ack', 'garbage'] and faults[5] == ['delay']
+    assert faults[6] == ['drop_ack', 'drop_sens']
+    outcomes = [r['outcome'] for r in emu.records]
+    assert outcomes == ['completed', 'completed', 'sens_dropped', 'completed', 'completed',
+                        'sens_dropped']
+    cl.close()
+
+
+def test_reset_mid_cycle(emu_factory, link_path):
+    emu = emu_factory(faults=Faults(reset_after=1))
+    cl = Client(link_path)
+    boot = emu.controller.boot_id
+    cl.send(p.Fire(1))
+    cl.wait(lambda e: isinstance(e, p.Sens))
+    cl.send(p.Fire(2))
+    hello = cl.wait(lambda e: isinstance(e, p.Hello))[0]
+    assert hello.boot_id != boot
+    time.sleep(0.1)
+    assert not [e for e in cl.events if isinstance(e, (p.Rel, p.Sens)) and e.seq == 2]
+    rec = emu.records[-1]
+    assert rec['outcome'] == 'reset' and not rec['throw']
+    assert (rec['edge'], rec['R']) == (emu.records[0]['edge'], emu.records[0]['R'])
+    cl.send(p.Fire(3))
+    cl.wait(lambda e: isinstance(e, p.Sens) and e.seq == 3)
+    cl.close()
+
+
+def test_unplug_and_replug_behind_the_same_link(emu_factory, link_path):
+    emu = emu_factory(faults=Faults(unplug_after=1, unplug_for=0.4))
+    cl = Client(link_path)
+    first = os.readlink(link_path)
+    assert first.startswith('/dev/pts/')
+    cl.send(p.Fire(1))
+    cl.wait(lambda e: isinstance(e, p.Sens))
+    cl.send(p.Fire(2))
+    # The pty vanishes right after REL (which may or may not get through first).
+    with pytest.raises(serial.SerialException, match='disconnected'):
+        cl.wait(lambda e: isinstance(e, p.Sens) and e.seq == 2)
+    cl.close()
+    assert not os.path.lexists(link_path)
+    end = time.monotonic() + 3
+    while not os.path.lexists(link_path) and time.monotonic() < end:
+        time.sleep(0.02)
+    assert os.path.islink(link_path)
+    cl = Client(link_path)
+    cl.send(p.Ping('back'))
+    cl.wait(lambda e: e == p.Pong('back'))
+    rec = emu.records[-1]
+    assert rec['outcome'] == 'unplug' and rec['throw'] and rec['sent']['sens'] is False
+    assert emu.controller.unplugs == 1
+    cl.close()
+
+
+def test_truth_log_file(scene_path, sensor_radius, link_path, tmp_path):
+    log = tmp_path / 'truth.jsonl'
+    with EmulatorThread(scene_path, link_path, sensor_radius=sensor_radius, cycle_time=0.01,
+                        truth_log=str(log)):
+        cl = Client(link_path)
+        for seq in (5, 6):
+            cl.send(p.Fire(seq))
+            cl.wait(lambda e, s=seq: isinstance(e, p.Sens) and e.seq == s)
+        cl.close()
+    lines = [json.loads(x) for x in log.read_text().splitlines()]
+    assert lines[0]['type'] == 'header' and lines[0]['sensor_radius'] == sensor_radius
+    assert [(x['seq'], x['cycle']) for x in lines[1:]] == [(5, 1), (6, 2)]
+    assert set(lines[1]) >= {'edge', 'R', 'kind', 'bit', 'faults', 'outcome'}
+
+
+@pytest.mark.parametrize('kwargs, text', [
+    ({'drop_ack_every': 0}, '--drop-ack-every'),
+    ({'delay': -1.0}, '--delay'),
+    ({'delay_every': 3}, '--delay-every: needs --delay'),
+    ({'reset_after': -2}, '--reset-after'),
+])
+def test_bad_fault_options(kwargs, text):
+    with pytest.raises(EmulatorError, match=text):
+        Faults(**kwargs)
+
+
+def test_link_that_is_a_regular_file_is_refused(scene_path, sensor_radius, tmp_path):
+    path = tmp_path / 'file'
+    path.write_text('x')
+    with pytest.raises(EmulatorError, match='not a symlink'):
+        EmulatorThread(scene_path, str(path), sensor_radius=sensor_radius)
+
+
+def _run_cli(*args):
+    env = dict(os.environ)
+    env['PYTHONPATH'] = os.pathsep.join(
+        [os.path.dirname(os.path.dirname(p.__file__)), env.get('PYTHONPATH', '')])
+    return subprocess.run([sys.executable, '-m', 'feeder_driver.emulator', *args],
+                          capture_output=True, text=True, timeout=60, env=env)
+
+
+def test_cli_errors_are_clear(tmp_path):
+    res = _run_cli('--scene', str(tmp_path / 'missing.yaml'), '--link', str(tmp_path / 'l'))
+    assert res.returncode == 2 and 'no such file' in res.stderr and 'scene' in res.stderr
+    res = _run_cli('--scene', 'x.yaml', '--drop-sens-every', 'two')
+    assert res.returncode == 2 and 'invalid int value' in res.stderr
+
+
+def test_cli_runs_and_cleans_up(tmp_path, scene_path, sensor_radius):
+    link = str(tmp_path / 'tty')
+    res = _run_cli('--scene', scene_path, '--link', link, '--sensor-radius',
+                   str(sensor_radius), '--max-time', '0.5')
+    assert res.returncode == 0, res.stderr
+    assert 'ready on' in res.stdout and not os.path.lexists(link)

@@ -1,0 +1,407 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The driver node in-process (own Context, own domain) against the emulator on a pty."""
+
+import math
+import os
+import threading
+import time
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from feeder_driver import protocol as p
+from feeder_driver.driver_node import DriverNode
+from feeder_driver.emulator import Faults
+from feeder_driver.testing import EmulatorThread
+import pytest
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.lifecycle import TransitionCallbackReturn
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState, Range
+from std_srvs.srv import SetBool, Trigger
+
+FAST = {'ack_timeout_s': 0.15, 'cycle_timeout_s': 1.0, 'watchdog_timeout_s': 0.8,
+        'reconnect_initial_s': 0.05, 'reconnect_max_s': 0.2, 'cycle_period': 0.03}
+
+
+class Harness:
+    """A driver node plus a probe node that records everything the driver publishes."""
+
+    def __init__(self, domain_id, port, **overrides):
+        self.ctx = Context()
+        rclpy.init(context=self.ctx, domain_id=domain_id)
+        self.executor = SingleThreadedExecutor(context=self.ctx)
+        params = dict(FAST, port=port, **overrides)
+        self.node = DriverNode(context=self.ctx, namespace='/feeder',
+                               parameter_overrides=[Parameter(k, value=v)
+                                                    for k, v in params.items()])
+        self.probe = rclpy.create_node('probe', context=self.ctx)
+        self.status, self.prox, self.joints, self.diags = [], [], [], []
+        self.probe.create_subscription(
+            DiagnosticStatus, '/feeder/cycle_status', self.status.append,
+            QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+        self.probe.create_subscription(Range, '/feeder/proximity', self.prox.append,
+                                       qos_profile_sensor_data)
+        self.probe.create_subscription(JointState, '/feeder/joint_states', self.joints.append,
+                                       10)
+        self.probe.create_subscription(DiagnosticArray, '/diagnostics', self.diags.append,
+                                       QoSProfile(depth=10,
+                                                  durability=DurabilityPolicy.VOLATILE))
+        self.trigger_cl = self.probe.create_client(Trigger, '/feeder/feeder_driver/trigger_cycle')
+        self.enable_cl = self.probe.create_client(SetBool, '/feeder/feeder_driver/enable')
+        self.executor.add_node(self.node)
+        self.executor.add_node(self.probe)
+        assert self.trigger_cl.wait_for_service(timeout_sec=5)
+
+    def start(self):
+        assert self.node.trigger_configure() == TransitionCallbackReturn.SUCCESS
+        assert self.node.trigger_activate() == TransitionCallbackReturn.SUCCESS
+        return self
+
+    def spin_until(self, cond, timeout=5.0):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if cond():
+                return True
+            self.executor.spin_once(timeout_sec=0.01)
+        return cond()
+
+    def spin_for(self, seconds):
+        self.spin_until(lambda: False, seconds)
+
+    def call(self, client, request, timeout=5.0):
+        fut = client.call_async(request)
+        assert self.spin_until(fut.done, timeout), 'service call timed out'
+        return fut.result()
+
+    def trigger(self):
+        return self.call(self.trigger_cl, Trigger.Request())
+
+    def enable(self, on):
+        return self.call(self.enable_cl, SetBool.Request(data=on))
+
+    def connected(self):
+        return self.node.core.link == 'connected'
+
+    def idle(self):
+        return self.node.core.pending is None
+
+    def wait_connected(self, timeout=5.0):
+        assert self.spin_until(self.connected, timeout), self.node.core.last_link_error
+
+    def close(self):
+        self.node.destroy_node()
+        self.probe.destroy_node()
+        self.executor.shutdown()
+        rclpy.shutdown(context=self.ctx)
+
+
+@pytest.fixture
+def emulator(scene_path, sensor_radius, link_path):
+    started = []
+
+    def make(**kw):
+        kw.setdefault('cycle_time', 0.02)
+        kw.setdefault('heartbeat', 0.1)
+        emu = EmulatorThread(scene_path, link_path, sensor_radius=sensor_radius, **kw)
+        started.append(emu.start())
+        return emu
+
+    yield make
+    for emu in started:
+        emu.stop()
+
+
+@pytest.fixture
+def harness(domain_id):
+    made = []
+
+    def make(port, **overrides):
+        h = Harness(domain_id, port, **overrides)
+        made.append(h)
+        return h
+
+    yield make
+    for h in made:
+        h.close()
+
+
+def values(status):
+    return {kv.key: kv.value for kv in status.values}
+
+
+def by_seq(statuses):
+    return {int(values(s)['seq']): s for s in statuses}
+
+
+def check_accounting(h, emu):
+    """
+    Check that every fired cycle is accounted for; return (completed, failed) statuses.
+
+    Every fired cycle has exactly one cycle_status, proximity comes once per completed
+    cycle, completed bits equal the emulator's truth, failures carry reasons.
+    """
+    core = h.node.core
+    fired = core.counters['fired']
+    assert h.spin_until(lambda: len(h.status) == fired and h.idle(), 5)
+    seqs = [int(values(s)['seq']) for s in h.status]
+    assert seqs == list(range(1, fired + 1))
+    ok = [s for s in h.status if s.level == DiagnosticStatus.OK]
+    failed = [s for s in h.status if s.level == DiagnosticStatus.ERROR]
+    assert len(ok) + len(failed) == fired
+    assert core.counters['completed'] == len(ok) and core.counters['failed'] == len(failed)
+    assert h.spin_until(lambda: len(h.prox) == len(ok), 2)
+    assert len(h.prox) == len(ok)
+    truth = {}
+    for rec in emu.records:
+        truth.setdefault(rec['seq'], []).append(rec)
+    for s in ok:
+        v = values(s)
+        (rec,) = truth[int(v['seq'])]
+        assert s.message == 'completed' and rec['outcome'] == 'completed'
+        assert v['sensor'] == str(rec['bit'])
+    # proximity and cycle_status of a completed cycle carry the same sample stamp.
+    prox = {r.header.stamp.sec * 10 ** 9 + r.header.stamp.nanosec: r.range for r in h.prox}
+    assert len(prox) == len(h.prox)
+    for s in ok:
+        sec, frac = values(s)['stamp'].split('.')
+        ns = int(sec) * 10 ** 9 + int(frac)
+        assert prox[ns] == (-math.inf if values(s)['sensor'] == '1' else math.inf)
+    for s in failed:
+        v = values(s)
+        assert s.message and s.message != 'completed' and v['sensor'] == 'none'
+        recs = truth.get(int(v['seq']), [])
+        # Failed on the driver side: the emulator either injected a fault into that
+        # cycle, refused it, or never saw the FIRE.
+        assert all(r['outcome'] != 'completed' or r['faults'] for r in recs), (s.message,
+                                                                               recs)
+    return ok, failed
+
+
+def test_normal_cycles(harness, emulator, link_path):
+    emu = emulator()
+    h = harness(link_path, sensor_range_m=0.03, frame_id='my_sensor').start()
+    h.wait_connected()
+    for k in range(1, 16):
+        res = h.trigger()
+        assert res.success and f'seq {k}' in res.message, res.message
+        assert h.spin_until(h.idle, 2)
+    ok, failed = check_accounting(h, emu)
+    assert len(ok) == 15 and not failed
+    r = h.prox[0]
+    assert r.min_range == r.max_range == pytest.approx(0.03)
+    assert r.radiation_type == Range.INFRARED and r.header.frame_id == 'my_sensor'
+    assert values(h.status[0])['sensor'] in ('0', '1')
+    assert h.status[0].name == 'cycle' and h.status[0].hardware_id == link_path
+    assert h.spin_until(lambda: len(h.joints) >= 30, 2)
+    speeds = sorted({round(j.velocity[0], 4) for j in h.joints})
+    assert speeds == [0.0, 5.585]
+    assert all(j.name == ['feeder_arm_joint'] and list(j.effort) == [] for j in h.joints)
+
+
+def test_continuous_cycling_and_diagnostics(harness, emulator, link_path):
+    emu = emulator()
+    h = harness(link_path).start()
+    h.wait_connected()
+    res = h.enable(True)
+    assert res.success, res.message
+    refused = h.trigger()
+    assert not refused.success and 'enable' in refused.message
+    assert h.spin_until(lambda: len(h.status) >= 30, 10)
+    assert h.enable(False).success
+    ok, failed = check_accounting(h, emu)
+    assert not failed
+    fired = h.node.core.counters['fired']
+
+    def diag_caught_up():
+        return any(int(values(s).get('fired', -1)) == fired for d in h.diags for s in d.status)
+
+    assert h.spin_until(diag_caught_up, 3)
+    names = {s.name: s for s in h.diags[-1].status}
+    link = names['feeder_driver: serial link']
+    cyc = names['feeder_driver: cycles']
+    assert link.level == DiagnosticStatus.OK and link.hardware_id == link_path
+    assert values(link)['firmware'] == 'feeder-emu-1.0'
+    assert int(values(cyc)['fired']) == fired >= 30
+    assert cyc.level == DiagnosticStatus.OK and values(cyc)['enabled'] == 'false'
+
+
+def test_every_fault_kind_is_accounted_for(harness, emulator, link_path):
+    faults = Faults(drop_ack_every=5, drop_sens_every=7, garbage_every=3, delay=0.3,
+                    delay_every=11, reset_after=17, seed=3)
+    emu = emulator(faults=faults)
+    h = harness(link_path).start()
+    h.wait_connected()
+    assert h.enable(True).success
+    assert h.spin_until(lambda: len(h.status) >= 40, 20)
+    h.enable(False)
+    ok, failed = check_accounting(h, emu)
+    reasons = ' | '.join(s.message for s in failed)
+    assert 'no ACK' in reasons               # delayed cycles (0.3 s > ack_timeout 0.15 s)
+    assert 'SENS' in reasons                 # dropped SENS: IDLE heartbeat or timeout
+    assert 'controller reset during cycle' in reasons
+    kinds = {f for r in emu.records for f in r['faults']}
+    assert kinds == {'drop_ack', 'drop_sens', 'garbage', 'delay', 'reset'}
+    # A dropped ACK alone does not lose the cycle: REL/SENS imply it.
+    drop_ack_only = [r for r in emu.records if r['faults'] == ['drop_ack']]
+    assert drop_ack_only and all(r['outcome'] == 'completed' for r in drop_ack_only)
+    assert h.node.core.counters['acks_missing'] >= len(drop_ack_only)
+    stats = h.node.link.parser.stats
+    assert stats['checksum'] > 0 and stats['overlong'] > 0 and stats['garbage_bytes'] > 0
+    assert len(ok) >= 25
+
+
+def test_unplug_replug_reconnects(harness, emulator, link_path):
+    emu = emulator(faults=Faults(unplug_after=3, unplug_for=0.6))
+    h = harness(link_path).start()
+    h.wait_connected()
+    for k in range(1, 5):
+        assert h.trigger().success
+        assert h.spin_until(lambda: len(h.status) == k, 2)
+    assert values(h.status[3])['sensor'] == 'none'
+    assert 'serial link lost during cycle' in h.status[3].message
+    res = h.trigger()
+    assert not res.success and 'serial link is disconnected' in res.message, res.message
+    assert not h.enable(True).success
+    h.wait_connected(5)
+    assert h.node.core.counters['link_losses'] == 1
+    assert h.node.core.counters['open_failures'] >= 1     # the link was gone for a while
+    for _ in range(3):
+        assert h.trigger().success
+        assert h.spin_until(h.idle, 2)
+    ok, failed = check_accounting(h, emu)
+    assert len(ok) == 6 and len(failed) == 1
+
+
+def test_refusals_when_inactive_or_disconnected(harness, tmp_path):
+    h = harness(str(tmp_path / 'no-such-port'))
+    res = h.trigger()
+    assert not res.success and 'unconfigured' in res.message
+    assert h.node.trigger_configure() == TransitionCallbackReturn.SUCCESS
+    res = h.trigger()
+    assert not res.success and 'inactive' in res.message
+    assert not h.enable(True).success
+    assert h.node.trigger_activate() == TransitionCallbackReturn.SUCCESS
+    h.spin_for(0.3)
+    res = h.trigger()
+    assert not res.success and 'disconnected' in res.message
+    assert 'No such file' in res.message or 'could not open' in res.message, res.message
+    res = h.enable(True)
+    assert not res.success and 'disconnected' in res.message
+    assert h.node.core.counters['fired'] == 0 and h.status == []
+    assert h.spin_until(lambda: h.diags, 3)
+    link = [s for s in h.diags[-1].status if s.name.endswith('serial link')][0]
+    assert link.level == DiagnosticStatus.ERROR and 'open failed' in link.message
+
+
+def test_busy_refusal_and_deactivate_abort(harness, emulator, link_path):
+    emu = emulator(cycle_time=0.6)
+    h = harness(link_path).start()
+    h.wait_connected()
+    assert h.trigger().success
+    res = h.trigger()
+    assert not res.success and 'busy with cycle seq 1' in res.message
+    h.spin_for(0.1)
+    assert h.node.trigger_deactivate() == TransitionCallbackReturn.SUCCESS
+    assert h.spin_until(lambda: h.status, 2)
+    assert h.status[0].message == 'aborted: node deactivated'
+    assert h.status[0].level == DiagnosticStatus.ERROR
+    assert h.spin_until(lambda: emu.records, 2)
+    assert emu.records[0]['outcome'] == 'aborted'      # the controller got STOP
+    res = h.trigger()
+    assert not res.success and 'inactive' in res.message
+
+
+def _fake_device(path, reply_ping=True, noise=False, stop=None):
+    """Serve a pty that answers PING, then stays silent (or emits only noise)."""
+    master, slave = os.openpty()
+    os.symlink(os.ttyname(slave), path)
+
+    def serve():
+        parser = p.Parser(p.HOST_MESSAGES)
+        while not stop.is_set():
+            try:
+                import select
+                r, _, _ = select.select([master], [], [], 0.05)
+                if noise:
+                    os.write(master, b'\xfe\xff\x00garbage 9600 baud?\r\n')
+                if r:
+                    for e in parser.feed(os.read(master, 1024)):
+                        if reply_ping and isinstance(e, p.Ping):
+                            os.write(master, p.encode(p.Pong(e.token)))
+            except OSError:
+                return
+
+    t = threading.Thread(target=serve, daemon=True)
+    t.start()
+    return t, master, slave
+
+
+@pytest.mark.parametrize('noise', [False, True], ids=['silent', 'noise'])
+def test_watchdog_and_handshake_timeouts(harness, link_path, noise):
+    stop = threading.Event()
+    t, master, slave = _fake_device(link_path, reply_ping=not noise, noise=noise, stop=stop)
+    try:
+        h = harness(link_path).start()
+        if noise:
+            assert h.spin_until(lambda: h.node.core.counters['handshake_timeouts'] >= 1, 5)
+            assert 'no PONG' in h.node.core.last_link_error
+            assert h.node.link.parser.stats['garbage_bytes'] > 0
+        else:
+            h.wait_connected()
+            assert h.spin_until(lambda: h.node.core.counters['watchdog_timeouts'] >= 1, 5)
+            assert 'silent' in h.node.core.last_link_error
+    finally:
+        stop.set()
+        t.join()
+        os.close(master)
+        os.close(slave)
+
+
+def test_second_driver_cannot_open_the_same_port(harness, emulator, link_path, domain_id):
+    emulator()
+    h = harness(link_path).start()
+    h.wait_connected()
+    from feeder_driver.serial_link import LinkError, SerialLink
+    other = SerialLink(link_path, 115200, lambda *a: None, lambda *a: None)
+    with pytest.raises(LinkError, match='exclusively lock'):
+        other.open_port()
+
+
+@pytest.mark.parametrize('name, value, text', [
+    ('cycle_period', -1.0, 'out of range'),
+    ('cycle_period', 'fast', 'Wrong parameter type'),
+    ('ack_timeout_s', 2.0, 'must be smaller than cycle_timeout_s'),
+    ('reconnect_initial_s', 30.0, 'must not exceed reconnect_max_s'),
+    ('frame_id', ' ', 'frame_id must not be empty'),
+    ('port', '/dev/other', 'read-only'),
+    ('baud_rate', 9600, 'read-only'),
+])
+def test_bad_parameters_are_rejected_with_a_reason(harness, link_path, name, value, text):
+    h = harness(link_path)
+    (res,) = h.node.set_parameters([Parameter(name, value=value)])
+    assert not res.successful and text in res.reason, res.reason
+
+
+def test_good_parameters_apply(harness, link_path):
+    h = harness(link_path)
+    (res,) = h.node.set_parameters([Parameter('cycle_timeout_s', value=2.5)])
+    assert res.successful
+    assert h.node.core.config.cycle_timeout_s == 2.5
+    res = h.node.set_parameters_atomically([Parameter('reconnect_initial_s', value=20.0),
+                                            Parameter('reconnect_max_s', value=40.0)])
+    assert res.successful and h.node.core.backoff.maximum == 40.0

@@ -1,0 +1,176 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Protocol codec: round trips, the worked checksum example, defensive decoding."""
+
+import random
+
+from feeder_driver import protocol as p
+from hypothesis import given, settings
+from hypothesis import strategies as st
+import pytest
+
+ALL = [p.Fire(0), p.Fire(65535), p.Stop(), p.Ping('h1'), p.Ident(),
+       p.Hello('feeder-emu-1.0', '0A1B'), p.Ack(7), p.Rel(7, 5585), p.Rel(7, -12),
+       p.Sens(7, 1), p.Sens(65535, 0),
+       p.Err(7, 'BUSY', 'cycle 6 in progress'), p.Err(None, 'BADSUM', ''), p.Pong('h1'),
+       p.Hb(0, 'IDLE'), p.Hb(2 ** 32 - 1, 'BUSY')]
+TABLE = dict(p.HOST_MESSAGES, **p.CONTROLLER_MESSAGES)
+
+
+def test_checksum_worked_example():
+    # docs/serial-protocol.md: 'P'^'I'^'N'^'G'^','^'4'^'2' = 0x3A
+    assert p.checksum(b'PING,42') == 0x3A
+    assert p.encode(p.Ping('42')) == b'$PING,42*3A\r\n'
+    assert p.encode(p.Fire(7)) == b'$FIRE,7*03\r\n'
+    assert p.encode(p.Sens(7, 1)) == b'$SENS,7,1*0D\r\n'
+
+
+@pytest.mark.parametrize('msg', ALL, ids=lambda m: m.NAME)
+def test_round_trip(msg):
+    parser = p.Parser(TABLE)
+    line = p.encode(msg)
+    assert line.startswith(b'$') and line.endswith(b'\r\n') and len(line) <= p.MAX_LINE
+    assert parser.feed(line) == [msg]
+    assert parser.stats['lines'] == 1 and parser.dropped_frames == 0
+
+
+def test_lowercase_checksum_and_bare_newline_are_accepted():
+    parser = p.Parser()
+    line = b'$HELLO,fw,AB*%02x\n' % p.checksum(b'HELLO,fw,AB')
+    assert parser.feed(line) == [p.Hello('fw', 'AB')]
+
+
+def test_every_split_of_a_stream_gives_the_same_messages():
+    stream = b''.join(p.encode(m) for m in ALL)
+    for cut in range(1, len(stream)):
+        parser = p.Parser(TABLE)
+        assert parser.feed(stream[:cut]) + parser.feed(stream[cut:]) == ALL
+
+
+def test_byte_by_byte():
+    stream = b''.join(p.encode(m) for m in ALL)
+    parser = p.Parser(TABLE)
+    out = []
+    for b in stream:
+        out += parser.feed(bytes([b]))
+    assert out == ALL
+
+
+@pytest.mark.parametrize('raw, kind', [
+    (b'$SENS,7,1*00\r\n', 'checksum'),
+    (b'$SENS,7,1\r\n', 'frame'),
+    (b'$SENS,7,1*G1\r\n', 'frame'),
+    (b'$SENS,7,\xff1*00\r\n', 'frame'),
+    (b'$SE\x00NS,7,1*00\r\n', 'frame'),
+    (b'$FOO,1*%02X\r\n' % p.checksum(b'FOO,1'), 'unknown'),
+    (b'$SENS,7,2*%02X\r\n' % p.checksum(b'SENS,7,2'), 'fields'),
+    (b'$SENS,70000,1*%02X\r\n' % p.checksum(b'SENS,70000,1'), 'fields'),
+    (b'$ACK,7,8*%02X\r\n' % p.checksum(b'ACK,7,8'), 'fields'),
+    (b'$ACK,-1*%02X\r\n' % p.checksum(b'ACK,-1'), 'fields'),
+    (b'$ACK,7', 'truncated'),
+    (b'$' + b'A' * 200 + b'\r\n', 'overlong'),
+])
+def test_defective_frames_are_dropped_counted_and_the_next_frame_survives(raw, kind):
+    parser = p.Parser()
+    good = p.encode(p.Ack(9))
+    events = parser.feed(raw) + parser.feed(good)
+    assert events[-1] == p.Ack(9)
+    rejected = [e for e in events if isinstance(e, p.Rejected)]
+    assert [r.kind for r in rejected] == [kind]
+    assert rejected[0].detail
+    assert parser.stats[kind] == 1 and parser.dropped_frames == 1
+
+
+def test_garbage_outside_frames_is_counted_not_reported():
+    parser = p.Parser()
+    assert parser.feed(b'\xff\xfe\r\nnoise*12\n') == []
+    assert parser.stats['garbage_bytes'] == 13
+    assert parser.feed(p.encode(p.Ack(1))) == [p.Ack(1)]
+
+
+def test_buffer_stays_bounded_under_endless_input():
+    parser = p.Parser()
+    for _ in range(1000):
+        parser.feed(b'$' + b'x' * 1000)
+        assert len(parser._buf) <= p.MAX_LINE
+    assert parser.feed(b'\n' + p.encode(p.Ack(3))) == [p.Ack(3)]
+    assert parser.stats['overlong'] >= 1
+
+
+def test_a_frame_of_exactly_max_line_is_accepted_and_one_more_byte_is_not():
+    text = 'x' * (p.MAX_LINE - len('$ERR,1,FAULT,*HH\r\n'))
+    with pytest.raises(p.ProtocolError):
+        p.encode(p.Err(1, 'FAULT', text))       # text longer than 48
+    fields = ['HELLO', 'f' * 32, 'A' * 16]
+    line = p.frame(fields)
+    parser = p.Parser(max_line=len(line))
+    assert parser.feed(line) == [p.Hello('f' * 32, 'A' * 16)]
+    parser = p.Parser(max_line=len(line) - 1)
+    assert [e.kind for e in parser.feed(line)] == ['overlong']
+
+
+@pytest.mark.parametrize('bad', [
+    lambda: p.Fire(-1), lambda: p.Fire(65536), lambda: p.Fire(True), lambda: p.Ping(''),
+    lambda: p.Ping('a,b'), lambda: p.Hello('fw$', 'AB'), lambda: p.Hello('fw', 'A-B'),
+    lambda: p.Sens(1, 2), lambda: p.Err(1, 'busy', ''), lambda: p.Err(1, 'BUSY', 'a*b'),
+    lambda: p.Hb(-1, 'IDLE'), lambda: p.Rel(1, 10 ** 8), lambda: p.Rel(1, 1.5),
+])
+def test_encoding_invalid_values_raises_a_clear_error(bad):
+    with pytest.raises(p.ProtocolError) as info:
+        p.encode(bad())
+    assert ':' in str(info.value)
+
+
+def test_random_noise_never_raises_and_never_forges_a_message():
+    rng = random.Random(1)
+    parser = p.Parser(TABLE)
+    for _ in range(300):
+        chunk = bytes(rng.randrange(256) for _ in range(rng.randrange(1, 64)))
+        for event in parser.feed(chunk):
+            # Random bytes pass an 8-bit checksum now and then, but only as a valid message.
+            assert isinstance(event, (p.Rejected,) + tuple(TABLE.values()))
+    assert parser.stats['bytes'] > 0
+
+
+@settings(max_examples=200, deadline=None)
+@given(noise=st.lists(st.binary(max_size=40), max_size=6),
+       seqs=st.lists(st.integers(0, 65535), min_size=1, max_size=6),
+       cuts=st.lists(st.integers(1, 30), max_size=20))
+def test_messages_between_noise_survive_any_chunking(noise, seqs, cuts):
+    # Noise may end in a cut frame; a real frame always starts with $, so it resyncs.
+    msgs = [p.Sens(s, s % 2) for s in seqs]
+    stream = b''
+    for k, m in enumerate(msgs):
+        junk = noise[k] if k < len(noise) else b''
+        stream += junk.replace(b'\n', b' ') + p.encode(m)
+    parser = p.Parser()
+    out, i = [], 0
+    for c in cuts:
+        out += parser.feed(stream[i:i + c])
+        i += c
+    out += parser.feed(stream[i:])
+    got = [e for e in out if isinstance(e, p.Sens)]
+    assert got == msgs
+
+
+def test_parser_rejects_a_tiny_max_line():
+    with pytest.raises(ValueError, match='max_line'):
+        p.Parser(max_line=3)
+
+
+def test_reject_codes_cover_every_kind():
+    parser = p.Parser()
+    assert set(p.REJECT_CODES) == set(parser.STAT_KEYS) - {'bytes', 'lines', 'garbage_bytes'}
+    assert set(p.REJECT_CODES.values()) <= set(p.ERROR_CODES)

@@ -1,0 +1,169 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The real driver against the emulated controller, with the monitor, as processes on real DDS.
+
+controller_emulator (pty, throw-map truth, injected faults) <- serial -> driver_node ->
+proximity + cycle_status -> monitor_node -> edge1_ready. Every cycle the driver fires is
+accounted for against the emulator's truth log, and the monitor's verdict is checked cycle by
+cycle: true exactly when the cycle completed, the part lies on the goal edge and the sensor
+sees it, after the warm-up (which restarts at every failed cycle, docs/nodes.md).
+"""
+
+import json
+import os
+import time
+
+from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_nodes import (Collector, Diagnostics, LATCHED, monitor, STARTUP_TIMEOUT,
+                          status_values, TRIANGLE, wait_for_monitor, wait_for_readers)
+from sensor_msgs.msg import Range
+from std_msgs.msg import Bool
+from std_srvs.srv import SetBool
+
+CYCLES = 240
+PERIOD = 0.03
+# Faults: every kind, and a failed cycle at least every ~40 cycles (so the monitor's pattern
+# checks, which need 87 settled throws, never apply and its verdicts follow the warm-up rule).
+EMULATOR_FAULTS = ['--drop-ack-every', '9', '--garbage-every', '5', '--drop-sens-every', '23',
+                   '--delay', '0.4', '--delay-every', '37', '--reset-after', '100',
+                   '--unplug-after', '150', '--unplug-for', '1.0']
+DRIVER_PARAMS = [f'cycle_period:={PERIOD}', 'ack_timeout_s:=0.15', 'cycle_timeout_s:=1.0',
+                 'watchdog_timeout_s:=1.0', 'reconnect_initial_s:=0.1', 'reconnect_max_s:=0.4']
+
+
+def read_truth(path):
+    header, fires = None, {}
+    for line in path.read_text().splitlines():
+        rec = json.loads(line)
+        if rec['type'] == 'header':
+            header = rec
+        else:
+            fires.setdefault(rec['seq'], []).append(rec)
+    return header, fires
+
+
+def test_every_cycle_accounted_and_ready_exactly_on_the_goal_edge(graph, ros, tmp_path):
+    link = tmp_path / 'feeder-tty'
+    truth_path = tmp_path / 'truth.jsonl'
+    emu = graph.start('feeder_driver', 'controller_emulator', '--scene', TRIANGLE,
+                      '--link', link, '--truth-log', truth_path, '--cycle-time', '0.02',
+                      '--heartbeat', '0.2', *EMULATOR_FAULTS, name='emulator')
+    end = time.monotonic() + STARTUP_TIMEOUT
+    while not os.path.islink(link):
+        assert emu.poll() is None, graph.log(emu)
+        assert time.monotonic() < end, 'the emulator did not create its pty link'
+        time.sleep(0.05)
+    args = ['--ros-args', '-r', '__ns:=/feeder', '-p', f'port:={link}']
+    for p in DRIVER_PARAMS:
+        args += ['-p', p]
+    drv = graph.start('feeder_driver', 'driver_node', *args, name='driver')
+    mon = monitor(graph)
+
+    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    prox = Collector(ros, Range, '/feeder/proximity')
+    diags = Diagnostics(ros)
+    wait_for_monitor(ros, ready)
+    wait_for_readers(ros, '/feeder/cycle_status', 2)    # the monitor's and ours
+    wait_for_readers(ros, '/feeder/proximity', 2)
+
+    # Enabling is refused until the driver's handshake with the controller is done.
+    end = time.monotonic() + STARTUP_TIMEOUT
+    while True:
+        res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True))
+        if res.success:
+            break
+        assert 'refused' in res.message and time.monotonic() < end, res.message
+        ros.spin_for(0.1)
+    ros.spin_until(lambda: len(statuses) >= CYCLES, 120, f'{CYCLES} cycles')
+    res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=False))
+    assert res.success, res.message
+    ros.spin_for(1.5)       # the cycle in flight ends; the monitor judges the last ones
+    assert drv.poll() is None and emu.poll() is None and mon.poll() is None
+
+    # --- every fired cycle: exactly one cycle_status, in seq order --------------------------
+    n = len(statuses)
+    vals = [status_values(s) for s in statuses.msgs]
+    seqs = [int(v['seq']) for v in vals]
+    assert seqs == list(range(1, n + 1))
+    ok = [s.level == DiagnosticStatus.OK for s in statuses.msgs]
+    assert all(s.level in (DiagnosticStatus.OK, DiagnosticStatus.ERROR) for s in statuses.msgs)
+
+    # --- against the emulator's truth ----------------------------------------------------------
+    header, fires = read_truth(truth_path)
+    goal, warmup = header['goal_edge'], header['warmup_throws']
+    assert set(fires) <= set(seqs), 'the emulator saw a FIRE the driver never reported'
+    injected = set()
+    for seq, v, good, st in zip(seqs, vals, ok, statuses.msgs):
+        recs = fires.get(seq % 65536, [])
+        for r in recs:
+            injected.update(r['faults'])
+        if good:
+            (rec,) = recs
+            assert rec['outcome'] == 'completed', (seq, rec)
+            assert v['sensor'] == str(rec['bit']), (seq, v, rec)
+        else:
+            assert v['sensor'] == 'none' and st.message and st.message != 'completed'
+            assert all(r['outcome'] != 'completed' or r['faults'] for r in recs), (st.message,
+                                                                                   recs)
+    assert injected == {'drop_ack', 'garbage', 'drop_sens', 'delay', 'reset', 'unplug'}
+    failed = [st.message for st, good in zip(statuses.msgs, ok) if not good]
+    reasons = ' | '.join(failed)
+    for expected in ('no ACK', 'SENS', 'controller reset during cycle',
+                     'serial link lost during cycle'):
+        assert expected in reasons, f'{expected!r} not among the failures: {reasons}'
+    assert sum(ok) >= CYCLES * 0.8
+
+    # proximity: once per completed cycle, with the cycle's bit and sample stamp.
+    assert len(prox) == sum(ok)
+    by_stamp = {p.header.stamp.sec * 10 ** 9 + p.header.stamp.nanosec: p for p in prox.msgs}
+    for v, good in zip(vals, ok):
+        if good:
+            sec, frac = v['stamp'].split('.')
+            p = by_stamp[int(sec) * 10 ** 9 + int(frac)]
+            assert (p.range == float('-inf')) == (v['sensor'] == '1')
+
+    # --- the monitor: one verdict per fired cycle after its initial latched false ----------
+    verdicts = [m.data for m in ready.msgs[1:]]
+    assert len(verdicts) == n, f'{len(verdicts)} verdicts for {n} cycles'
+    since, expected_ready = 0, 0
+    for seq, v, good, verdict in zip(seqs, vals, ok, verdicts):
+        if not good:
+            since = 0
+            assert verdict is False, f'edge1_ready on failed cycle {seq}'
+            continue
+        since += 1
+        (rec,) = fires[seq % 65536]
+        on_goal_seen = rec['bit'] == 1 and rec['edge'] == goal
+        expect = on_goal_seen and since >= warmup
+        assert verdict == expect, (f'cycle {seq}: edge1_ready {verdict}, truth: edge '
+                                   f'{rec["edge"]}, R {rec["R"]:.4f}, bit {rec["bit"]}, '
+                                   f'{since} throws since the last failure')
+        expected_ready += expect
+    assert expected_ready >= 5, 'too few goal-edge detections to mean anything'
+
+    # The driver's own account in /diagnostics agrees.
+    ros.spin_for(1.2)
+    cyc = diags.by_name['feeder_driver: cycles'][-1]
+    dv = Diagnostics.values(cyc)
+    assert int(dv['fired']) == n and int(dv['completed']) == sum(ok)
+    assert int(dv['failed']) == n - sum(ok)
+    link_status = diags.by_name['feeder_driver: serial link'][-1]
+    lv = Diagnostics.values(link_status)
+    assert int(lv['link_losses']) >= 1 and int(lv['controller_resets']) >= 1
+    assert int(lv['dropped checksum']) > 0 and int(lv['garbage bytes']) > 0
+    mv = Diagnostics.values(diags.by_name['feeder_monitor: readiness'][-1])
+    assert int(mv['failed']) == n - sum(ok) and int(mv['ready']) == expected_ready
