@@ -284,7 +284,7 @@ def throw_one(edge, R, w, g, h, n, rho2, d, u_l, u_r, stable, edge_len, vrad, ac
         return ERR_EDGE_INDEX, -1, math.nan, math.nan, math.nan, 0, -1, 0
     if not stable[edge]:
         return ERR_UNSTABLE_EDGE, -1, math.nan, math.nan, math.nan, 0, -1, 0
-    if not (R >= r_grasp[edge]):
+    if not (r_grasp[edge] <= R < math.inf):    # (an infinite R: model.domain_error says so)
         return ERR_GRASP, -1, math.nan, math.nan, math.nan, 0, -1, 0
     if not (R + u_l[edge] > 0.0):
         return ERR_TOE_STUB, -1, math.nan, math.nan, math.nan, 0, -1, 0

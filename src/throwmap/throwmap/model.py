@@ -105,6 +105,25 @@ def classify(edge0, edge, net_rotation):
     return 'jog' if edge == edge0 and abs(net_rotation) < math.pi else 'flip'
 
 
+def _state_arrays(edges, radii):
+    """Edges and radii as contiguous int64 / float64 arrays; InputError for anything else.
+
+    A non-integer edge (1.5, 'a', True) is refused rather than truncated by the conversion.
+    """
+    try:
+        e = np.asarray(edges)
+        r = np.asarray(radii, dtype=float).ravel()
+    except (TypeError, ValueError) as exc:
+        raise InputError('states', f'edges and radii must be numbers ({exc})',
+                         'give integer edge numbers and radii in metres') from None
+    integral = e.dtype.kind in 'iu' or (e.dtype.kind == 'f' and bool(np.all(np.isfinite(e)))
+                                        and bool(np.all(e == np.round(e))))
+    if e.size and not integral:
+        raise InputError('states', f'edges must be integers, got {e.ravel()[:4].tolist()}'
+                         f'{" ..." if e.size > 4 else ""}', 'give edge numbers as integers')
+    return (np.ascontiguousarray(e.astype(np.int64).ravel()), np.ascontiguousarray(r))
+
+
 class ThrowModel:
     """f(i, R) for a part on an arm with offset h, release speed w and gravity g (< 0).
 
@@ -179,7 +198,8 @@ class ThrowModel:
                                f'{part.u_l[edge]:.4g} m, u_r = {part.u_r[edge]:.4g} m; stable '
                                f'needs u_l < 0 < u_r): f is defined only on stable edges '
                                f'{part.stable_edges}')
-        if not (isinstance(R, (int, float, np.floating)) and math.isfinite(R)):
+        if (isinstance(R, bool) or not isinstance(R, (int, float, np.integer, np.floating))
+                or not math.isfinite(R)):
             return DomainError('radius', f'R must be a finite number of metres, got {R!r}')
         gr = self.grasp[edge]
         if R < gr.R_grasp:
@@ -201,8 +221,24 @@ class ThrowModel:
         return None
 
     # ----------------------------------------------------------------------------- the map
+    def _state(self, edge, R):
+        """(edge, R) as the kernel's types (int, float), or raise the DomainError.
+
+        The compiled kernel only takes an integer edge and a real R: anything else (a string,
+        None, a bool, a float edge, an integer beyond 64 bits) would fail to compile with a
+        numba TypingError, and an infinite R would fly forever; those are outside the domain.
+        """
+        if (isinstance(edge, (int, np.integer)) and not isinstance(edge, bool)
+                and isinstance(R, (int, float, np.integer, np.floating))
+                and not isinstance(R, bool) and math.isfinite(R) and 0 <= edge < self.part.n):
+            return int(edge), float(R)
+        err = self.domain_error(edge, R)
+        raise err if err is not None else DomainError(
+            'radius', f'R must be a finite number of metres, got {R!r}')
+
     def f(self, edge, R):
         """(edge', R', kind) of one throw; raises DomainError outside the domain."""
+        edge, R = self._state(edge, R)
         out = kernel.throw_one(edge, R, *self._args, self._no_record)
         status = out[0]
         if status != kernel.OK:
@@ -211,6 +247,7 @@ class ThrowModel:
 
     def throw(self, edge, R, trajectory=False, samples=60):
         """Full ThrowResult; with ``trajectory`` the sampled poses (throwmap.trajectory)."""
+        edge, R = self._state(edge, R)
         rec = np.empty((64, kernel.REC_COLS))
         status, j, r1, t, rot, nimp, k0, nrec = kernel.throw_one(edge, R, *self._args, rec)
         if status != kernel.OK:
@@ -234,8 +271,7 @@ class ThrowModel:
         """Vectorised f. Returns dict of arrays: edge, R, kind ('jog'/'flip'/''), status,
         flight_time, net_rotation. States outside the domain get status != 0 and NaN R;
         ``error_message(status, edge, R)`` gives the text."""
-        edges = np.ascontiguousarray(np.asarray(edges, dtype=np.int64).ravel())
-        radii = np.ascontiguousarray(np.asarray(radii, dtype=float).ravel())
+        edges, radii = _state_arrays(edges, radii)
         if edges.shape != radii.shape:
             raise InputError('states', f'{edges.size} edges but {radii.size} radii',
                              'give one edge per radius')
@@ -265,8 +301,10 @@ class ThrowModel:
 
     def orbits(self, edges, radii, throws):
         """Many orbits (shape (starts, throws + 1)); status per start, throws completed."""
-        edges = np.ascontiguousarray(np.asarray(edges, dtype=np.int64).ravel())
-        radii = np.ascontiguousarray(np.asarray(radii, dtype=float).ravel())
+        edges, radii = _state_arrays(edges, radii)
+        if edges.shape != radii.shape:
+            raise InputError('states', f'{edges.size} edges but {radii.size} radii',
+                             'give one edge per radius')
         m = edges.size
         out_edge = np.full((m, throws + 1), -1, dtype=np.int64)
         out_r = np.full((m, throws + 1), np.nan)
