@@ -132,7 +132,7 @@ def test_batch_reports_errors_per_state_without_nan_results(triangle):
 
 @pytest.mark.parametrize('changes, field, words', [
     ({'colour': 'red'}, 'colour', 'allowed here'),
-    ({'arm__offest': 0.1}, 'arm.offest', 'allowed here: offset, offset_cm'),
+    ({'arm__offest': 0.1}, 'arm.offest', 'allowed here: length, length_cm, offset, offset_cm'),
     ({'arm__offset': KeyError}, 'arm.offset', 'give exactly one of offset / offset_cm'),
     ({'arm__offset_cm': -0.5}, 'arm.offset', 'given twice'),
     ({'gravity': 'down'}, 'gravity', 'must be a number'),

@@ -12,11 +12,13 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Scene files: YAML describing a part, an arm, a throw and gravity (docs/scenes.md).
+"""Scene files: YAML describing a part, an arm, a throw, gravity and effects (docs/scenes.md).
 
 Lengths are metres; a key ending in ``_cm`` gives the same quantity in centimetres and
 ``release_speed_deg`` gives degrees per second. Unknown keys are errors that list the allowed
-names, so a typo never silently falls back to a default.
+names, so a typo never silently falls back to a default. ``effects: [...]`` names the effects
+beyond the paper's base model (throwmap.effects, docs/effects.md); a scene without effects gets
+the base ThrowModel itself.
 """
 
 import math
@@ -25,25 +27,30 @@ import warnings
 
 import yaml
 
+from . import effects as fx
+from .effect_model import EFFECT_ACCURACY_KEYS, EffectAccuracy, EffectModel
 from .errors import InputError
 from .model import Accuracy, SETTLE_RULES, ThrowModel
 from .part import Part
 
+BASE_ACCURACY_KEYS = ('contact_time_tol', 'flat_landing_tol', 'max_flight_steps', 'max_impacts')
 SCHEMA = {
-    '': {'name', 'description', 'part', 'arm', 'throw', 'gravity', 'contact', 'catch',
-         'accuracy', 'sensor', 'start'},
+    '': {'name', 'description', 'part', 'arm', 'throw', 'gravity', 'plate', 'contact', 'catch',
+         'effects', 'noise', 'accuracy', 'sensor', 'start'},
     'part': {'vertices', 'vertices_cm', 'cm', 'cm_cm', 'radius_of_gyration',
              'radius_of_gyration_cm'},
-    'arm': {'offset', 'offset_cm'},
-    'throw': {'release_speed', 'release_speed_deg'},
-    'contact': {'mu'},
+    'arm': {'offset', 'offset_cm', 'length', 'length_cm'},
+    'throw': {'release_speed', 'release_speed_deg', 'carry'},
+    'plate': {'inclination_deg', 'g0', 'mu'},
+    'contact': {'mu', 'restitution', 'bounce_threshold', 'pivot'},
     'catch': {'settle_rule'},
-    'accuracy': {'contact_time_tol', 'flat_landing_tol', 'max_flight_steps', 'max_impacts'},
-    'sensor': {'goal_edge', 'radius', 'radius_cm', 'footprint', 'footprint_cm'},
+    'noise': {'seed', 'release_speed_sd', 'release_speed_sd_deg', 'offset_sd', 'offset_sd_cm'},
+    'accuracy': set(BASE_ACCURACY_KEYS) | set(EFFECT_ACCURACY_KEYS),
+    'sensor': {'goal_edge', 'radius', 'radius_cm', 'footprint', 'footprint_cm',
+               'false_positive', 'false_negative'},
     'start': {'edge', 'R', 'R_cm'},
 }
-REQUIRED = {'': ('name', 'part', 'arm', 'throw', 'gravity'), 'part': (), 'arm': (),
-            'throw': ()}
+REQUIRED = {'': ('name', 'part', 'arm', 'throw'), 'part': (), 'arm': (), 'throw': ()}
 ALTERNATIVES = {'part': [('vertices', 'vertices_cm')], 'arm': [('offset', 'offset_cm')],
                 'throw': [('release_speed', 'release_speed_deg')]}
 
@@ -103,14 +110,64 @@ def _scaled(points, factor, field):
                          'give [[x0, y0], [x1, y1], ...]') from None
 
 
-class Scene:
-    """A validated scene: the part, the throw-map model and the sensor/start settings."""
+def _plate(data):
+    """Gravity from ``gravity`` (in-plane, < 0) or from ``plate`` (exactly one of them):
+    g = -g0 sin(inclination); the plate's pressure per unit mass is g0 cos(inclination)."""
+    if 'gravity' in data and 'plate' in data:
+        raise InputError('gravity', 'given together with plate',
+                         'give either gravity (in-plane, < 0) or plate: {inclination_deg, g0}, '
+                         'not both')
+    if 'plate' not in data:
+        if 'gravity' not in data:
+            raise InputError('gravity', 'missing',
+                             'give gravity (in-plane, m/s^2, < 0, e.g. -9.66) or plate: '
+                             '{inclination_deg: 80, g0: 9.81}')
+        return data['gravity'], None
+    plate = data['plate']
+    incl = _unit(plate, 'inclination_deg', 'plate', [('inclination_deg', 1.0)])
+    if incl is None or not 0 < incl <= 90:
+        raise InputError('plate.inclination_deg', f'must be in (0, 90], got '
+                         f'{plate.get("inclination_deg")!r}',
+                         'give the back plate\'s inclination from horizontal, e.g. 80')
+    g0 = _unit(plate, 'g0', 'plate', [('g0', 1.0)])
+    if g0 is None:
+        g0 = 9.81
+    if not g0 > 0:
+        raise InputError('plate.g0', f'must be > 0, got {g0!r}', 'give e.g. 9.81 (m/s^2)')
+    mu = _unit(plate, 'mu', 'plate', [('mu', 1.0)])
+    if mu is not None and mu < 0:
+        raise InputError('plate.mu', f'must be >= 0, got {mu!r}',
+                         'give the part/plate Coulomb coefficient, e.g. 0.1')
+    rad = math.radians(incl)
+    g_normal = 0.0 if incl == 90 else g0 * math.cos(rad)
+    return -g0 * math.sin(rad), {'g_normal': g_normal, 'mu': mu, 'inclination_deg': incl,
+                                 'g0': g0}
 
-    def __init__(self, data, source='<scene>'):
+
+def _seed(data, seed):
+    if seed is not None:
+        value, field = seed, 'seed'
+    else:
+        value, field = data.get('noise', {}).get('seed', 0), 'noise.seed'
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise InputError(field, f'must be an integer >= 0, got {value!r}',
+                         'give a seed for the random numbers, e.g. 1')
+    return value
+
+
+class Scene:
+    """A validated scene: the part, the throw-map model and the sensor/start settings.
+
+    ``seed`` overrides ``noise.seed`` (the CLI's --seed). ``model`` is the base ThrowModel when
+    the scene names no effects (and keeps the default contact method), else an EffectModel
+    with the same interface.
+    """
+
+    def __init__(self, data, source='<scene>', seed=None):
         self.source = source
         _check_keys('', data, '')
-        for section in ('part', 'arm', 'throw', 'contact', 'catch', 'accuracy', 'sensor',
-                        'start'):
+        for section in ('part', 'arm', 'throw', 'plate', 'contact', 'catch', 'noise',
+                        'accuracy', 'sensor', 'start'):
             if section in data:
                 _check_keys(section, data[section], section)
         self.data = data
@@ -131,17 +188,35 @@ class Scene:
         h = _unit(data['arm'], 'offset', 'arm', [('offset', 1.0), ('offset_cm', 0.01)])
         w = _unit(data['throw'], 'release_speed', 'throw',
                   [('release_speed', 1.0), ('release_speed_deg', math.pi / 180.0)])
-        g = data['gravity']
+        g, self.plate = _plate(data)
         mu = data.get('contact', {}).get('mu')
         rule = data.get('catch', {}).get('settle_rule', 'full')
         if rule not in SETTLE_RULES:
             raise InputError('catch.settle_rule', f'unknown rule {rule!r}',
                              f'use one of {", ".join(SETTLE_RULES)}')
-        accuracy = Accuracy(**data.get('accuracy', {}))
+        acc = data.get('accuracy', {})
+        accuracy = Accuracy(**{k: v for k, v in acc.items() if k in BASE_ACCURACY_KEYS})
+        knobs = EffectAccuracy(**{k: v for k, v in acc.items() if k in EFFECT_ACCURACY_KEYS})
+        if 'length' in data['arm'] and 'length_cm' in data['arm']:
+            raise InputError('arm.length', 'given twice (length and length_cm)',
+                             'give only one of them')
+        self.arm_length = _unit(data['arm'], 'length', 'arm',
+                                [('length', 1.0), ('length_cm', 0.01)])
+        if mu is not None:
+            mu = ThrowModel._number(mu, 'contact.mu', 'the friction coefficient')
+        self.effects = fx.compose(fx.parse_names(data.get('effects')), data, self.plate,
+                                  self.arm_length, mu)
+        self.seed = _seed(data, seed)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter('always')
-            self.model = ThrowModel(self.part, h, w, g, mu=mu, settle_rule=rule,
-                                    accuracy=accuracy)
+            if not self.effects and knobs.contact_method == 'advancement':
+                self.model = ThrowModel(self.part, h, w, g, mu=mu, settle_rule=rule,
+                                        accuracy=accuracy)
+            else:
+                self.model = EffectModel(self.part, h, w, g, mu=mu, settle_rule=rule,
+                                         accuracy=accuracy, effects=self.effects, knobs=knobs,
+                                         seed=self.seed, g_normal=(self.plate or {}).get(
+                                             'g_normal'))
         self.warnings = [str(c.message) for c in caught]
         for msg in self.warnings:
             warnings.warn(f'{source}: {msg}', stacklevel=2)
@@ -174,6 +249,24 @@ class Scene:
         return self.model.h
 
     @property
+    def stochastic(self):
+        """True when the scene names release_noise or sensor_noise (results depend on seeds)."""
+        return self.effects.stochastic
+
+    def sense(self, edge, R, x=None, footprint=None):
+        """The sensor's reading for a part resting at (edge, R): the shadow test of
+        throwmap.sees, with sensor_noise's false positives/negatives if the scene names it.
+        x and footprint default to the scene's sensor; edge -1 (lost) is never seen."""
+        from .dynamics import sees
+        x = self.sensor_radius if x is None else x
+        if x is None:
+            raise InputError('sensor.radius', 'missing', 'give the sensor position, or pass x')
+        footprint = self.sensor_footprint if footprint is None else footprint
+        if isinstance(self.model, EffectModel):
+            return self.model.sensor_reading(edge, R, x, footprint)
+        return sees(self.part, edge, R, x, footprint)
+
+    @property
     def release_speed(self):
         return self.model.w
 
@@ -193,8 +286,9 @@ class Scene:
         return int(edge), float(R)
 
 
-def load_scene(path):
-    """Read and validate a scene file; every error names the file and the field."""
+def load_scene(path, seed=None):
+    """Read and validate a scene file; every error names the file and the field. ``seed``
+    overrides the scene's noise.seed."""
     if not os.path.exists(path):
         raise InputError('scene', f'no such file: {path}',
                          'give the path of a scene YAML (e.g. scenes/triangle.yaml)')
@@ -206,6 +300,6 @@ def load_scene(path):
     if data is None:
         raise InputError(f'{path}', 'is empty', 'see scenes/triangle.yaml for a scene')
     try:
-        return Scene(data, source=path)
+        return Scene(data, source=path, seed=seed)
     except InputError as exc:
         raise InputError(f'{path}: {exc.field}', exc.problem, exc.fix) from None

@@ -1,0 +1,50 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Effect finite_arm: the arm occupies 0 <= x <= L; a part that leaves it is lost.
+
+Physics: the arm surface is the segment from the pivot (x = 0) to the arm's end (x = L, the
+experiment's arm is 40 cm). The throw is computed as on an unbounded arm, and the part is
+**lost** (it falls off; a documented outcome, not an error) when
+* its first contact with the arm line is outside [0, L] (it missed the arm),
+* any later contact (a landing vertex, a pivot it rolls or slides over, a corner of an edge
+  that lands flat) is outside [0, L] (it rolled or slid off: that vertex has no arm under it),
+* it comes to rest with its CM outside [0, L].
+A lost throw ends an orbit: f returns (-1, nan, 'lost'), orbits stop there and say so, basins
+count the start as 'lost', design radii treat lost states as leaving the invariant set.
+
+Limit: L -> inf is the base model (nothing is ever lost).
+
+Scene: arm: {offset_cm: -0.5, length_cm: 40}; effects: [finite_arm].
+"""
+
+from dataclasses import dataclass
+
+from ..errors import InputError
+
+NAME = 'finite_arm'
+
+
+@dataclass(frozen=True)
+class FiniteArm:
+    length: float   # m
+
+
+def parse(length):
+    if length is None:
+        raise InputError('arm.length', 'missing (effect finite_arm needs it)',
+                         'give the arm length, e.g. length_cm: 40')
+    if not length > 0:
+        raise InputError('arm.length', f'must be > 0, got {length!r}', 'give the arm length')
+    return FiniteArm(length)
