@@ -140,3 +140,24 @@ def test_cli_malformed_arguments_exit_2_with_usage(capsys, argv, message):
     assert exit_.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith('usage: throwmap') and message in err
+
+
+def test_cli_plot_into_a_file_is_refused_before_the_analysis(tmp_path, capsys):
+    """Used to run the whole analysis and then die with a FileExistsError traceback."""
+    target = tmp_path / 'plots.png'
+    target.write_bytes(b'')
+    assert main(['plot', TRIANGLE, '--out', str(target), '--quiet'], out=io.StringIO()) == 2
+    assert capsys.readouterr().err == (f'throwmap: error: --out {target}: is a file, not a '
+                                       'directory; give a directory (it is created if missing)\n')
+
+
+def test_cli_file_system_errors_name_the_path(tmp_path, capsys):
+    """An OSError (here: a directory below a file) is a message and exit code 2, not a crash."""
+    blocker = tmp_path / 'file'
+    blocker.write_bytes(b'')
+    out_dir = blocker / 'plots'
+    argv = ['plot', TRIANGLE, '--out', str(out_dir), '--quiet', '--throws', '5',
+            '--orbit-throws', '5']
+    assert main(argv, out=io.StringIO()) == 2
+    assert capsys.readouterr().err == (f'throwmap: error: {out_dir}: Not a directory; check the '
+                                       'path and its permissions\n')

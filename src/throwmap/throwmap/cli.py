@@ -268,6 +268,10 @@ def cmd_design(scene, args, out):
 
 def cmd_plot(scene, args, out):
     from .plots import plot_all
+    if os.path.exists(args.out) and not os.path.isdir(args.out):
+        # Checked before the analysis, which takes a while, rather than failing after it.
+        raise ThrowmapError(f'--out {args.out}: is a file, not a directory; give a directory '
+                            '(it is created if missing)')
     an = analyse(scene, grid_throws=args.throws + 1, progress=Progress('plot', args.quiet))
     edge, R = an.start
     orb = orbit(scene.model, edge, R, args.orbit_throws)
@@ -344,6 +348,10 @@ def main(argv=None, out=None):
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 0
+    except OSError as exc:    # a file or directory the command could not read or write
+        sys.stderr.write(f'throwmap: error: {exc.filename}: {exc.strerror}; check the path '
+                         'and its permissions\n')
+        return 2
 
 
 if __name__ == '__main__':
