@@ -111,6 +111,19 @@ def _process_env():
     return env
 
 
+@pytest.fixture(scope='session', autouse=True)
+def warm_numba_cache():
+    """
+    Compile throwmap's kernels once, as the node processes will import them.
+
+    A fresh colcon install has no valid numba cache: the first process compiles for several
+    seconds. Doing it here keeps that time out of every test's timeouts.
+    """
+    code = ('from throwmap import analyse, load_scene\n'
+            f'analyse(load_scene({str(REPO / "scenes" / "triangle.yaml")!r}))\n')
+    subprocess.run([sys.executable, '-c', code], env=_process_env(), check=True, timeout=300)
+
+
 class Graph:
     """Node processes of one test; all of them are stopped at the end of the test."""
 

@@ -88,9 +88,3 @@ def wait_for_monitor(ros, ready):
 def wait_for_readers(ros, topic, count):
     ros.spin_until(lambda: ros.node.count_subscribers(topic) >= count, STARTUP_TIMEOUT,
                    f'{count} readers of {topic}')
-
-
-def is_error(level):
-    return level == DiagnosticStatus.ERROR
-
-

@@ -16,6 +16,7 @@
 
 import math
 
+from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
@@ -134,6 +135,23 @@ def marker_array(specs, frame_id, stamp):
         m.frame_locked = False
         out.markers.append(m)
     return out
+
+
+def stamp_text(stamp):
+    """Write a builtin_interfaces/Time as exact seconds, ``'<sec>.<9 digits>'``."""
+    return f'{stamp.sec}.{stamp.nanosec:09d}'
+
+
+def stamp_from_text(text):
+    """
+    Parse seconds written as ``'<sec>.<fraction>'`` into a builtin_interfaces/Time, exactly.
+
+    A float would lose the last nanoseconds of a stamp near 1.8e9 s. Raises ValueError.
+    """
+    whole, _, frac = text.strip().partition('.')
+    if not whole.isdigit() or (frac and not frac.isdigit()):
+        raise ValueError(f'not a time in seconds: {text!r}')
+    return Time(sec=int(whole), nanosec=int((frac + '000000000')[:9]))
 
 
 def stamp_seconds(stamp):

@@ -27,7 +27,6 @@ import rclpy
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException
 from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
-from rclpy.time import Time
 from sensor_msgs.msg import JointState, Range
 from std_msgs.msg import Float64, Float64MultiArray, Int32, MultiArrayDimension, String
 from std_srvs.srv import SetBool, Trigger
@@ -40,7 +39,7 @@ from .params import check_scene, check_start, SIM_PARAMS
 from .predictor import Predictor, yaw_quaternion
 from .ros_glue import (CYCLE_STATUS_QOS, declare, DEFAULT_DEPTH, diagnostic_array,
                        diagnostic_status, DIAGNOSTICS_QOS, LATCHED_QOS, marker_array,
-                       ParameterGate, stamp_seconds)
+                       ParameterGate, stamp_from_text, stamp_text)
 
 FRAME = 'feeder_base'
 SENSOR_FRAME = 'feeder_sensor'
@@ -292,7 +291,7 @@ class SimNode(LifecycleNode):
             message=message, hardware_id=HARDWARE_ID,
             values=[KeyValue(key='seq', value=str(self._seq)),
                     KeyValue(key='sensor', value=sensor),
-                    KeyValue(key='stamp', value=f'{stamp_seconds(stamp):.9f}')])
+                    KeyValue(key='stamp', value=stamp_text(stamp))])
 
     def _publish_joint(self, stamp, velocity):
         js = JointState()
@@ -337,8 +336,7 @@ class SimNode(LifecycleNode):
         if sensor in ('0', '1'):
             self._counts['agree' if (sensor == '1') == throw.detected else 'disagree'] += 1
         try:
-            sec = float(values['stamp'])
-            stamp = Time(nanoseconds=int(round(sec * 1e9))).to_msg()
+            stamp = stamp_from_text(values['stamp'])
         except (KeyError, ValueError):
             stamp = self.get_clock().now().to_msg()
         self._publish_prediction(stamp, throw)

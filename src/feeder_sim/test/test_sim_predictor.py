@@ -81,3 +81,16 @@ def test_reset_rejects_states_outside_the_domain(triangle):
     pred.step()
     pred.reset(0, 0.16)
     assert (pred.state, pred.count) == ((0, 0.16), 0)
+
+
+def test_stamp_text_round_trip():
+    from feeder_sim.ros_glue import stamp_from_text, stamp_text
+    t = stamp_from_text('1795362335.204302396')
+    assert (t.sec, t.nanosec) == (1795362335, 204302396)
+    assert stamp_text(t) == '1795362335.204302396'
+    assert stamp_from_text(stamp_text(stamp_from_text('3.000000007'))).nanosec == 7
+    assert stamp_from_text('12.5').nanosec == 500_000_000
+    assert stamp_from_text('7').sec == 7
+    for bad in ('', '-1.5', '1.2e3', 'x'):
+        with pytest.raises(ValueError):
+            stamp_from_text(bad)

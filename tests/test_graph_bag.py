@@ -1,0 +1,141 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""(c) A bag of the running graph, recorded by bag_recorder and read back."""
+
+import json
+import math
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from feeder_nodes import (Collector, LATCHED, monitor, sim_as_hardware, STARTUP_TIMEOUT,
+                          status_values, wait_for_monitor)
+from geometry_msgs.msg import PoseStamped
+from rclpy.serialization import deserialize_message
+from rosbags.interfaces import QosDurability, QosReliability
+from rosbags.rosbag2 import Reader
+from sensor_msgs.msg import JointState, Range
+from std_msgs.msg import Bool, Float64, Float64MultiArray, Int32, String
+from std_srvs.srv import Trigger
+from visualization_msgs.msg import MarkerArray
+import yaml
+
+N = 20
+# topic -> (type, expected count with N triggered cycles; None: at least one)
+EXPECTED = {
+    '/feeder/proximity': (Range, N),
+    '/feeder/cycle_status': (DiagnosticStatus, N),
+    '/feeder/joint_states': (JointState, 2 * N),
+    '/feeder/predicted/edge': (Int32, N),
+    '/feeder/predicted/radius': (Float64, N),
+    '/feeder/predicted/part_pose': (PoseStamped, N),
+    '/feeder/predicted/throw_kind': (String, N),
+    '/feeder/predicted/limit_set': (Float64MultiArray, 1),      # latched, once
+    '/feeder/predicted/analysis': (String, 1),                  # latched, once
+    '/feeder/markers': (MarkerArray, N + 1),                    # latched + one per cycle
+    '/feeder/edge1_ready': (Bool, N + 1),                       # latched false + one per cycle
+    '/diagnostics': (DiagnosticArray, None),
+}
+LATCHED_TOPICS = {'/feeder/predicted/limit_set', '/feeder/predicted/analysis', '/feeder/markers',
+                  '/feeder/edge1_ready'}
+
+
+def type_name(cls):
+    module = cls.__module__.split('.')
+    return f'{module[0]}/{module[1]}/{cls.__name__}'
+
+
+def recorder_subscribed(ros, topic):
+    return any(i.node_name == 'feeder_bag_recorder'
+               for i in ros.node.get_subscriptions_info_by_topic(topic))
+
+
+def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
+    bag = tmp_path / 'run'
+    sim_as_hardware(graph)
+    monitor(graph)
+    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    wait_for_monitor(ros, ready)
+    rec = graph.start('feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
+                      '__ns:=/feeder', name='recorder')
+    ros.spin_until(lambda: all(recorder_subscribed(ros, t) for t in EXPECTED), STARTUP_TIMEOUT,
+                   'the recorder on every topic')
+    ros.spin_for(1.0)       # latched messages reach the recorder
+    for k in range(N):
+        res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
+        assert res.success, res.message
+        assert res.message.startswith(f'fired cycle seq={k + 1}')
+    ros.spin_until(lambda: len(statuses) == N and len(ready) == N + 1, 20.0, 'all cycles')
+    ros.spin_for(1.2)       # and /diagnostics once more
+    assert graph.stop(rec) == 0
+    assert f'in {bag}' in graph.log(rec) and 'stopped (SIGINT)' in graph.log(rec)
+
+    meta = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert meta['storage_identifier'] == 'mcap' and meta['version'] == 9
+    assert [f['path'] for f in meta['files']] == ['run.mcap']
+
+    with Reader(bag) as reader:
+        conns = {c.topic: c for c in reader.connections}
+        for topic, (cls, count) in EXPECTED.items():
+            assert topic in conns, f'{topic} not recorded'
+            assert conns[topic].msgtype == type_name(cls)
+            if count is None:
+                assert conns[topic].msgcount >= 1, topic
+            else:
+                assert conns[topic].msgcount == count, (topic, conns[topic].msgcount)
+            qos = conns[topic].ext.offered_qos_profiles
+            assert qos, f'{topic}: no offered QoS recorded'
+            durability = (QosDurability.TRANSIENT_LOCAL if topic in LATCHED_TOPICS
+                          else QosDurability.VOLATILE)
+            assert all(q.durability == durability for q in qos), (topic, qos)
+            assert all(q.reliability == QosReliability.RELIABLE for q in qos), (topic, qos)
+        assert meta['message_count'] == sum(c.msgcount for c in reader.connections)
+        msgs = {}
+        last_t = {}
+        for conn, t, raw in reader.messages():
+            if conn.topic not in EXPECTED:
+                continue
+            assert t >= last_t.get(conn.topic, 0)
+            last_t[conn.topic] = t
+            msgs.setdefault(conn.topic, []).append(
+                deserialize_message(raw, EXPECTED[conn.topic][0]))
+
+    # Contents: what the test saw live, and what the interface promises.
+    bits = [status_values(s)['sensor'] == '1' for s in msgs['/feeder/cycle_status']]
+    assert bits == [status_values(s)['sensor'] == '1' for s in statuses.msgs]
+    assert [r.range == -math.inf for r in msgs['/feeder/proximity']] == bits
+    assert all(math.isinf(r.range) for r in msgs['/feeder/proximity'])
+    assert [int(status_values(s)['seq']) for s in msgs['/feeder/cycle_status']] == \
+        list(range(1, N + 1))
+    assert [b.data for b in msgs['/feeder/edge1_ready']] == [b.data for b in ready.msgs]
+    assert msgs['/feeder/edge1_ready'][0].data is False
+    velocities = [js.velocity[0] for js in msgs['/feeder/joint_states']]
+    assert velocities[1::2] == [0.0] * N and all(v > 0 for v in velocities[::2])
+    ls = msgs['/feeder/predicted/limit_set'][0]
+    assert [d.label for d in ls.layout.dim] == ['edges', 'fields']
+    rows, fields = ls.layout.dim[0].size, ls.layout.dim[1].size
+    assert fields == 5 and len(ls.data) == rows * fields and rows >= 2
+    for r in range(rows):
+        assert ls.data[r * 5 + 1] <= ls.data[r * 5 + 2]
+    analysis = json.loads(msgs['/feeder/predicted/analysis'][0].data)
+    assert analysis['sensor']['goal_edge'] == 1
+    assert sorted(int(e) for e in analysis['limit_set']['bands']) == \
+        [int(ls.data[r * 5]) for r in range(rows)]
+    markers = msgs['/feeder/markers'][-1].markers
+    assert {'arm', 'part', 'sensor', 'limit_set'} <= {m.ns for m in markers}
+    assert all(m.header.frame_id == 'feeder_base' and m.color.a > 0 for m in markers)
+    poses = msgs['/feeder/predicted/part_pose']
+    assert [p.pose.position.x for p in poses] == [r.data for r in msgs['/feeder/predicted/radius']]
+    names = {s.name for a in msgs['/diagnostics'] for s in a.status}
+    assert {'feeder_driver: actuator', 'feeder_monitor: readiness'} <= names

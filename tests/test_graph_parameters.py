@@ -1,0 +1,89 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""(d) Bad parameters are rejected with a reason, through the parameter services."""
+
+from feeder_nodes import (Collector, LATCHED, monitor, sim_as_hardware, TRIANGLE,
+                          wait_for_monitor)
+from std_msgs.msg import Bool, Float64, Int32
+from std_srvs.srv import Trigger
+from throwmap import load_scene
+
+SIM = '/feeder/feeder_driver'
+MON = '/feeder/feeder_monitor'
+
+
+def rejected(result, *words):
+    assert not result.successful, 'accepted'
+    assert result.reason, 'rejected without a reason'
+    for w in words:
+        assert w in result.reason, result.reason
+
+
+def test_bad_values_are_rejected_and_good_ones_applied(graph, ros):
+    sim_as_hardware(graph)
+    monitor(graph)
+    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    edges = Collector(ros, Int32, '/feeder/predicted/edge')
+    radii = Collector(ros, Float64, '/feeder/predicted/radius')
+    wait_for_monitor(ros, ready)
+
+    # sim: domain of f, ranges, read-only, types
+    r = ros.set_parameters(SIM, {'start_radius': 0.001, 'start_edge': 7, 'cycle_period': 0.001,
+                                 'sensor_radius': -1.0, 'scene': 'scenes/bracket.yaml',
+                                 'hardware_mode': False})
+    rejected(r['start_radius'], 'no dynamic grasp on edge 1', 'R >= 0.016')
+    rejected(r['start_edge'], 'edge 7 does not exist')
+    rejected(r['cycle_period'])
+    rejected(r['sensor_radius'])
+    rejected(r['scene'], 'read-only')
+    rejected(r['hardware_mode'], 'read-only')
+    rejected(ros.set_parameters(SIM, {'start_radius': 'far'})['start_radius'])
+    assert ros.get_parameters(SIM, ['start_edge', 'start_radius', 'cycle_period']) == \
+        {'start_edge': 1, 'start_radius': 0.12, 'cycle_period': 1.0}
+
+    # A good start state is applied: the next throw starts from it.
+    assert ros.set_parameters(SIM, {'start_radius': 0.15})['start_radius'].successful
+    res = ros.call(Trigger, f'{SIM}/trigger_cycle', Trigger.Request())
+    assert res.success, res.message
+    ros.spin_until(lambda: len(edges) == 1 and len(radii) == 1, 10.0, 'the prediction')
+    edge, R, _ = load_scene(TRIANGLE).model.f(1, 0.15)
+    assert (edges.msgs[0].data, radii.msgs[0].data) == (edge, R)
+
+    # monitor: the proven warm-up, ranges, read-only
+    r = ros.set_parameters(MON, {'warmup_cycles': 0, 'silence_margin': 0.5,
+                                 'orbit_throws': 5000, 'stamp_tolerance': 0.5})
+    rejected(r['warmup_cycles'], 'below the proven warm-up of 1')
+    rejected(r['silence_margin'])
+    rejected(r['orbit_throws'], 'read-only')
+    rejected(r['stamp_tolerance'])
+    assert ros.set_parameters(MON, {'warmup_cycles': 4})['warmup_cycles'].successful
+    assert ros.get_parameters(MON, ['warmup_cycles', 'silence_margin']) == \
+        {'warmup_cycles': 4, 'silence_margin': 1.5}
+
+
+def test_a_scene_that_does_not_load_stops_the_node_with_throwmaps_message(graph, tmp_path):
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text(open(TRIANGLE).read() + 'bogus_key: 1\n')
+    sim = graph.start('feeder_sim', 'sim_node', '--ros-args', '-p', f'scene:={bad}')
+    mon = graph.start('feeder_monitor', 'monitor_node', '--ros-args', '-p',
+                      f'scene:={tmp_path / "missing.yaml"}')
+    unset = graph.start('feeder_sim', 'sim_node')
+    assert sim.wait(timeout=60) == 2
+    assert 'bogus_key: unknown key' in graph.log(sim)
+    assert 'allowed here' in graph.log(sim)
+    assert mon.wait(timeout=60) == 2
+    assert 'no such file' in graph.log(mon)
+    assert unset.wait(timeout=60) == 2
+    assert 'scene: not set' in graph.log(unset)
