@@ -16,7 +16,7 @@
 
 import pathlib
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 # The test's own QoS (written out here, not taken from the code under test).
