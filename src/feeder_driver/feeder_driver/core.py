@@ -208,12 +208,21 @@ class DriverCore:
 
     # ---- requests --------------------------------------------------------------------------
 
+    def link_refusal(self):
+        """Why the link cannot carry a cycle now (None if it can)."""
+        if self.link == HANDSHAKE:
+            return ('refused: serial port open, but the controller has not answered PING yet '
+                    f'(last link error: {self.last_link_error})')
+        if self.link != CONNECTED:
+            return f'refused: serial link is disconnected ({self.last_link_error})'
+        return None
+
     def refusal(self, now):
         """Why a cycle cannot be fired now (None if it can)."""
         if not self.active:
             return 'refused: driver is not active (lifecycle state is not active)'
         if self.link != CONNECTED:
-            return f'refused: serial link is {self.link} ({self.last_link_error})'
+            return self.link_refusal()
         if self.pending is not None:
             return (f'refused: busy with cycle seq {self.pending.seq} (fired '
                     f'{_fmt(now - self.pending.fired_at)} s ago)')
@@ -241,7 +250,7 @@ class DriverCore:
         if not self.active:
             return False, 'refused: driver is not active (lifecycle state is not active)', []
         if self.link != CONNECTED:
-            return False, f'refused: serial link is {self.link} ({self.last_link_error})', []
+            return False, self.link_refusal(), []
         if self.enabled:
             return True, f'already enabled (every {_fmt(self.config.cycle_period)} s)', []
         self.enabled = True

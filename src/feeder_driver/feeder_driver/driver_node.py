@@ -44,7 +44,9 @@ from .diagnostics import Updater
 from .serial_link import LinkError, SerialLink
 
 JOINT_NAME = 'feeder_arm_joint'
+# Timeouts and continuous cycling are checked on a timer: 50 Hz, faster for short periods.
 TICK_PERIOD_S = 0.02
+MIN_TICK_PERIOD_S = 0.005
 
 
 class ParameterError(Exception):
@@ -111,6 +113,12 @@ class DriverNode(LifecycleNode):
         self.core.reconfigure(self._core_config())
         if 'diagnostic_updater.period' in changed:
             self.diagnostics.set_period(self._p['diagnostic_updater.period'])
+        if 'cycle_period' in changed and self._tick_timer is not None:
+            self.destroy_timer(self._tick_timer)
+            self._tick_timer = self.create_timer(self._tick_period(), self._tick)
+
+    def _tick_period(self):
+        return max(MIN_TICK_PERIOD_S, min(TICK_PERIOD_S, self._p['cycle_period'] / 2))
 
     # ---- lifecycle -----------------------------------------------------------------------
 
@@ -125,7 +133,7 @@ class DriverNode(LifecycleNode):
                                                               QoSProfile(depth=10))
             self.link = SerialLink(self._p['port'], self._p['baud_rate'], self._on_rx,
                                    self._on_lost)
-            self._tick_timer = self.create_timer(TICK_PERIOD_S, self._tick)
+            self._tick_timer = self.create_timer(self._tick_period(), self._tick)
             self._apply(self.core.start(time.monotonic()))
         except Exception as exc:    # noqa: B902 - report, then let lifecycle fail cleanly
             self.get_logger().error(f'configure failed: {exc!r}')
