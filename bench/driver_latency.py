@@ -62,8 +62,8 @@ def main():
     ctx = Context()
     rclpy.init(context=ctx, domain_id=reserve_domain_id())
     ex = SingleThreadedExecutor(context=ctx)
-    node = DriverNode(context=ctx, parameter_overrides=[Parameter('port', value=link),
-                                                         Parameter('cycle_period', value=0.01)])
+    overrides = [Parameter('port', value=link), Parameter('cycle_period', value=0.01)]
+    node = DriverNode(context=ctx, parameter_overrides=overrides)
     probe = rclpy.create_node('bench_probe', context=ctx)
     got = []
     probe.create_subscription(DiagnosticStatus, 'cycle_status',

@@ -161,6 +161,7 @@ class DriverCore:
         self._last_rx = None
         self._ping_token = None
         self._ping_sent_at = None
+        self._ids_outstanding = 0     # ID requests whose HELLO answer has not arrived
         self._tokens = itertools.count(1)
         self._last_fire_at = None
         self._hold_until = None       # after a failure, continuous cycling waits one period
@@ -264,6 +265,7 @@ class DriverCore:
         self.link = HANDSHAKE
         self._opened_at = now
         self._last_rx = None
+        self._ids_outstanding = 0
         self._last_open_error = None
         self._log('info', 'serial port open; handshake (PING) started')
         return self._send_ping(now)
@@ -355,6 +357,7 @@ class DriverCore:
         # firmware and boot id are known once connected, even if the banner was missed.
         self._ping_token = f'h{next(self._tokens)}'
         self._ping_sent_at = now
+        self._ids_outstanding += 1
         return [Send(p.Ident()), Send(p.Ping(self._ping_token))]
 
     def _fire(self, now):
@@ -428,7 +431,11 @@ class DriverCore:
             return []
         if isinstance(msg, p.Hello):
             effects = []
-            if self.link == CONNECTED:
+            answer = self._ids_outstanding > 0 and (not self.boot_id
+                                                    or msg.boot_id == self.boot_id)
+            self._ids_outstanding = max(0, self._ids_outstanding - 1)
+            if self.link == CONNECTED and not answer:
+                # Unsolicited, or a new boot id: the controller has reset.
                 self.counters['controller_resets'] += 1
                 self._log('warning', f'controller reset (HELLO firmware {msg.firmware}, boot '
                           f'{msg.boot_id}; previous boot {self.boot_id or "unknown"})')

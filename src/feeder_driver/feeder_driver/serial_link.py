@@ -68,7 +68,7 @@ class SerialLink:
             ser = serial.serial_for_url(self.port, baudrate=self.baudrate,
                                         timeout=self._read_timeout,
                                         write_timeout=self._write_timeout, exclusive=True)
-        except (serial.SerialException, OSError, ValueError) as exc:
+        except Exception as exc:    # noqa: B902 - any URL handler error: report, retry later
             raise LinkError(f'{self.port}: {exc}') from None
         try:
             ser.reset_input_buffer()
@@ -93,7 +93,7 @@ class SerialLink:
         try:
             ser.write(data)
             ser.flush()
-        except (serial.SerialException, OSError) as exc:
+        except Exception as exc:    # noqa: B902 - SerialException, OSError, timeouts, ...
             raise LinkError(f'{self.port}: write failed: {exc}') from None
         self.bytes_written += len(data)
 

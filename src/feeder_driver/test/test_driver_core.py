@@ -274,3 +274,18 @@ def test_every_fired_cycle_ends_exactly_once(core):
     assert [r.seq for r in endings] == list(range(1, 31))
     assert core.counters['completed'] + core.counters['failed'] == core.counters['fired'] == 30
     assert all(r.reason for r in endings if not r.ok)
+
+
+def test_a_late_answer_to_a_repeated_id_is_not_a_reset():
+    core = c.DriverCore(CFG)
+    core.start(0.0)
+    core.link_opened(0.0)
+    token = sent(core.tick(0.6, 0))[1].token      # ID + PING repeated: two IDs outstanding
+    core.received(0.61, 0, [p.Hello('fw', 'B1'), p.Pong(token)])
+    assert core.link == c.CONNECTED
+    core.received(0.62, 0, [p.Hello('fw', 'B1')])   # answer to the second ID
+    assert core.counters['controller_resets'] == 0
+    core.received(0.63, 0, [p.Hello('fw', 'B1')])   # nothing outstanding: a reset
+    assert core.counters['controller_resets'] == 1
+    core.received(0.64, 0, [p.Hello('fw', 'B2')])
+    assert core.counters['controller_resets'] == 2
