@@ -24,6 +24,7 @@ FIRE received so tests can account for every cycle. CLI table: docs/driver.md.
 """
 
 import argparse
+import fcntl
 import heapq
 import itertools
 import json
@@ -81,6 +82,20 @@ class Pty:
         if not os.path.isdir(parent):
             raise EmulatorError(f'--link {self.link}: directory {parent} does not exist; '
                                 'create it or pick another path')
+        # One emulator per link: a second one would silently steal the symlink.
+        self._lock = open(self.link + '.lock', 'a+')
+        try:
+            fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            self._lock.seek(0)
+            owner = self._lock.read().strip() or 'unknown'
+            self._lock.close()
+            raise EmulatorError(f'--link {self.link}: in use by another controller_emulator '
+                                f'(pid {owner}); stop it or pick another path') from None
+        self._lock.seek(0)
+        self._lock.truncate()
+        self._lock.write(str(os.getpid()))
+        self._lock.flush()
 
     @property
     def plugged(self):
@@ -97,6 +112,17 @@ class Pty:
             os.unlink(tmp)
         os.symlink(self.slave_name, tmp)
         os.replace(tmp, self.link)
+
+    def release(self):
+        """Unplug for good and give the link up to another emulator."""
+        self.unplug()
+        if self._lock is not None:
+            try:
+                os.unlink(self.link + '.lock')
+            except OSError:
+                pass
+            self._lock.close()
+            self._lock = None
 
     def unplug(self):
         if os.path.islink(self.link):
@@ -207,7 +233,6 @@ class Controller:
     def __init__(self, link, throw, sense, release_speed, state=None, cycle_time=0.1,
                  heartbeat=1.0, faults=None, truth_log=None, firmware=FIRMWARE, header=None,
                  log=None, clock=time.monotonic):
-        self.pty = Pty(link)
         self._throw = throw
         self._sense = sense
         self.release_speed_mrad_s = int(round(release_speed * 1000.0))
@@ -217,10 +242,16 @@ class Controller:
         if self.heartbeat == 0:
             raise EmulatorError('--heartbeat: must be > 0 s (the protocol needs one)')
         self.faults = faults or Faults()
+        try:
+            p.encode(p.Hello(firmware, 'A'))
+        except p.ProtocolError as exc:
+            raise EmulatorError(f'--firmware: {exc}') from None
         self.firmware = firmware
         self.header = header or {}
         self._log = log or (lambda text: None)
         self._clock = clock
+        self._truth = open(truth_log, 'w', encoding='utf-8') if truth_log else None
+        self.pty = Pty(link)        # last of the checks: it takes the link's lock
         self.parser = p.Parser(p.HOST_MESSAGES)
         self.cycle = None
         self.cycles = 0
@@ -234,7 +265,6 @@ class Controller:
         self._epoch = 0     # bumps on reset/unplug: scheduled actions of older epochs lapse
         self._wake_r, self._wake_w = os.pipe()
         self._stop = threading.Event()
-        self._truth = open(truth_log, 'w', encoding='utf-8') if truth_log else None
         if self._truth:
             self._write_truth(dict({'type': 'header', 'firmware': firmware}, **self.header))
 
@@ -249,7 +279,7 @@ class Controller:
         self._power_up()
 
     def close(self):
-        self.pty.unplug()
+        self.pty.release()
         if self._truth:
             self._truth.close()
             self._truth = None

@@ -222,6 +222,15 @@ def test_bad_fault_options(kwargs, text):
         Faults(**kwargs)
 
 
+def test_one_emulator_per_link(emu_factory, scene_path, sensor_radius, link_path):
+    emu_factory()
+    with pytest.raises(EmulatorError, match='in use by another controller_emulator'):
+        EmulatorThread(scene_path, link_path, sensor_radius=sensor_radius)
+    with pytest.raises(EmulatorError, match='--firmware'):
+        EmulatorThread(scene_path, link_path + '2', sensor_radius=sensor_radius,
+                       firmware='a,b')
+
+
 def test_link_that_is_a_regular_file_is_refused(scene_path, sensor_radius, tmp_path):
     path = tmp_path / 'file'
     path.write_text('x')
