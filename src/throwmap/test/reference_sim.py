@@ -22,18 +22,22 @@ Method:
   resting on E^i the edge lies on the arm line y = h with V^i on the left and the centre of
   mass (CM) above it. The body pose is (CM position, angle phi) with world = CM + Rot(phi) b
   for a body vector b (vertex minus CM in the input frame).
-* Flight (eqs 5-6): the heights over the arm of all vertices are sampled on a fixed grid of
-  time steps (dt = t_upper / FLIGHT_SAMPLES, t_upper a proven upper bound of the flight time);
+* Flight (eqs 5-6, closed form): the heights over the arm of all vertices are sampled on a
+  fixed grid (dt = t_upper / FLIGHT_SAMPLES, t_upper a proven upper bound of the flight time;
+  smaller for long flights so that the part turns at most MAX_STEP_ANGLE per step; a second
+  pass over [0, 1.001 T] when the contact at T comes early, so dt <= T / FLIGHT_SAMPLES);
   the first sign change + -> - of any vertex is refined by bisection. Between samples a vertex
   could dip below the arm and come back (a graze); every sampled local minimum lower than the
   largest such dip (|F''|max dt^2) is refined by bounded minimisation, and a negative minimum
   counts as a contact too.
 * Impacts are sticking (eqs 7-9), solved as a 3x3 linear system: the contact vertex stops and
   the impulse passes through it (so angular momentum about it is conserved).
-* Rolling about the contact vertex is integrated numerically (scipy solve_ivp, DOP853, tight
-  tolerances) with the pendulum equation (rho^2 + l^2) phi'' = g (x_CM - x_pivot), with
-  terminal events for the two neighbouring vertices reaching the arm (on a convex polygon they
-  are the only ones that can). Each new contact is again a sticking impact.
+* Rolling about the contact vertex V^p is integrated numerically (scipy solve_ivp, DOP853,
+  rtol 1e-12) with the pendulum equation (rho^2 + l_p^2) phi'' = g (x_CM - x_pivot). On a
+  convex polygon only the neighbours V^{p+1} and V^{p-1} can reach the arm, exactly when the
+  body angle reaches the pose with E^p, respectively E^{p-1}, flat: these two angles are
+  terminal events, and so are turning points (phi' = 0), so that a part that only just reaches
+  an edge is not stepped past (see _roll). Each new contact is again a sticking impact.
 * Conventions shared with throwmap (its documented model choices, not physics of the paper):
   an edge within FLAT_TOL rad of the arm when the flight ends lands flat and the part stops on
   it; while rolling, if the post-impact rotation about the new contact would turn the part back
@@ -50,9 +54,11 @@ import math
 
 import numpy as np
 from scipy.integrate import solve_ivp
-from scipy.optimize import minimize_scalar
+from scipy.optimize import brentq, minimize_scalar
 
-FLIGHT_SAMPLES = 40000     # fixed time steps over the flight-time bound
+FLIGHT_SAMPLES = 40000     # fixed time steps over the flight-time bound (at least)
+MAX_STEP_ANGLE = 0.002     # rad: long flights get more steps, so the part turns less per step
+MAX_FLIGHT_SAMPLES = 4000000
 FLAT_TOL = 1e-9            # rad: an edge this close to the arm at the end of flight lands flat
 ROLL_RTOL = 1e-12
 ROLL_ATOL_REL = 1e-14      # times the part size (angle) / natural rate (angular velocity)
@@ -136,6 +142,7 @@ class RefResult:
     flight_energy_drift: float = 0.0    # |E(contact) - E(release)| / energy scale
     roll_energy_drift: float = 0.0      # max over rolling segments, relative to energy scale
     roll_segments: int = 0
+    contact_speed: float = 0.0          # m/s, downward speed of the contact vertex at impact
 
 
 class ReferencePart:
@@ -148,8 +155,8 @@ class ReferencePart:
         n = len(self.v)
         self.n = n
         self.b = self.v - self.cm                    # body vectors of the vertices
-        self.l = np.hypot(self.b[:, 0], self.b[:, 1])
-        self.size = float(self.l.max())
+        self.dist = np.hypot(self.b[:, 0], self.b[:, 1])
+        self.size = float(self.dist.max())
         self.theta = np.empty(n)                     # body angle that lays E^i flat on the arm
         self.d = np.empty(n)
         self.u_l = np.empty(n)
@@ -189,6 +196,7 @@ class ReferenceSimulator:
         self.samples = int(flight_samples)
         self.flat_tol = float(flat_tol)
         self.rtol = float(rtol)
+        self.last_contact_from_graze = False
 
     # ------------------------------------------------------------------ flight (eqs 5-6)
     def _flight_heights(self, i, R, t, u, v):
@@ -209,7 +217,10 @@ class ReferenceSimulator:
         return (vy + math.sqrt(vy * vy + 2.0 * self.g_abs * drop)) / self.g_abs
 
     def _first_root(self, i, R, u, v, ts, hs, bound_dd):
-        """First time the vertex (u, v) reaches the arm moving down, from samples hs at ts."""
+        """First time the vertex (u, v) reaches the arm, from samples hs at ts.
+
+        Returns (time, whether it was found as a dip between two samples).
+        """
         def height(t):
             return float(self._flight_heights(i, R, np.array([t]), u, v)[0])
 
@@ -225,7 +236,7 @@ class ReferenceSimulator:
                     hi = mid
             return hi
 
-        best = math.inf
+        best, graze = math.inf, False
         below = np.flatnonzero(hs[1:] <= 0.0)
         if below.size:
             j = int(below[0]) + 1
@@ -243,28 +254,49 @@ class ReferenceSimulator:
             res = minimize_scalar(height, bounds=(ts[j - 1], ts[j + 1]), method='bounded',
                                   options={'xatol': dt * 1e-12})
             if res.fun <= 0.0:
-                best = min(best, bisect(ts[j - 1], float(res.x)))
+                t = bisect(ts[j - 1], float(res.x))
+                if t < best:
+                    best, graze = t, True
                 break
-        return best
+        return best, graze
 
-    def flight_contact(self, i, R):
-        """(T, k): flight time and first contact vertex, by dense sampling plus bisection."""
+    def _scan(self, i, R, t_end):
+        """(T, k, graze): first contact in [0, t_end] on a fixed grid of time steps."""
         part = self.part
-        t_up = self._flight_time_bound(i, R) * (1.0 + 1e-9) + 1e-15
-        ts = np.linspace(0.0, t_up, self.samples + 1)
+        turns = math.ceil(self.w * t_end / MAX_STEP_ANGLE)
+        steps = max(self.samples, min(MAX_FLIGHT_SAMPLES, turns))
+        ts = np.linspace(0.0, t_end, steps + 1)
         u, v = part.uv(i)
-        best_t, best_k = math.inf, -1
+        best_t, best_k, best_graze = math.inf, -1, False
         for k in range(part.n):
             hs = self._flight_heights(i, R, ts, u[k], v[k])
             # The resting edge's vertices start on the arm (rounding may say -1e-18).
             hs[0] = max(hs[0], 0.0)
-            bound_dd = self.g_abs + self.w * self.w * part.l[k]     # >= |F''|
-            t = self._first_root(i, R, u[k], v[k], ts, hs, bound_dd)
+            bound_dd = self.g_abs + self.w * self.w * part.dist[k]     # >= |F''|
+            t, graze = self._first_root(i, R, u[k], v[k], ts, hs, bound_dd)
             if t < best_t:
-                best_t, best_k = t, k
-        if not math.isfinite(best_t):
+                best_t, best_k, best_graze = t, k, graze
+        return best_t, best_k, best_graze
+
+    def flight_contact(self, i, R):
+        """(T, k): flight time and first contact vertex, by dense sampling plus bisection.
+
+        The first pass covers [0, t_up]; when the contact comes much earlier than t_up, a
+        second pass samples [0, 1.001 T] again so that dt <= T / samples holds for the flight
+        that actually happens; the earlier contact of the two passes is taken.
+        """
+        t_up = self._flight_time_bound(i, R) * (1.0 + 1e-9) + 1e-15
+        t, k, graze = self._scan(i, R, t_up)
+        if not math.isfinite(t):
             raise RuntimeError(f'no contact found before the flight-time bound {t_up} s')
-        return best_t, best_k
+        if t < 0.5 * t_up:
+            # Both passes evaluate the same heights: a contact either finds is a contact (they
+            # can differ only at a graze of rounding depth).
+            t2, k2, graze2 = self._scan(i, R, min(t_up, 1.001 * t))
+            if t2 < t:
+                t, k, graze = t2, k2, graze2
+        self.last_contact_from_graze = graze
+        return t, k
 
     # ------------------------------------------------------------------ rolling
     def _cm_rel(self, p, phi):
@@ -273,7 +305,7 @@ class ReferenceSimulator:
         return -bx, -by
 
     def _roll_energy(self, p, phi, omega):
-        lp = self.part.l[p]
+        lp = self.part.dist[p]
         return 0.5 * (self.part.rho2 + lp * lp) * omega * omega + \
             self.g_abs * self._cm_rel(p, phi)[1]
 
@@ -292,13 +324,21 @@ class ReferenceSimulator:
     def _roll(self, p, phi, omega, start_edge=-1):
         """Integrate rolling about V^p until a neighbour vertex reaches the arm.
 
-        ``start_edge`` is the edge through V^p lying flat at the start (-1 if none). The state is (psi, omega) with psi = phi - phi_start, so that angles near the start
-        keep full precision. Returns (q, phi, omega, time, relative energy drift).
+        ``start_edge`` is the edge through V^p lying flat at the start (-1 if none). The state
+        is (psi, omega) with psi = phi - phi_start, so that angles near the start keep full
+        precision. Returns (q, phi, omega, time, relative energy drift).
+
+        Landing events are sign changes of the angular distance to the two ends A and B of
+        the range. A part that only just reaches an end overshoots it (in the unconstrained
+        pendulum) by a dip that one integration step could jump over, so turning points
+        (omega = 0) are events too: psi is monotonic between turning points, and a turning
+        point beyond an end means that end was crossed, found by root-finding on the dense
+        output since the last turn.
         """
         part = self.part
         n = part.n
         bp = part.b[p]
-        inertia = part.rho2 + part.l[p] ** 2
+        inertia = part.rho2 + part.dist[p] ** 2
         g = self.g
         a, b = self._roll_window(p, phi)
         if not a - 1e-9 <= phi <= b + 1e-9:
@@ -309,17 +349,19 @@ class ReferenceSimulator:
             phi = b
         elif start_edge != -1:
             raise ValueError(f'edge {start_edge} does not end at vertex {p}')
-        # Event values: distance in angle to the landing of V^{p+1} (at A, phi falling) and of
-        # V^{p-1} (at B, phi rising). A start exactly on a boundary (the edge that just landed)
-        # is divided by t so that a bounce straight back to it is still a sign change.
         lo, hi = a - phi, b - phi
-        acc0 = g * -(math.cos(phi) * bp[0] - math.sin(phi) * bp[1]) / inertia
-        start_rate = omega if omega != 0.0 else acc0
+
+        def accel(psi):
+            ang = phi + psi
+            return g * -(math.cos(ang) * bp[0] - math.sin(ang) * bp[1]) / inertia
 
         def rhs(_, y):
-            ang = phi + y[0]
-            cm_dx = -(math.cos(ang) * bp[0] - math.sin(ang) * bp[1])
-            return [y[1], g * cm_dx / inertia]
+            return [y[1], accel(y[0])]
+
+        # Distance in angle to the landing of V^{p+1} (at A, phi falling) and of V^{p-1} (at B,
+        # phi rising). A start exactly on an end (the edge that just landed) is divided by t,
+        # so that coming straight back to it is still a sign change and t = 0 is not a root.
+        start_rate = omega if omega != 0.0 else accel(0.0)
 
         def ev_lo(t, y):
             if lo == 0.0:
@@ -333,29 +375,50 @@ class ReferenceSimulator:
 
         ev_lo.terminal = ev_hi.terminal = True
         ev_lo.direction = ev_hi.direction = -1.0
-        events = [ev_lo, ev_hi]
         nbrs = ((p + 1) % n, (p - 1) % n)
-        rate = math.sqrt(self.g_abs * part.l[p] / inertia)      # natural angular rate
+        rate = math.sqrt(self.g_abs * part.dist[p] / inertia)      # natural angular rate
         chunk = 50.0 / rate
         atol = [ROLL_ATOL_REL, ROLL_ATOL_REL * max(rate, abs(omega))]
         e0 = self._roll_energy(p, phi, omega)
         scale = self.g_abs * part.size + 0.5 * inertia * omega * omega
-        y0 = [0.0, omega]
-        t0 = 0.0
-        for _ in range(20):
-            sol = solve_ivp(rhs, (t0, t0 + chunk), y0, method='DOP853', rtol=self.rtol,
-                            atol=atol, events=events)
+
+        def landing(k, t1, psi1, om1):
+            phi1 = phi + psi1
+            drift = abs(self._roll_energy(p, phi1, om1) - e0) / scale
+            return nbrs[k], float(phi1), float(om1), float(t1), drift
+
+        t_s, y_s = 0.0, [0.0, omega]
+        for _ in range(40):
+            if y_s[1] == 0.0:
+                # From rest (or a turning point): omega ~ accel * (t - t_s) at first.
+                acc_s, t_turn0 = accel(y_s[0]), t_s
+
+                def ev_turn(t, y):
+                    return acc_s if t == t_turn0 else y[1] / (t - t_turn0)
+            else:
+                def ev_turn(t, y):
+                    return y[1]
+            ev_turn.terminal = True
+            sol = solve_ivp(rhs, (t_s, t_s + chunk), y_s, method='DOP853', rtol=self.rtol,
+                            atol=atol, events=[ev_lo, ev_hi, ev_turn], dense_output=True)
             if sol.status < 0:
                 raise RuntimeError(f'rolling integration failed: {sol.message}')
-            hit = [k for k in range(2) if sol.t_events[k].size]
-            if hit:
-                k = min(hit, key=lambda m: sol.t_events[m][0])
-                psi1, om1 = sol.y_events[k][0]
-                phi1 = phi + psi1
-                drift = abs(self._roll_energy(p, phi1, om1) - e0) / scale
-                return nbrs[k], float(phi1), float(om1), float(sol.t_events[k][0]), drift
-            y0 = sol.y[:, -1]
-            t0 += chunk
+            hit = [k for k in range(3) if sol.t_events[k].size]
+            if not hit:
+                t_s, y_s = float(sol.t[-1]), [float(sol.y[0, -1]), float(sol.y[1, -1])]
+                continue
+            k = min(hit, key=lambda m: sol.t_events[m][0])
+            t1 = float(sol.t_events[k][0])
+            psi1, om1 = (float(x) for x in sol.y_events[k][0])
+            if k < 2:
+                return landing(k, t1, psi1, om1)
+            # A turning point. Beyond an end: that end was crossed since t_s (psi monotonic).
+            for m, bound in ((0, lo), (1, hi)):
+                if (psi1 < bound) if m == 0 else (psi1 > bound):
+                    tc = brentq(lambda t: sol.sol(t)[0] - bound, t_s, t1, xtol=1e-15,
+                                rtol=4 * np.finfo(float).eps)
+                    return landing(m, tc, bound, float(sol.sol(tc)[1]))
+            t_s, y_s = t1, [psi1, 0.0]
         raise RuntimeError('rolling did not reach an edge (balanced on a vertex?)')
 
     def _flat_angle(self, j, phi):
@@ -393,15 +456,15 @@ class ReferenceSimulator:
             cm = self._cm_rel(p, phi)
             vel = (-om_e * cm[1], om_e * cm[0])
             r_q = _rot(phi, part.b[q])
-            lq = part.l[q]
+            lq = part.dist[q]
             _, _, om_new = sticking_impact(r_q, vel, om_e, part.rho2)
-            e_before = 0.5 * (part.rho2 + part.l[p] ** 2) * om_e ** 2 + g_abs * part.d[j]
+            e_before = 0.5 * (part.rho2 + part.dist[p] ** 2) * om_e ** 2 + g_abs * part.d[j]
             continues = om_new * s > 0.0
             ke = 0.5 * (part.rho2 + lq * lq) * om_new * om_new if continues else 0.0
             res.impacts.append(RefImpact('landing', q, j, xq, om_e, om_new if continues else 0.0,
                                          e_before, ke + g_abs * part.d[j]))
             if continues and part.stable[j]:
-                barrier_p = g_abs * (part.l[p] - part.d[j])
+                barrier_p = g_abs * (part.dist[p] - part.d[j])
                 barrier_q = g_abs * (lq - part.d[j])
                 if ke <= barrier_p and ke <= barrier_q:
                     continues = False
@@ -415,7 +478,7 @@ class ReferenceSimulator:
             omega = 0.0
 
     def _tip_from_rest(self, j, q, xq, phi, res):
-        """Stopped flat on unstable E^j (V^q at xq): pivot about the vertex the CM is beyond."""
+        """Tip over from rest off unstable E^j (V^q at xq), about the vertex the CM is beyond."""
         part = self.part
         n = part.n
         left = j
@@ -462,6 +525,7 @@ class ReferenceSimulator:
         res.flight_energy_drift = abs(e_flight - res.release_energy) / res.release_energy
         r_k = _rot(phi, part.b[k])
         xk = cm[0] + r_k[0]
+        res.contact_speed = float(-(vel[1] + w * r_k[0]))
         n = part.n
         # Tilt of the two edges at V^k: E^k flat when its direction is +x (V^{k+1} above V^k
         # means a positive angle); E^{k-1} flat when its direction is +x (negative when above).
@@ -482,12 +546,12 @@ class ReferenceSimulator:
             p, xp = self._tip_from_rest(j, q, xk, phi, res)
             return self._settle(p, xp, phi, 0.0, res, start_edge=j)
         _, _, omega = sticking_impact(r_k, vel, w, part.rho2)
-        lk = part.l[k]
+        lk = part.dist[k]
         e_after = 0.5 * (part.rho2 + lk * lk) * omega * omega + self.g_abs * (-r_k[1])
         res.impacts.append(RefImpact('flight', k, -1, xk, w, omega, e_flight, e_after))
         return self._settle(k, xk, phi, omega, res)
 
 
 def reference_throw(vertices, cm, rho2, h, w, g, edge, R, **kw):
-    """Convenience wrapper: one reference throw (see ReferenceSimulator)."""
+    """Run one reference throw (see ReferenceSimulator)."""
     return ReferenceSimulator(vertices, cm, rho2, h, w, g, **kw).throw(edge, R)
