@@ -20,13 +20,12 @@ puts the rolling energy on the tip-over threshold, ...) and checks the property.
 cases, and why the discontinuities some of them show are real, is docs/numerics.md.
 """
 
+import io
 import math
-import pathlib
 
 import numpy as np
 import pytest
-from throwmap import (Accuracy, DomainError, load_scene, NumericalError, orbit, Part,
-                      ThrowModel)
+from throwmap import Accuracy, DomainError, load_scene, NumericalError, Part, ThrowModel
 from throwmap.cli import main
 from throwmap_testing import PAPER_W, SCENES, TRIANGLE_VERTICES
 
@@ -46,13 +45,14 @@ def vertex_heights(model, edge, R, t):
 
 
 def signature(res):
-    """The discrete outcome of a throw: first contact, every event, and the final edge."""
+    """Return the discrete outcome of a throw: first contact, every event, final edge."""
     return (res.first_contact_vertex, tuple((i.kind, i.vertex, i.edge) for i in res.impacts),
             res.edge)
 
 
 def assert_valid(model, res):
-    """Invariants every throw must satisfy, whatever the case.
+    """
+    Check the invariants every throw must satisfy, whatever the case.
 
     Finite numbers; the part settles on a stable edge; the net rotation takes the resting pose
     on the start edge to the one on the final edge; energy is conserved in flight and while
@@ -102,11 +102,19 @@ def bisect(pred, a, b):
 
 
 def paper_triangle(w=PAPER_W, h=-0.005, **kw):
+    """Return the paper's triangle (h = -0.5 cm, 320 deg/s unless changed)."""
     return ThrowModel(Part(TRIANGLE_VERTICES), h, w, G, **kw)
 
 
+def ngon(n, radius=0.05):
+    """Return a regular n-gon around the origin with edge 0 flat at the bottom."""
+    angles = 2 * np.pi * np.arange(n) / n - np.pi / 2 - np.pi / n
+    return radius * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+
+
 def graze_state(model, edge, k, t, R):
-    """(t*, R*, F''): vertex k's height has a double root, F = F' = 0 at t*, when thrown at R*.
+    """
+    Return (t*, R*, F''): thrown at R*, vertex k's height has a double root at t*.
 
     Newton on the 2x2 system from a nearby guess. Since dF/dR = w t > 0, R* is well conditioned
     (an error in F of 1e-17 m moves it by 1e-17 / (w t*)).
@@ -159,6 +167,8 @@ def test_graze_a_vertex_that_just_touches_and_one_that_just_misses(depth):
 
 def test_graze_a_left_vertex_hop_that_just_clears_the_arm():
     """
+    A hop whose left vertex comes back down and just grazes the arm, or just clears it.
+
     A flat 8 x 3 cm plate spun at 16 rad/s: its left vertex (which starts on the arm) comes
     back down and grazes the arm at t* = 76 ms when thrown at R* = 4.574 cm.
 
@@ -183,6 +193,8 @@ def test_graze_a_left_vertex_hop_that_just_clears_the_arm():
 # ------------------------------------------------------------------------ two-point landings
 def test_near_simultaneous_two_vertex_landing():
     """
+    An edge that lands almost flat: either corner first, or both at once.
+
     Thrown from edge 1 near R = 38.84 cm the triangle lands with E0 almost flat: V1 hits first
     below R*, V0 above it, and within flat_landing_tol of flat both stick at once.
 
@@ -218,6 +230,8 @@ def test_near_simultaneous_two_vertex_landing():
 
 def test_flat_landing_tolerance_sliver_at_the_toe_stub_limit():
     """
+    A tiny hop at the toe-stub limit: flat_landing_tol decides between stop and flip.
+
     Thrown from edge 0 just beyond the toe-stub limit R = -u_l, the triangle spinning at
     15 rad/s barely hops and comes down on its left vertex with E0 tilted by phi ~ w T.
 
@@ -271,6 +285,8 @@ def test_sweet_spot_catch_is_continuous():
 
 def test_rolling_energy_exactly_at_the_tip_over_threshold():
     """
+    Rolling energy exactly at the tip-over threshold: back below it, over above it.
+
     Thrown from edge 0 near R = 13.88 cm, the triangle's first impact leaves it with just the
     energy to roll up until its CM is over the pivot V0, |g| l_0 (CM height right above V0).
 
@@ -332,6 +348,494 @@ def test_cm_exactly_above_the_pivot_tips_the_part_deterministically():
     assert inside.throw(1, R).edge == 0
 
 
+# --------------------------------------------------------------------- release speed extremes
+def test_release_speed_to_zero_flight_time_to_zero():
+    """
+    Release speed -> 0: the flight time goes to 0 with it, and every throw is a jog.
+
+    As w -> 0 the hop shrinks: T = 2 w (R + u_l) / |g + w^2 d| to first order, and the jog
+    moves the part out by -h w T (Proposition IV.4). Down to w = 5e-324 (the smallest double)
+    every throw must be a clean jog; T must follow the formula until it drops below
+    contact_time_tol, and the shift must follow -h w T while it is above rounding.
+    """
+    for w in [1.0, 1e-1, 1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-100, 5e-324]:
+        model = paper_triangle(w=w)
+        part = model.part
+        tol_t = model.accuracy.contact_time_tol
+        for edge in part.stable_edges:
+            R = 1.5 * max(model.r_grasp[edge], -part.u_l[edge])
+            res = model.throw(edge, R)
+            assert_valid(model, res)
+            assert (res.edge, res.kind) == (edge, 'jog')
+            hop = 2 * w * (R + part.u_l[edge]) / abs(G + w * w * part.d[edge])
+            if w < 1.0 and hop > 10 * tol_t:      # (below tol_t both corners 'touch' at tol_t)
+                assert res.first_contact_vertex == edge      # the left vertex lands first
+            shift = -model.h * w * res.flight_time
+            if w <= 1e-2 and hop > 10 * tol_t:
+                assert res.flight_time == pytest.approx(hop, rel=1e-6, abs=0)
+            else:
+                assert res.flight_time <= max(hop * 1.5, tol_t * (1 + 1e-9))
+            if shift > 1e-6 * R:
+                assert res.R - R == pytest.approx(shift, rel=0.05 if w < 1.0 else 0.2)
+            else:
+                assert abs(res.R - R - shift) <= 4 * np.spacing(R) + 2 * abs(shift)
+
+
+def _lowest_point_during_flight(model, edge, R, T):
+    """Minimum over [0, T) of every vertex's height: a fine grid, then each low dip refined."""
+    from scipy.optimize import minimize_scalar
+    step = 0.02 / max(model.w, 1.0)
+    t = np.linspace(0.0, T, max(2000, int(T / step)))
+    heights = vertex_heights(model, edge, R, t)
+    lowest = heights[:, :-1].min()
+    for k in range(model.part.n):
+        h = heights[k]
+        dips = np.flatnonzero((h[1:-1] <= h[:-2]) & (h[1:-1] <= h[2:])) + 1
+        for i in dips:
+            if t[i] > 0.999 * T or h[i] > 1e-3:
+                continue
+            best = minimize_scalar(lambda x: vertex_heights(model, edge, R, x)[k, 0],
+                                   bounds=(t[i - 1], t[i + 1]), method='bounded',
+                                   options={'xatol': 1e-13})
+            lowest = min(lowest, best.fun)
+    return lowest
+
+
+@pytest.mark.parametrize('w', [20.0, 50.0, 100.0])
+def test_very_fast_throws_with_several_turns_find_the_first_contact(w):
+    """
+    Fast throws that turn many times in flight still find the first contact.
+
+    At 20-100 rad/s the triangle turns 1-30 times in flight and each vertex swings down past
+    the arm once a turn. Conservative advancement must return the first contact: no vertex may
+    dip below the arm earlier (checked on a grid of 1/50 turn, every low dip refined).
+    """
+    model = paper_triangle(w=w)
+    part = model.part
+    turns = []
+    for edge in part.stable_edges:
+        lo = max(model.r_grasp[edge], -part.u_l[edge])
+        for R in np.linspace(lo * 1.01, lo * 4, 5):
+            res = model.throw(edge, R)
+            assert_valid(model, res)
+            assert _lowest_point_during_flight(model, edge, R, res.flight_time) > -1e-12
+            turns.append(res.flight_time * w / (2 * math.pi))
+    assert max(turns) > (2 if w == 20.0 else 10)
+
+
+# ------------------------------------------------------------------- the ends of the domain
+def test_R_exactly_at_R_grasp():
+    """R_grasp itself is inside the domain, one ulp below it is not; f is continuous there."""
+    model = paper_triangle()
+    r_grasp = model.r_grasp[2]
+    assert r_grasp > -model.part.u_l[2]                      # the grasp bound is the binding one
+    res = model.throw(2, r_grasp)
+    assert_valid(model, res)
+    below = np.nextafter(r_grasp, 0.0)
+    with pytest.raises(DomainError) as err:
+        model.f(2, below)
+    assert err.value.condition == 'grasp_bound_3'
+    assert err.value.margin == r_grasp - below > 0
+    for eps in (1e-15, 1e-12, 1e-9):
+        near = model.throw(2, r_grasp * (1 + eps))
+        assert signature(near) == signature(res)
+        assert near.R == pytest.approx(res.R, abs=10 * eps * r_grasp)
+
+
+@pytest.mark.parametrize('edge', [0, 1])
+def test_R_at_the_toe_stub_limit(edge):
+    """
+    R at the toe-stub limit: excluded there, a jog of contact_time_tol one ulp beyond.
+
+    At R = -u_l the left vertex starts at the pivot and would move straight up: excluded
+    (toe_stub). One ulp beyond it the hop lasts ~1e-17 s, below contact_time_tol: the throw is
+    a flat jog of contact_time_tol, and R' moves by at most what the part moves in that time.
+    Further out T grows in proportion to R - R_min, continuously.
+    """
+    model = paper_triangle()
+    part = model.part
+    r_min = -part.u_l[edge]
+    assert r_min > model.r_grasp[edge]                       # the toe-stub bound binds
+    with pytest.raises(DomainError) as err:
+        model.f(edge, r_min)
+    assert err.value.condition == 'toe_stub'
+    tol_t = model.accuracy.contact_time_tol
+    res = model.throw(edge, np.nextafter(r_min, 1.0))
+    assert_valid(model, res)
+    assert res.kind == 'jog' and res.impacts[0].kind == 'flat_landing'
+    assert res.flight_time <= tol_t * (1 + 1e-9)
+    assert 0 < res.R - r_min <= 2 * abs(model.h) * model.w * tol_t
+    slope = 2 * model.w / abs(G + model.w ** 2 * part.d[edge])     # dT/dR at R_min
+    for eps in (1e-9, 1e-7, 1e-5):
+        near = model.throw(edge, r_min + eps)
+        assert_valid(model, near)
+        assert near.kind == 'jog'
+        assert near.flight_time == pytest.approx(slope * eps, rel=1e-3)
+
+
+# ------------------------------------------------------------------------- awkward geometry
+@pytest.mark.parametrize('n', [64, 128, 256])
+def test_many_vertices_near_circular(n):
+    """
+    Regular 64-, 128- and 256-gons roll like wheels for thousands of impacts.
+
+    Regular 64-, 128- and 256-gons (R_grasp grows like n: 1.0, 2.0, 4.1 m) thrown from R_grasp
+    and 1.5 R_grasp roll like wheels for thousands of impacts; every impact must lose energy,
+    every roll conserve it, and the part must settle on a stable edge.
+    """
+    part = Part(ngon(n))
+    assert part.n == n and part.stable.all()
+    model = ThrowModel(part, -0.5 * part.d_min, PAPER_W, G)
+    impacts = []
+    for factor in (1.0, 1.5):
+        res = model.throw(0, model.r_grasp[0] * factor)
+        assert_valid(model, res)
+        impacts.append(len(res.impacts))
+    assert min(impacts) > 100
+
+
+@pytest.mark.parametrize('n', [64, 256])
+def test_many_vertices_semicircle(n):
+    """
+    A semicircle with 64 or 256 arc vertices (a D-shape) jogs, flips and rocks.
+
+    A D-shape: n vertices on a 5 cm arc and one flat edge (the realistic way to get many
+    vertices). Thrown from the flat edge at ordinary radii it jogs and flips; a flip that
+    lands on the arc rocks like a rocking chair (68,000 impacts at n = 256, R = 20 cm).
+    """
+    arc = np.linspace(0.0, np.pi, n + 1)[:-1]
+    part = Part(np.vstack([0.05 * np.stack([np.cos(arc), np.sin(arc)], axis=1), [[-0.05, 0]]]))
+    flat = int(np.argmax(part.edge_length))
+    model = ThrowModel(part, -0.5 * part.d_min, PAPER_W, G)
+    lo = max(model.r_grasp[flat], -part.u_l[flat])
+    kinds = set()
+    for R in np.linspace(lo * 1.001, 0.4, 8):
+        res = model.throw(flat, R)
+        assert_valid(model, res)
+        kinds.add(res.kind)
+    assert kinds == {'jog', 'flip'}
+
+
+def _square_with_a_bump(eps, s=0.05):
+    """Return a 5 cm square whose bottom edge is split at 30 % by a vertex eps s below it."""
+    return np.array([[0, 0], [0.3, -eps], [1, 0], [1, 1], [0, 1]]) * s
+
+
+def test_nearly_collinear_vertices():
+    """
+    A square with a vertex a hair out of its bottom edge: stable numerics, real jumps.
+
+    A square with a vertex pushed 1e-3 .. 1e-11 of its size out of the bottom edge (exterior
+    angle ~1.4 eps): the bottom becomes two edges, one unstable, and a landing on the bottom
+    rolls over the bump through an angle ~eps between two sticking impacts.
+
+    Properties: every throw is valid; results are continuous in eps > 0 (eps = 1e-8 and 1e-10
+    agree to O(eps) on a grid of 1,200 throws); below the hull's collinearity threshold
+    (1e-12 relative) the bump is dropped and the square's results come back exactly. Between
+    the two (eps -> 0+ versus the square) about 1 % of throws differ: two one-point impacts
+    are not one two-point impact (docs/numerics.md).
+    """
+    w = PAPER_W
+    square = ThrowModel(Part(_square_with_a_bump(0.0)), -0.01, w, G)
+    assert square.part.n == 4
+    radii = np.linspace(0.035, 0.4, 300)
+    batches = {}
+    for eps in (1e-3, 1e-8, 1e-10, 1e-13):
+        model = ThrowModel(Part(_square_with_a_bump(eps)), -0.01, w, G)
+        part = model.part
+        if eps >= 1e-11:
+            assert part.n == 5 and not part.stable[0] and part.stable[1:].all()
+            turn = part.rest_angle[1] - part.rest_angle[0]
+            assert abs(turn) == pytest.approx(eps / 0.3 + eps / 0.7, rel=1e-3)
+        else:
+            assert part.n == 4
+        offset = part.n - 4                       # square edge i is edge i + offset here
+        for edge in range(1, 4):
+            for R in radii[::25]:
+                assert_valid(model, model.throw(edge + offset, R))
+        batches[eps] = [model.f_batch(np.full(radii.size, edge + offset), radii)
+                        for edge in range(1, 4)]
+    ref = [square.f_batch(np.full(radii.size, edge), radii) for edge in range(1, 4)]
+    for a, b in zip(batches[1e-8], batches[1e-10]):
+        assert np.array_equal(a['edge'], b['edge'])
+        assert np.abs(a['R'] - b['R']).max() < 1e-8
+    for a, b in zip(batches[1e-13], ref):
+        assert np.array_equal(a['edge'], b['edge'])
+        assert np.abs(a['R'] - b['R']).max() < 1e-12
+    differ = sum(int(np.sum(a['edge'] - 1 != b['edge'])) for a, b in zip(batches[1e-10], ref))
+    assert 0 < differ < 0.03 * 3 * radii.size
+
+
+@pytest.mark.parametrize('aspect', [100, 1000])
+def test_very_thin_parts(aspect):
+    """
+    Plates 1:100 and 1:1000 thin: all throws valid, orbits finite.
+
+    A 10 cm plate 1:100 and 1:1000 thin. Its long edges have d = 0.5 (0.05) mm and start at
+    the toe-stub limit; its short edges are 1 (0.1) mm wide, stable but with tip-over barriers
+    of 2e-5 J/kg, and R_grasp there is metres. Every throw must be valid and an orbit of 300
+    throws must stay finite until it leaves the domain with a DomainError, if it does.
+    """
+    length, thick = 0.1, 0.1 / aspect
+    part = Part([[0, 0], [length, 0], [length, thick], [0, thick]])
+    assert part.stable.all() and part.d_min == pytest.approx(thick / 2)
+    model = ThrowModel(part, -0.25 * thick, PAPER_W, G)
+    for edge in range(4):
+        lo = max(model.r_grasp[edge], -part.u_l[edge])
+        for R in lo * (1 + np.logspace(-9, 0.5, 12)):
+            assert_valid(model, model.throw(edge, R))
+    edges, radii, rots, status, done = model.orbits([0, 1], [0.08, 1.2 * model.r_grasp[1]], 300)
+    for k in range(2):
+        assert np.all(np.isfinite(radii[k, :done[k] + 1]))
+        assert status[k] == 0 or model.domain_error(int(edges[k, done[k]]),
+                                                    float(radii[k, done[k]])) is not None
+
+
+def test_cm_near_the_hull_boundary():
+    """
+    The CM close to the hull boundary (d_min -> 0): f converges as it gets closer.
+
+    The triangle with its CM moved to delta = 1e-4 .. 1e-10 m from the hypotenuse (d_min ->
+    0), rho kept, h = -d_min / 2 (so h -> 0 too). The part lying on the hypotenuse is almost
+    flat on its CM. Throws must be valid, and f must converge as delta -> 0 (differences of
+    order delta on a fixed grid of states).
+    """
+    tri = np.array(TRIANGLE_VERTICES)
+    rho = math.sqrt(Part(tri).rho2)
+    foot = 0.5 * (tri[1] + tri[2])
+    inward = np.array([0.8, -0.6])                     # unit normal into the part from E1
+    states = [(e, R) for e in range(3) for R in np.linspace(0.075, 0.45, 60)]
+    previous = None
+    for delta in (1e-4, 1e-6, 1e-8, 1e-10):
+        part = Part(tri, cm=foot + delta * inward, radius_of_gyration=rho)
+        assert part.d_min == pytest.approx(delta, rel=1e-4) and part.d[1] == part.d_min
+        model = ThrowModel(part, -0.5 * part.d_min, PAPER_W, G)
+        out = []
+        for edge, R in states:
+            res = model.throw(edge, R)
+            assert_valid(model, res)
+            out.append((res.edge, res.R))
+        if previous is not None:
+            assert [e for e, _ in out] == [e for e, _ in previous]
+            assert max(abs(a[1] - b[1]) for a, b in zip(out, previous)) < 1000 * delta
+        previous = out
+
+
+def test_nearly_unstable_edge():
+    """
+    An edge that is barely stable: f is continuous in the CM through the switch.
+
+    A quadrilateral whose CM sits eta * 5 cm inside the right end of E0 (u_r = eta s): E0 is
+    stable for eta > 0 with a tip-over barrier of ~|g| (eta s)^2 / (2 d), unstable for eta <= 0.
+
+    f must be continuous in eta through the switch (to O(eta) on ~500 throws, for |eta| <=
+    1e-6) except where the part comes to rest on E0 itself, which only a flat landing on E0
+    does here: there the stable part stays and the unstable one tips (a real discontinuity).
+    """
+    s = 0.05
+    outline = np.array([[0, 0], [1, 0], [1.5, 1], [0, 1]]) * s
+    rho = math.sqrt(Part(outline).rho2)
+
+    def model(eta):
+        return ThrowModel(Part(outline, cm=[s * (1 - eta), 0.5 * s], radius_of_gyration=rho),
+                          -0.005, 8.0, G)
+
+    base = model(0.0)
+    models = {eta: model(eta) for eta in (1e-3, 1e-6, 1e-9, 1e-12, -1e-12, -1e-9)}
+    states = [(e, R) for e in (1, 2, 3) for R in np.linspace(0.06, 0.45, 200)
+              if all(m.domain_error(e, R) is None for m in [base, *models.values()])]
+    assert len(states) > 400
+    reference = [base.throw(e, R) for e, R in states]
+    for eta, m in models.items():
+        assert m.part.stable[0] == (eta > 0)
+        for (edge, R), ref in zip(states, reference):
+            res = m.throw(edge, R)
+            assert_valid(m, res)
+            if abs(eta) <= 1e-6:      # (a CM moved by 50 um can cross a tip-over threshold)
+                assert res.edge == ref.edge
+                assert abs(res.R - ref.R) <= 1e3 * abs(eta) * s
+    flat = 0.09603733737156481                         # lands flat on E0 (see the CM test)
+    assert model(1e-9).throw(1, flat).edge == 0
+    assert model(-1e-9).throw(1, flat).edge == 1
+
+
+def test_offset_h_to_zero_and_to_minus_d_min():
+    """
+    The arm offset h -> 0 and h -> -d_min: f is continuous at both ends.
+
+    h -> 0- and h -> -d_min+ (the ends of Proposition IV.4's range; at the ends themselves the
+    model warns and still computes). h only enters through the CM's sideways speed -(h + d) w,
+    so f must be continuous in h at both ends: |R'(h) - R'(end)| = O(h - end).
+    """
+    import warnings
+    part = Part(TRIANGLE_VERTICES)
+    states = [(e, R) for e in range(3) for R in np.linspace(0.06, 0.4, 40)]
+    for end, side in ((0.0, -1.0), (-part.d_min, 1.0)):
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore')
+            at_end = ThrowModel(part, end, PAPER_W, G)
+        limit = [at_end.throw(e, R) if at_end.domain_error(e, R) is None else None
+                 for e, R in states]
+        for gap in (1e-3, 1e-6, 1e-9, 1e-12):
+            h = end + side * gap * part.d_min
+            model = ThrowModel(part, h, PAPER_W, G)
+            for (edge, R), ref in zip(states, limit):
+                if ref is None or model.domain_error(edge, R) is not None:
+                    continue
+                res = model.throw(edge, R)
+                assert_valid(model, res)
+                if gap <= 1e-9:
+                    assert signature(res) == signature(ref)
+                if signature(res) == signature(ref):
+                    assert abs(res.R - ref.R) <= 50 * gap * part.d_min
+
+
+# -------------------------------------------------------------------- scales and determinism
+def _scaled_model(k, vertices=TRIANGLE_VERTICES, h=-0.005, w=PAPER_W, g=G):
+    """Return the paper's triangle with every length and g multiplied by k."""
+    return ThrowModel(Part(np.asarray(vertices) * k), h * k, w, g * k)
+
+
+@pytest.mark.parametrize('k', [2.0 ** -6, 2.0 ** -3, 2.0 ** 3, 2.0 ** 4])
+def test_length_scales_by_powers_of_two_are_bit_exact(k):
+    """
+    Scaling lengths and g by a power of two scales the orbit exactly.
+
+    Lengths x k and g x k leave every time and angle unchanged and scale every length by k.
+    With k a power of two (the triangle at 1 mm .. 1.3 m) every floating-point operation scales
+    exactly, so a 300-throw orbit must come out with the same edges and R x k bit for bit.
+    """
+    base = _scaled_model(1.0)
+    scaled = _scaled_model(k)
+    for edge, R in ((1, 0.12), (0, 0.2), (2, 0.07)):
+        e0, r0, _ = base.orbit_arrays(edge, R, 300)
+        e1, r1, _ = scaled.orbit_arrays(edge, R * k, 300)
+        assert np.array_equal(e0, e1)
+        assert np.array_equal(r0 * k, r1)
+
+
+@pytest.mark.parametrize('k', [1e-3, 1e-2, 10.0])
+def test_length_scales_mm_to_m(k):
+    """
+    Millimetre to metre parts: lengths and g x k give the same edges and R x k.
+
+    With decimal k (a 60 um .. 1 m triangle, g from 9.7 mm/s^2 to 97 m/s^2) rounding differs,
+    so single throws must agree to 1e-12 relative and an orbit must keep the same edges while
+    the expanding jogs (Proposition IV.1) amplify rounding: its first 40 throws.
+    """
+    base = _scaled_model(1.0)
+    scaled = _scaled_model(k)
+    for edge in range(3):
+        for R in np.linspace(0.06, 0.4, 25):
+            a, b = base.throw(edge, R), scaled.throw(edge, R * k)
+            assert signature(a) == signature(b)
+            assert b.R / k == pytest.approx(a.R, rel=1e-12, abs=1e-15)
+            assert b.flight_time == pytest.approx(a.flight_time, rel=1e-12)
+            assert b.release_energy / k ** 2 == pytest.approx(a.release_energy, rel=1e-12)
+    e0, r0, _ = base.orbit_arrays(1, 0.12, 40)
+    e1, r1, _ = scaled.orbit_arrays(1, 0.12 * k, 40)
+    assert np.array_equal(e0, e1)
+    assert np.allclose(r1 / k, r0, rtol=1e-9, atol=0)
+
+
+def test_determinism_across_calls_batches_and_processes():
+    """
+    The same state gives the same bits everywhere, in this process and a fresh one.
+
+    The same state gives the same bits: twice in a row, through f, throw, f_batch and orbits,
+    and in a fresh interpreter (which loads the compiled kernel from numba's cache).
+    """
+    import json
+    import subprocess
+    import sys
+    model = paper_triangle()
+    rng = np.random.default_rng(11)
+    states = [(int(e), float(R)) for e, R in zip(rng.choice(3, 200), rng.uniform(0.06, 0.4, 200))]
+    edges = np.array([e for e, _ in states])
+    radii = np.array([R for _, R in states])
+    batch = model.f_batch(edges, radii)
+    again = model.f_batch(edges, radii)
+    assert np.array_equal(batch['R'], again['R']) and np.array_equal(batch['edge'], again['edge'])
+    o_edge, o_r, _, o_status, _ = model.orbits(edges, radii, 1)
+    assert np.array_equal(o_r[:, 1], batch['R']) and (o_status == 0).all()
+    for k, (e, R) in enumerate(states):
+        j, r1, kind = model.f(e, R)
+        res = model.throw(e, R)
+        assert (j, r1, kind) == (batch['edge'][k], batch['R'][k], batch['kind'][k])
+        assert (res.edge, res.R, res.kind) == (j, r1, kind)
+    code = ('import json, sys\n'
+            'from throwmap import Part, ThrowModel\n'
+            f'm = ThrowModel(Part({TRIANGLE_VERTICES!r}), -0.005, {PAPER_W!r}, {G!r})\n'
+            'states = json.load(sys.stdin)\n'
+            'print(json.dumps([m.f(e, R)[1].hex() for e, R in states]))\n')
+    out = subprocess.run([sys.executable, '-c', code], input=json.dumps(states),
+                         capture_output=True, text=True, timeout=300, check=True)
+    assert json.loads(out.stdout) == [float(x).hex() for x in batch['R']]
+
+
+# ------------------------------------------------------------------------ scenes/hard/*.yaml
+def _first_impact_energy_is_the_climb_to_the_top(scene, res):
+    return res.impacts[0].energy_after == pytest.approx(
+        -scene.gravity * scene.part.vertex_radius[res.first_contact_vertex], rel=1e-13)
+
+
+# What each scene's start must show (besides assert_valid): the hard thing it is about.
+SCENE_PROPERTIES = {
+    'balanced_on_vertex': lambda sc, r: [(i.kind, i.vertex) for i in r.impacts][1:] == [
+        ('tip_from_rest', 1), ('landing', 2)] and sc.part.u_r[0] == 0.0,
+    'cm_near_edge': lambda sc, r: sc.part.d_min < 2e-9,
+    'collinear_bump': lambda sc, r: sc.part.n == 5 and len(r.impacts) == 5,
+    'fast_spin': lambda sc, r: r.flight_time * sc.release_speed / (2 * math.pi) > 30,
+    'flat_landing': lambda sc, r: r.impacts[0].kind == 'flat_landing' and r.edge == 0,
+    'flat_sliver_toe_stub': lambda sc, r: r.impacts[0].kind == 'flat_landing' and r.kind == 'jog',
+    'graze_miss': lambda sc, r: r.first_contact_vertex == 0 and r.flight_time > 0.2,
+    'graze_touch': lambda sc, r: r.first_contact_vertex == 1 and r.flight_time < 0.1834,
+    'long_flight': lambda sc, r: r.flight_time > 16000,
+    'metre': lambda sc, r: sc.part.r > 0.5,
+    'millimetre': lambda sc, r: sc.part.r < 0.006,
+    'nearly_unstable_edge': lambda sc, r: sc.part.stable[0] and r.edge == 0,
+    'ngon64': lambda sc, r: sc.part.n == 64 and len(r.impacts) > 100,
+    'offset_near_minus_dmin': lambda sc, r: 0 < sc.h + sc.part.d_min < 2e-12,
+    'offset_near_zero': lambda sc, r: -2e-12 < sc.h < 0,
+    'semicircle256': lambda sc, r: sc.part.n == 257 and len(r.impacts) > 10_000,
+    'slow_release': lambda sc, r: r.kind == 'jog' and r.flight_time < 1e-7,
+    'sweet_spot': lambda sc, r: abs(r.impacts[0].omega_after) < 1e-13 * sc.release_speed,
+    'thin_plate': lambda sc, r: sc.part.d_min == pytest.approx(0.0005),
+    'tiny_contact_time_tol': lambda sc, r: sc.model.accuracy.contact_time_tol == 1e-17,
+    'tip_threshold': _first_impact_energy_is_the_climb_to_the_top,
+    'toe_stub_limit': lambda sc, r: r.flight_time <= sc.model.accuracy.contact_time_tol,
+}
+
+
+def test_every_hard_scene_is_listed_and_says_what_is_hard():
+    """Each scenes/hard/*.yaml has a test property and opens with a 'HARD CASE' comment."""
+    assert sorted(p.stem for p in HARD_SCENES) == sorted(SCENE_PROPERTIES)
+    for path in HARD_SCENES:
+        assert path.read_text().startswith('# HARD CASE'), path.name
+
+
+@pytest.mark.parametrize('path', HARD_SCENES, ids=lambda p: p.stem)
+def test_hard_scene_loads_throws_and_orbits(path, capsys):
+    """
+    Load a hard scene with `throwmap grasp`, throw from its start, run a 50-throw orbit.
+
+    The throw must satisfy the generic invariants and the scene's own property; the orbit must
+    give finite states until it ends or leaves the domain (a DomainError, documented).
+    """
+    assert main(['grasp', str(path)], out=io.StringIO()) == 0
+    assert 'warning' not in capsys.readouterr().err
+    scene = load_scene(str(path))
+    edge, R = scene.default_start()
+    res = scene.model.throw(edge, R)
+    assert_valid(scene.model, res)
+    assert SCENE_PROPERTIES[path.stem](scene, res)
+    edges, radii, _, status, done = scene.model.orbits([edge], [R], 50)
+    assert np.all(np.isfinite(radii[0, :done[0] + 1]))
+    if status[0] != 0:
+        assert scene.model.domain_error(int(edges[0, done[0]]),
+                                        float(radii[0, done[0]])) is not None
+
+
 # ------------------------------------------------------------------------------ regressions
 def test_regression_tiny_contact_time_tol_does_not_stall():
     """
@@ -390,8 +894,6 @@ def test_regression_short_hop_is_not_rounded_to_an_ulp_of_d():
     than it flies (w = 1e-8 rad/s). The resting edge's vertices now start at exactly 0 and F
     is f0 plus terms that vanish at t = 0, so the time stays exact to an ulp.
     """
-    from throwmap import load_scene
-    from throwmap_testing import SCENES
     scene = load_scene(str(SCENES / 'bracket.yaml'))
     part = scene.part
     assert part.d[1] + part.V[1, 1] > 0      # the rounding that used to bite
@@ -407,12 +909,6 @@ def test_regression_short_hop_is_not_rounded_to_an_ulp_of_d():
             else:   # below the documented resolution: exact to contact_time_tol
                 assert abs(res.flight_time - hop) <= model.accuracy.contact_time_tol
             assert res.first_contact_vertex == edge
-
-
-def ngon(n, radius=0.05):
-    """A regular n-gon around the origin with one edge flat at the bottom (edge 0)."""
-    angles = 2 * np.pi * np.arange(n) / n - np.pi / 2 - np.pi / n
-    return radius * np.stack([np.cos(angles), np.sin(angles)], axis=1)
 
 
 def test_regression_a_1024_gon_settles_within_the_default_impact_cap():
