@@ -22,6 +22,8 @@ import numpy as np
 from . import kernel
 from .errors import InputError, NumericalError
 
+LOST = 20   # effect_model.LOST: the part left the finite arm (kept here to avoid an import cycle)
+
 
 @dataclass(frozen=True)
 class Orbit:
@@ -38,11 +40,13 @@ class Orbit:
 
 
 def orbit(model, edge, R, throws):
+    """Iterate f; with effect finite_arm the orbit may end early with a 'lost' state (-1, nan)."""
     if isinstance(throws, bool) or not isinstance(throws, (int, np.integer)) or throws < 1:
         raise InputError('throws', f'must be an integer >= 1, got {throws!r}',
                          'give the number of throws to simulate')
     edges, radii, rots = model.orbit_arrays(edge, R, int(throws))
-    kinds = [None] + [('jog' if edges[k] == edges[k - 1] and abs(rots[k]) < math.pi else 'flip')
+    kinds = [None] + [('lost' if edges[k] < 0 else
+                       'jog' if edges[k] == edges[k - 1] and abs(rots[k]) < math.pi else 'flip')
                       for k in range(1, len(edges))]
     return Orbit(edges, radii, tuple(kinds), rots)
 
@@ -163,6 +167,11 @@ def limit_set_from_orbit(edges, radii, rotations, tail_fraction=0.5, band_tol=No
 
 def limit_set(model, edge, R, throws=2000, tail_fraction=0.5):
     orb = orbit(model, edge, R, throws)
+    if orb.edges[-1] < 0:
+        from .effect_model import PartLost
+        raise PartLost(f'from ({edge}, {R:.6g} m) the part was lost (fell off the arm) at throw '
+                       f'{len(orb.edges) - 1}: there is no limit set; start elsewhere or '
+                       'lengthen arm.length', after=len(orb.edges) - 2)
     return limit_set_from_orbit(orb.edges, orb.radii, orb.rotations, tail_fraction)
 
 
@@ -220,6 +229,9 @@ def basin(model, start_edges, start_radii, throws=100, reference=None, progress=
     sigs = []
     transients = np.full(len(start_edges), -1)
     for s in range(len(start_edges)):
+        if status[s] == LOST:
+            sigs.append('lost')
+            continue
         if status[s] != kernel.OK:
             sigs.append('error: ' + model.error_message(int(status[s]), int(e[s, done[s]]),
                                                         float(r[s, done[s]])))
@@ -287,7 +299,11 @@ def design_radii(model, samples=400, max_rounds=50):
         for i in stable:
             rs = np.linspace(lo[i], r_max[i], samples)
             res = model.f_batch(np.full(samples, i), rs)
-            ok = res['status'] == kernel.OK
+            lost = res['status'] == LOST
+            if lost.any():
+                # Lost states (effect finite_arm) leave every invariant set.
+                escapes.append((i, -1, float(rs[np.flatnonzero(lost)[0]])))
+            ok = (res['status'] == kernel.OK) | lost
             if not ok.all():
                 bad = int(np.flatnonzero(~ok)[0])
                 raise NumericalError(model.error_message(int(res['status'][bad]), i,
@@ -302,7 +318,7 @@ def design_radii(model, samples=400, max_rounds=50):
                     if top > r_max[j] * (1 + 1e-12):
                         r_max[j] = top
                         grew = True
-            landed_unknown = ~np.isin(res['edge'], stable)
+            landed_unknown = ~np.isin(res['edge'][~lost], stable)
             if landed_unknown.any():   # pragma: no cover - settled edges are stable
                 invariant = False
         if not grew:
@@ -392,11 +408,15 @@ class Analysis:
     radii: dict
     basin: Basin
     sensor: SensorDesign
+    stochastic: dict = None     # noisy scenes: outcome distribution, P(goal | detection)
 
     def as_dict(self):
-        return {'start': {'edge': self.start[0], 'R': self.start[1]},
-                'limit_set': self.limit_set.as_dict(), 'design': self.radii,
-                'basin': self.basin.summary(), 'sensor': self.sensor.as_dict()}
+        d = {'start': {'edge': self.start[0], 'R': self.start[1]},
+             'limit_set': self.limit_set.as_dict(), 'design': self.radii,
+             'basin': self.basin.summary(), 'sensor': self.sensor.as_dict()}
+        if self.stochastic is not None:
+            d['stochastic'] = self.stochastic
+        return d
 
 
 def analyse(scene, throws=10_000, grid_radii=50, grid_throws=200, progress=None):
@@ -407,8 +427,12 @@ def analyse(scene, throws=10_000, grid_radii=50, grid_throws=200, progress=None)
     """
     model = scene.model
     start = scene.default_start()
+    noisy = getattr(scene, 'stochastic', False)
+    if noisy:
+        model.reseed(scene.seed)
     ls = limit_set(model, start[0], start[1], throws)
-    radii = design_radii(model)
+    # Design radii are properties of the deterministic map: noise is taken out for them.
+    radii = design_radii(model.nominal() if noisy else model)
     e, r = default_grid(model, grid_radii, radii['R_max_all'])
     bas = basin(model, e, r, grid_throws, reference=ls, progress=progress)
     goal = scene.goal_edge
@@ -416,4 +440,9 @@ def analyse(scene, throws=10_000, grid_radii=50, grid_throws=200, progress=None)
         u_max = model.part.U.max(axis=1)
         goal = max(ls.bands, key=lambda k: ls.bands[k][1] + u_max[k])
     sensor = sensor_design(model, ls, goal, scene.sensor_footprint, scene.sensor_radius, bas)
-    return Analysis(start, ls, radii, bas, sensor)
+    stoch = None
+    if noisy:
+        from .stochastic import stochastic_summary
+        stoch = stochastic_summary(model, sensor, start, (e, r), throws=min(throws, 2000),
+                                   grid_throws=grid_throws, seeds=8, reference=ls)
+    return Analysis(start, ls, radii, bas, sensor, stoch)

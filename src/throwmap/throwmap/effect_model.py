@@ -21,7 +21,7 @@ backplate_friction and impact_restitution, to the general simulator (throwmap.ge
 A scene without effects never gets here: its model is the base ThrowModel.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 
 import numpy as np
@@ -43,7 +43,7 @@ CONTACT_METHODS = ('advancement', 'scan')
 _EVENT_NAMES = {kernel.EV_FLIGHT_IMPACT: 'flight', kernel.EV_LANDING: 'landing',
                 kernel.EV_FLAT_LANDING: 'flat_landing', kernel.EV_TIP_FROM_REST: 'tip_from_rest',
                 general.EV_BOUNCE: 'bounce', general.EV_LIFTOFF: 'liftoff',
-                general.EV_SETTLE_SNAP: 'settle_snap'}
+                general.EV_SETTLE_SNAP: 'settle_snap', general.EV_HELD: 'held_by_plate'}
 
 
 @dataclass(frozen=True)
@@ -194,7 +194,7 @@ def arm_clearance(edge, x0, y0, phi0, vx, vy, om, g, h, theta_r, w, ret_time, sa
 def throw_core(edge, R, zw, zh, w0, h0, g, sd_w, sd_h, mu, theta_r, ret_time, carry_n, arm_len,
                use_general, prm, method, scan_step, root_tol, tol_t, flat_tol, max_steps,
                max_impacts, first_stable, n, rho2, d, u_l, u_r, stable, edge_len, vrad, acw,
-               accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, rec):
+               accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, nobound, rec):
     """One throw with effects. Returns (status, edge, R, first contact time, net rotation,
     impacts, first contact vertex, records written, w used, h used)."""
     nan = math.nan
@@ -220,11 +220,18 @@ def throw_core(edge, R, zw, zh, w0, h0, g, sd_w, sd_h, mu, theta_r, ret_time, ca
         status, j, r1, t, rot, imp, k0, nrec, x_lo, x_hi = general.simulate(
             edge, x0, y0, phi0, vx, vy, om, prm, n, rho2, d, u_l, u_r, stable, edge_len,
             rest_angle, U, V, QU, QV, QW, acw, accw, rec)
+    elif theta_r == 0.0 and method == closed.METHOD_ADVANCEMENT:
+        # The impulsive release of eqs 5-6: the base kernel itself (bit-identical results).
+        status, j, r1, t, rot, imp, k0, nrec = kernel.throw_one(
+            edge, R, w, g, h, n, rho2, d, u_l, u_r, stable, edge_len, vrad, acw, accw, kcw,
+            kccw, U, V, nobound, first_stable, tol_t, flat_tol, max_steps, max_impacts,
+            rec)
     else:
         status, j, r1, t, rot, imp, k0, nrec = closed.ballistic_throw(
             edge, x0, y0, phi0, vx, vy, om, g, h, n, rho2, d, u_l, u_r, stable, edge_len, vrad,
             acw, accw, kcw, kccw, U, V, first_stable, tol_t, flat_tol, max_steps, max_impacts,
             method, scan_step, root_tol, rec)
+    if not use_general:
         x_lo = math.inf
         x_hi = -math.inf
         if math.isfinite(arm_len):
@@ -258,15 +265,15 @@ def throw_core(edge, R, zw, zh, w0, h0, g, sd_w, sd_h, mu, theta_r, ret_time, ca
 def throw_batch(edges, radii, z, w0, h0, g, sd_w, sd_h, mu, theta_r, ret_time, carry_n,
                 arm_len, use_general, prm, method, scan_step, root_tol, tol_t, flat_tol,
                 max_steps, max_impacts, first_stable, n, rho2, d, u_l, u_r, stable, edge_len,
-                vrad, acw, accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, out_edge, out_r,
-                out_status, out_t, out_rot):
+                vrad, acw, accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, nobound, out_edge,
+                out_r, out_status, out_t, out_rot):
     rec = np.empty((REC_ROWS, kernel.REC_COLS))
     for i in range(edges.shape[0]):
         st, j, r1, t, rot, _, _, _, _, _ = throw_core(
             edges[i], radii[i], z[i, 0], z[i, 1], w0, h0, g, sd_w, sd_h, mu, theta_r, ret_time,
             carry_n, arm_len, use_general, prm, method, scan_step, root_tol, tol_t, flat_tol,
             max_steps, max_impacts, first_stable, n, rho2, d, u_l, u_r, stable, edge_len, vrad,
-            acw, accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, rec)
+            acw, accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, nobound, rec)
         out_edge[i] = j
         out_r[i] = r1
         out_status[i] = st
@@ -278,8 +285,8 @@ def throw_batch(edges, radii, z, w0, h0, g, sd_w, sd_h, mu, theta_r, ret_time, c
 def orbit_batch(edges, radii, steps, z, w0, h0, g, sd_w, sd_h, mu, theta_r, ret_time, carry_n,
                 arm_len, use_general, prm, method, scan_step, root_tol, tol_t, flat_tol,
                 max_steps, max_impacts, first_stable, n, rho2, d, u_l, u_r, stable, edge_len,
-                vrad, acw, accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, out_edge, out_r,
-                out_rot, out_status, out_done):
+                vrad, acw, accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, nobound, out_edge,
+                out_r, out_rot, out_status, out_done):
     """Orbits from many starts; z has shape (starts, steps, 2). A lost throw ends its orbit
     with edge -1 and status LOST."""
     rec = np.empty((REC_ROWS, kernel.REC_COLS))
@@ -296,7 +303,8 @@ def orbit_batch(edges, radii, steps, z, w0, h0, g, sd_w, sd_h, mu, theta_r, ret_
                 edge, R, z[s, k, 0], z[s, k, 1], w0, h0, g, sd_w, sd_h, mu, theta_r, ret_time,
                 carry_n, arm_len, use_general, prm, method, scan_step, root_tol, tol_t,
                 flat_tol, max_steps, max_impacts, first_stable, n, rho2, d, u_l, u_r, stable,
-                edge_len, vrad, acw, accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, rec)
+                edge_len, vrad, acw, accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, nobound,
+                rec)
             if st != kernel.OK:
                 out_status[s] = st
                 out_done[s] = k
@@ -394,12 +402,24 @@ class EffectModel(ThrowModel):
                        settle_rule == 'first_stable', part.n, part.rho2, part.d, part.u_l,
                        part.u_r, part.stable, part.edge_length, part.vertex_radius,
                        part.alpha_cw_end, part.alpha_ccw_end, part.k_cw, part.k_ccw, part.U,
-                       part.V, part.rest_angle, qu, qv, qw)
+                       part.V, part.rest_angle, qu, qv, qw,
+                       # throw_core checks the grasp itself (at the throw's own h), so the
+                       # kernel it calls gets no bound
+                       np.full(part.n, -np.inf))
 
     # ------------------------------------------------------------------------- randomness
     def reseed(self, seed):
         self.seed = seed
         self.rng = np.random.default_rng(seed)
+
+    def nominal(self):
+        """The same model without release_noise and sensor_noise (the deterministic map)."""
+        eff = replace(self.effects, release_noise=None, sensor_noise=None,
+                      names=tuple(n for n in self.effects.names
+                                  if n not in ('release_noise', 'sensor_noise')))
+        return EffectModel(self.part, self.h, self.w, self.g, mu=self.mu,
+                           settle_rule=self.settle_rule, accuracy=self.accuracy, effects=eff,
+                           knobs=self.knobs, seed=self.seed, g_normal=self.g_normal)
 
     def _draw(self, shape):
         if self.effects.release_noise is None:

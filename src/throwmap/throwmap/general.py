@@ -23,10 +23,10 @@ Phases (per unit mass, frame F, the arm surface is y = h):
   (``integrator_step``). Contact is looked for at the end of every step: a vertex at or below
   the arm and moving down. The crossing is refined by bisection on re-integrated sub-steps to
   ``contact_root_tol``. A graze shorter than a step is missed; the benchmark shows how often.
-* IMPACT at one vertex: Chatterjee-Ruina algebraic law with normal restitution e, tangential
-  restitution 0 and the impulse clipped to the friction cone mu. A rebound slower than
-  ``bounce_threshold`` counts as plastic (its normal velocity is removed by a further normal
-  impulse, which only dissipates). With e = 0 and mu = inf it is the sticking impact (eqs 7-9).
+* IMPACT at one vertex: Routh's method with Stronge's energetic restitution e and Coulomb
+  friction mu (impact()). A rebound slower than ``bounce_threshold`` counts as plastic (its
+  normal velocity is removed by a further normal impulse, which only dissipates). With e = 0
+  and mu = inf it is the sticking impact (eqs 7-9).
 * CONTACT at one vertex P: sticking (rolling about P) or sliding along the arm, integrated with
   RK4 at ``roll_step``. Events: another vertex lands (single-point impact there; if the old
   pivot would then be driven into the arm, the edge lands flat instead), the normal force turns
@@ -46,12 +46,14 @@ import numpy as np
 
 from . import _jitcache  # noqa: F401  (drops stale compiled code first)
 from .kernel import (ERR_FLIGHT_CAP, ERR_NONFINITE, ERR_SETTLE_CAP, EV_FLAT_LANDING,
-                     EV_FLIGHT_IMPACT, EV_LANDING, EV_TIP_FROM_REST, njit, OK, REC_COLS)
+                     EV_FLIGHT_IMPACT, EV_LANDING, EV_TIP_FROM_REST, njit, OK, REC_COLS,
+                     sticking_impact)
 
 ERR_PAINLEVE = 9        # sliding contact with no consistent normal force (mu too large)
 EV_BOUNCE = 4           # an impact that sends the part back into flight
 EV_LIFTOFF = 5          # the normal force at the pivot reached zero: back into flight
 EV_SETTLE_SNAP = 6      # rocking energy below settle_energy: laid flat about the pivot
+EV_HELD = 7             # plate friction held the part on a corner: released from its edge
 
 # Indices of the float parameter vector ``prm``.
 (P_G, P_H, P_FRIC, P_MU, P_E, P_VB, P_DT, P_RDT, P_ROOT, P_VREG, P_SETTLE, P_FLAT, P_MAXSTEPS,
@@ -147,33 +149,98 @@ def _energy(vx, vy, om, y, h, g, rho2):
 
 @njit
 def impact(rx, ry, vx, vy, om, rho2, e, mu):
-    """Chatterjee-Ruina impact at a contact point r = (rx, ry) from the CM, arm normal +y.
+    """Frictional impact at a contact point r = (rx, ry) from the CM on the arm (normal +y).
 
-    Returns (vx, vy, om) after the impact. P_I is the impulse that stops the contact point
-    (plastic sticking); the law applies (1 + e) of its normal part and all of its tangential
-    part, clipped to the friction cone. e = 0 with the cone wide enough is eqs 7-9 exactly.
+    Routh's method with Stronge's energetic restitution: the impact is followed in terms of the
+    normal impulse p. The contact velocity u = (u_t, u_n) changes by K dP, where the tangential
+    impulse follows Coulomb's law: -mu sign(u_t) dp while slipping; while stuck, whatever keeps
+    u_t = 0 if that lies within the cone, else slip starts. Compression ends when u_n = 0;
+    restitution then goes on until the normal impulse has given back e^2 of the work it took
+    in compression. Friction only removes energy and the normal work is (1 - e^2) times the
+    (negative) compression work, so kinetic energy never increases. mu = inf stops slip at
+    once; with e = 0 the result is then the sticking impact of eqs 7-9. Returns (vx, vy, om).
     """
     ut = vx - om * ry
     un = vy + om * rx
+    if un >= 0.0:
+        return vx, vy, om    # separating or resting: no impact
     inv = 1.0 / rho2
     ktt = 1.0 + ry * ry * inv
     knn = 1.0 + rx * rx * inv
     ktn = -rx * ry * inv
-    det = ktt * knn - ktn * ktn
-    # P_I = -K^-1 u
-    pit = -(knn * ut - ktn * un) / det
-    pin = -(-ktn * ut + ktt * un) / det
-    pn = (1.0 + e) * pin
-    pt = pit
-    if pn < 0.0:
-        pn = 0.0    # a separating contact takes no impulse
-        pt = 0.0
-    if abs(pt) > mu * pn:
-        pt = math.copysign(mu * pn, pt)
-    vx_new = vx + pt
-    vy_new = vy + pn
-    om_new = om + (rx * pn - ry * pt) * inv
-    return vx_new, vy_new, om_new
+    pt = 0.0
+    pn = 0.0
+    eps = 1e-13 * (abs(ut) + abs(un))
+    if math.isinf(mu) and ut != 0.0:
+        # unbounded friction: a tangential impulse stops the slip at once
+        d_pt = -ut / ktt
+        pt += d_pt
+        ut = 0.0
+        un += ktn * d_pt
+        if un >= 0.0:
+            return vx + pt, vy, om - ry * pt * inv
+    work = 0.0
+    compressing = True
+    target = 0.0
+    for _ in range(16):
+        if abs(ut) > eps:
+            sigma = 1.0 if ut > 0.0 else -1.0
+            rate_t = -mu * sigma
+            stuck = False
+        else:
+            ut = 0.0
+            lam = -ktn / ktt
+            if abs(lam) <= mu:
+                rate_t = lam
+                stuck = True
+            else:
+                rate_t = mu if lam > 0.0 else -mu
+                stuck = False
+        dut = ktt * rate_t + ktn
+        dun = ktn * rate_t + knn
+        step = math.inf
+        ends_slip = False
+        if not stuck and ut != 0.0 and dut * ut < 0.0:
+            step = -ut / dut
+            ends_slip = True
+        if compressing:
+            if dun <= 0.0:
+                # No normal impulse can stop the approach while slipping (Painleve jam): the
+                # contact sticks instead (the impulse that stops the point, as in eqs 7-9).
+                det = ktt * knn - ktn * ktn
+                pt -= (knn * ut - ktn * un) / det
+                pn -= (-ktn * ut + ktt * un) / det
+                return vx + pt, vy + pn, om + (rx * pn - ry * pt) * inv
+            s_c = -un / dun
+            if s_c <= step:
+                step = s_c
+                ends_slip = False
+        else:
+            # W(p + s) = work + un s + dun s^2 / 2 reaches the target
+            rem = target - work
+            if dun > 0.0:
+                s_r = (-un + math.sqrt(un * un + 2.0 * dun * rem)) / dun
+            else:
+                s_r = rem / un if un > 0.0 else 0.0
+            if s_r <= step:
+                step = s_r
+                ends_slip = False
+        work += un * step + 0.5 * dun * step * step
+        pn += step
+        pt += rate_t * step
+        ut = 0.0 if ends_slip else ut + dut * step
+        un = un + dun * step
+        if ends_slip:
+            continue
+        if compressing:
+            compressing = False
+            un = 0.0
+            target = work * (1.0 - e * e)
+            if e == 0.0:
+                break
+        elif not ends_slip:
+            break
+    return vx + pt, vy + pn, om + (rx * pn - ry * pt) * inv
 
 
 @njit
@@ -273,7 +340,7 @@ def _contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, h, g, rho2, mu
     if sliding:
         if vxp * sigma <= 0.0:
             return 4, -1
-    elif abs(ft) > mu * abs(n):
+    elif unilateral and abs(ft) > mu * n:
         return 3, -1
     return 0, -1
 
@@ -444,6 +511,9 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
                 sep = k
                 continue
             vxa, vya, oma = _remove_normal(rx, ry, vxa, vya, oma, rho2)
+            if not unilateral:
+                # a hinge pivot: the foam catches a vertex that is still slipping
+                vxa, vya, oma = sticking_impact(rx, ry, vxa, vya, oma, rho2)
             nrec = _record(rec, nrec, EV_FLIGHT_IMPACT, k, -1, xk, om, oma, e_before,
                            _energy(vxa, vya, oma, y, h, g, rho2))
             vx, vy, om = vxa, vya, oma
@@ -452,7 +522,7 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
             vxp = vx - om * ry
             mode = MODE_CONTACT
             sliding, sigma = _contact_mode(vxp, xp, phi, om, p, bu, bv, h, g, rho2, mu, qu, qv,
-                                           qw, coef, vreg)
+                                           qw, coef, vreg, unilateral)
             continue
         if mode == MODE_CONTACT:
             code, kk = _contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, h, g, rho2,
@@ -466,10 +536,25 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
                 code, kk = _contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, h, g,
                                             rho2, mu, qu, qv, qw, coef, vreg, unilateral)
                 if code == 0:
+                    turned = om * o1 <= 0.0
                     xp, phi, vxp, om = xp1, p1, v1, o1
                     t += rdt
                     x_lo = min(x_lo, xp)
                     x_hi = max(x_hi, xp)
+                    if turned and coef > 0.0 and not sliding:
+                        held, dphi = _plate_hold(phi, om, bu[p], bv[p], qu, qv, qw, g, coef)
+                        if held:
+                            # Near the top the plate's friction can hold the part on a corner
+                            # (gravity's torque below the friction's largest torque at rest);
+                            # the regularised drag would only let it creep off over minutes.
+                            # The feeder's vibration breaks the tie: the part is turned to the
+                            # edge of the holding zone on its CM's side and falls from rest.
+                            phi += dphi
+                            e_now = -g * (_contact_to_cm(xp, phi, 0.0, 0.0, bu[p], bv[p],
+                                                         h)[1] - h)
+                            om = 0.0
+                            nrec = _record(rec, nrec, EV_HELD, p, -1, xp, 0.0, 0.0, e_now,
+                                           e_now)
                     continue
                 lo = 0.0
                 hi = rdt
@@ -501,7 +586,7 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
             if code == 4:
                 vxp = 0.0
                 sliding, sigma = _contact_mode(0.0, xp, phi, om, p, bu, bv, h, g, rho2, mu, qu,
-                                               qv, qw, coef, vreg)
+                                               qv, qw, coef, vreg, unilateral)
                 continue
             if code == 3:
                 _, _, ft, _, _ = _contact_accel(xp, phi, 0.0, om, False, 0.0, bu[p], bv[p], h,
@@ -550,12 +635,13 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
             vpn = vya + oma * rpx
             if j >= 0 and vpn < 0.0:
                 x_l = xq if j == q else xq - edge_len[j]
+                om_before = om
                 vx, om, vy, ok2 = _flat_impact(vx, vy, om, j, u_l, u_r, d, rho2, mu)
                 x = x_l - u_l[j]
                 y = h + d[j]
                 j_flat = j
                 mode = MODE_FLAT
-                nrec = _record(rec, nrec, EV_LANDING, q, j, xq, om, 0.0, e_before,
+                nrec = _record(rec, nrec, EV_LANDING, q, j, xq, om_before, 0.0, e_before,
                                _energy(vx, vy, om, y, h, g, rho2))
                 if first_stable and stable[j]:
                     out_edge = j
@@ -575,6 +661,8 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
                     mode = MODE_DONE
                 continue
             vxa, vya, oma = _remove_normal(rx, ry, vxa, vya, oma, rho2)
+            if not unilateral:
+                vxa, vya, oma = sticking_impact(rx, ry, vxa, vya, oma, rho2)
             e_after = _energy(vxa, vya, oma, y, h, g, rho2)
             nrec = _record(rec, nrec, EV_LANDING, q, j, xq, om, oma, e_before, e_after)
             vx, vy, om = vxa, vya, oma
@@ -600,7 +688,7 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
             xp = xq
             vxp = vx - om * ry
             sliding, sigma = _contact_mode(vxp, xp, phi, om, p, bu, bv, h, g, rho2, mu, qu, qv,
-                                           qw, coef, vreg)
+                                           qw, coef, vreg, unilateral)
             continue
         if mode == MODE_FLAT:
             j = j_flat
@@ -619,12 +707,17 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
                 x_hi = max(x_hi, xp)
                 om = 0.0
                 vy = 0.0
-                vxp = vx
+                if not unilateral and vx != 0.0:
+                    c = math.cos(phi)
+                    s = math.sin(phi)
+                    vx, vy, om = sticking_impact(c * bu[p] - s * bv[p], s * bu[p] + c * bv[p],
+                                                 vx, 0.0, 0.0, rho2)
+                vxp = vx - om * (math.sin(phi) * bu[p] + math.cos(phi) * bv[p])
                 e_now = _energy(vx, vy, om, y, h, g, rho2)
                 nrec = _record(rec, nrec, EV_TIP_FROM_REST, p, j, xp, 0.0, 0.0, e_now, e_now)
                 mode = MODE_CONTACT
-                sliding, sigma = _contact_mode(vxp, xp, phi, 0.0, p, bu, bv, h, g, rho2, mu, qu,
-                                               qv, qw, coef, vreg)
+                sliding, sigma = _contact_mode(vxp, xp, phi, om, p, bu, bv, h, g, rho2, mu, qu,
+                                               qv, qw, coef, vreg, unilateral)
                 if not sliding:
                     vxp = 0.0
                 continue
@@ -638,9 +731,11 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
                 return ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
             # Slide flat: ax is constant-sign friction plus plate drag; RK2 is plenty here.
             v_half = vx + 0.5 * rdt * ax
-            ax2, _, _, _ = _flat_forces(v_half, j, edge, u_l, u_r, d, g, mu, rho2, qu, qv, qw,
-                                        coef, vreg, phi)
-            v1 = vx + rdt * ax2
+            v1 = -vx
+            if v_half * vx > 0.0:
+                ax2, _, _, _ = _flat_forces(v_half, j, edge, u_l, u_r, d, g, mu, rho2, qu, qv,
+                                            qw, coef, vreg, phi)
+                v1 = vx + rdt * ax2
             if v1 * vx <= 0.0:
                 # Stops within the step: constant deceleration to zero.
                 tau = -vx / ax if ax != 0.0 else 0.0
@@ -661,9 +756,35 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
 
 
 @njit
-def _contact_mode(vxp, xp, phi, om, p, bu, bv, h, g, rho2, mu, qu, qv, qw, coef, vreg):
-    """(sliding, sigma) for a new contact phase at vertex p with slip velocity vxp."""
-    if math.isinf(mu):
+def _plate_hold(phi, om, bu_p, bv_p, qu, qv, qw, g, coef):
+    """(held, turn): does plate friction hold the part at rest on pivot p, and the turn about p
+    that brings its CM just past the holding zone on the side it leans to."""
+    c = math.cos(phi)
+    s = math.sin(phi)
+    cx = -(c * bu_p - s * bv_p)
+    cy = -(s * bu_p + c * bv_p)
+    dmean = 0.0
+    for k in range(qu.shape[0]):
+        dx = qu[k] - bu_p
+        dy = qv[k] - bv_p
+        dmean += qw[k] * math.sqrt(dx * dx + dy * dy)
+    reach = coef * dmean / abs(g)       # |c_x| below this: friction outweighs gravity
+    if abs(cx) > reach:
+        return False, 0.0
+    lc = math.sqrt(cx * cx + cy * cy)
+    side = cx if cx != 0.0 else -om
+    target = math.copysign(min(1.01 * reach, lc), side)
+    alpha = math.atan2(cy, cx)
+    alpha_new = math.acos(target / lc)
+    return True, alpha_new - alpha
+
+
+@njit
+def _contact_mode(vxp, xp, phi, om, p, bu, bv, h, g, rho2, mu, qu, qv, qw, coef, vreg,
+                  unilateral):
+    """(sliding, sigma) for a new contact phase at vertex p with slip velocity vxp. A hinge
+    pivot (not unilateral) is pinned: it never slides."""
+    if math.isinf(mu) or not unilateral:
         return False, 0.0
     if abs(vxp) > 1e-12:
         return True, math.copysign(1.0, vxp)

@@ -14,20 +14,29 @@
 
 """Effect impact_restitution: restitution e and finite friction mu at impacts.
 
-Physics: at an impact of vertex r (from the CM) with the arm (normal +y), let K be the 2x2
-matrix mapping an impulse per unit mass to the change of the contact point's velocity u, and
-P_I = -K^-1 u the impulse that stops the point (plastic sticking, eqs 7-9). The
-Chatterjee-Ruina algebraic law applies P = ((1 + e) P_I,n, P_I,t) (normal restitution e,
-tangential restitution 0) and, if that leaves the friction cone |P_t| <= mu P_n, clips P_t to
-the cone. Kinetic energy never increases (tested over random impacts). A rebound slower than
-contact.bounce_threshold (m/s) is plastic: a further normal impulse removes it, which only
-dissipates. After a plastic impact the vertex rolls (sticking) or slides with Coulomb friction;
-a flat landing of an edge is a two-point plastic impact with its tangential impulse clipped to
-mu times the normal one.
+Physics: at an impact of vertex r (from the CM) with the arm (normal +y), K is the 2x2 matrix
+mapping an impulse per unit mass to the change of the contact point's velocity u. The impact is
+followed in terms of the normal impulse p (Routh's method): while the point slips, the
+tangential impulse grows as -mu sign(u_t) dp; while it is stuck, by whatever keeps u_t = 0 if
+that lies inside the friction cone, else slip starts. Compression ends when u_n = 0;
+restitution goes on until the normal impulse has given back e^2 of the work it absorbed in
+compression (Stronge's energetic coefficient). Friction work is never positive and the net
+normal work is (1 - e^2) times the compression work, so kinetic energy never increases (tested
+over random impacts). The Chatterjee-Ruina algebraic law was the first candidate; with the
+clip to the friction cone it created energy in about 6 % of random impacts of these parts
+(strong coupling of normal and tangential motion), so it was not used. A rebound slower than
+``contact.bounce_threshold`` (m/s) is plastic: a further normal impulse removes it, which only
+dissipates. A flat landing of an edge is a two-point plastic impact whose tangential impulse
+is clipped to mu times the normal one; the part then slides flat with Coulomb friction mu until
+it stops (or tips, when one corner's share of the load turns negative).
 
-contact.pivot: 'hinge' (default) keeps a vertex that stopped on the foam on the arm while
-the part turns about it, as the paper's rolling model does; 'unilateral' lets it lift off when
-the normal force would turn negative (the part then flies again).
+``contact.pivot`` says what a vertex does after a plastic impact:
+* 'hinge' (default, the paper's rolling model): the foam grips it; the part turns about it
+  without slipping or lifting off (a vertex still slipping after the clipped impact is caught
+  by a further sticking impulse, which only dissipates). mu then acts in impacts and in flat
+  sliding.
+* 'unilateral': full Coulomb contact: the vertex slides when the friction force needed to hold
+  it exceeds mu N, and lifts off (the part flies again) when N would turn negative.
 
 Limit: e = 0 with mu = inf (or large enough that no impulse reaches the cone) is the sticking
 model; the throw map then equals the base model's (tested). mu is contact.mu, the same

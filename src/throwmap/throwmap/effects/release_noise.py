@@ -20,7 +20,7 @@ tension and the foam's compression vary from throw to throw. h_k is the arm surf
 whole throw (release and catch). The grasp bounds are evaluated at the throw's own h_k, so a
 noisy throw near R_grasp can leave the domain. The throw map becomes a random map: basins
 become distributions of outcomes over seeds and the sensor guarantee a probability
-(throwmap.stochastic). sd = 0 gives the deterministic map exactly (tested).
+(throwmap.stochastic). sd = 0 gives the deterministic map bit for bit (tested).
 
 Scene: noise: {seed: 1, release_speed_sd_deg: 5, offset_sd_cm: 0.02}; effects: [release_noise].
 """

@@ -1,0 +1,343 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Effects (docs/effects.md): each one's limit case, its physics, and its bad input."""
+
+import copy
+import math
+
+import numpy as np
+import pytest
+from throwmap import general, InputError, kernel, limit_set, load_scene, orbit, sees, ThrowModel
+from throwmap.closed import release_state
+from throwmap.effect_model import carry_margin, EffectModel, PartLost
+from throwmap.scene import Scene
+from throwmap_testing import PAPER_W, SCENES, TRIANGLE_VERTICES
+
+BASE = {'name': 't', 'part': {'vertices': TRIANGLE_VERTICES}, 'arm': {'offset': -0.005},
+        'throw': {'release_speed': PAPER_W}, 'gravity': -9.66}
+
+
+def scene(**sections):
+    data = copy.deepcopy(BASE)
+    for key, value in sections.items():
+        if value is None:
+            data.pop(key, None)
+        elif isinstance(value, dict) and isinstance(data.get(key), dict):
+            data[key].update(value)
+        else:
+            data[key] = value
+    return Scene(data)
+
+
+def states(model, count, seed, r_hi=0.28):
+    rng = np.random.default_rng(seed)
+    part = model.part
+    edges = rng.choice(part.stable_edges, count)
+    lo = np.array([max(model.r_grasp[e], -part.u_l[e]) * 1.001 for e in edges])
+    return edges, lo + rng.uniform(0, 1, count) * (r_hi - lo)
+
+
+@pytest.fixture(scope='module')
+def base():
+    return scene().model
+
+
+def test_scene_without_effects_is_the_base_model_itself():
+    assert type(scene().model) is ThrowModel
+    assert type(scene(effects=[]).model) is ThrowModel
+    assert type(load_scene(str(SCENES / 'triangle.yaml')).model) is ThrowModel
+    assert isinstance(load_scene(str(SCENES / 'experiment.yaml')).model, EffectModel)
+
+
+def test_plate_gives_in_plane_gravity_and_normal_pressure():
+    s = scene(gravity=None, plate={'inclination_deg': 80, 'g0': 9.81})
+    assert s.gravity == pytest.approx(-9.81 * math.sin(math.radians(80)))
+    assert s.plate['g_normal'] == pytest.approx(9.81 * math.cos(math.radians(80)))
+
+
+def test_general_simulator_without_forces_reproduces_the_kernel(base):
+    # backplate_friction with mu_p = 0 runs every throw through the general simulator.
+    model = scene(gravity=None, plate={'inclination_deg': math.degrees(math.asin(9.66 / 9.81)),
+                                       'g0': 9.81, 'mu': 0.0},
+                  effects=['backplate_friction']).model
+    assert model.effects.general
+    e, r = states(base, 300, 1)
+    ref = base.f_batch(e, r)
+    got = model.f_batch(e, r)
+    assert (got['status'] == 0).all()
+    assert (got['edge'] == ref['edge']).all()
+    assert np.abs(got['R'] - ref['R']).max() < 1e-9
+    assert (got['kind'] == ref['kind']).all()
+
+
+def test_backplate_friction_to_zero_converges_to_the_base_model(base):
+    e, r = states(base, 60, 2)
+    ref = base.f_batch(e, r)['R']
+    errs = []
+    for mu_p in (0.1, 0.01, 0.001):
+        model = scene(gravity=None, plate={'inclination_deg': 80, 'g0': 9.81, 'mu': mu_p},
+                      effects=['backplate_friction']).model
+        # compare with the base model at the same in-plane gravity
+        base80 = ThrowModel(base.part, base.h, base.w, model.g)
+        ref = base80.f_batch(e, r)
+        got = model.f_batch(e, r)
+        same = got['edge'] == ref['edge']
+        errs.append((same.mean(), np.abs(got['R'] - ref['R'])[same].max()))
+    assert errs[-1][0] == 1.0
+    assert errs[0][1] > errs[1][1] > errs[2][1]       # |dR| shrinks with mu_p
+    assert errs[2][1] < 1e-4
+
+
+def test_plate_drag_translation_rotation_and_its_torque_about_a_pivot(triangle):
+    qu, qv, qw = general.plate_quadrature(triangle.part, 4)
+    coef = 0.17
+    fx, fy, tq = general.plate_drag(0.3, -0.4, 0.0, 0.7, qu[1], qv[1], qw, coef, 1e-9)
+    assert (fx, fy) == pytest.approx((-0.6 * coef, 0.8 * coef), rel=1e-9)
+    assert tq == pytest.approx(0.0, abs=1e-12)
+    # Rolling about vertex P: every point moves perpendicular to its radius from P, so the drag
+    # torque about P is -sign(omega) coef <|r - P|>.
+    bu, bv = triangle.part.U[1], triangle.part.V[1]
+    p = 2
+    om = -3.0
+    vx, vy = -om * (-bv[p]), om * (-bu[p])      # v_cm = om z x (CM - P), phi = 0
+    fx, fy, tq = general.plate_drag(vx, vy, om, 0.0, qu[1], qv[1], qw, coef, 1e-12)
+    cx, cy = -bu[p], -bv[p]
+    torque_p = tq + (cx * fy - cy * fx)
+    dmean = float((qw * np.hypot(qu[1] - bu[p], qv[1] - bv[p])).sum())
+    assert torque_p == pytest.approx(coef * dmean, rel=1e-9)
+
+
+def test_chatterjee_ruina_with_e0_and_wide_cone_is_the_sticking_impact():
+    rng = np.random.default_rng(3)
+    checked = 0
+    for _ in range(500):
+        rx, ry = rng.uniform(-0.05, 0.05, 2)
+        vx, vy = rng.uniform(-1, 1), rng.uniform(-2, -0.1)
+        om, rho2 = rng.uniform(-8, 8), rng.uniform(1e-4, 2e-3)
+        ref = kernel.sticking_impact(rx, ry, vx, vy, om, rho2)
+        if vy + om * rx >= 0 or ref[1] < vy:
+            continue    # separating, or the sticking impulse would pull: no impact in the law
+        checked += 1
+        got = general.impact(rx, ry, vx, vy, om, rho2, 0.0, math.inf)
+        assert got == pytest.approx(ref, rel=1e-10, abs=1e-12)
+        big = general.impact(rx, ry, vx, vy, om, rho2, 0.0, 1e6)
+        assert big == pytest.approx(ref, rel=1e-10, abs=1e-12)
+    assert checked > 150
+
+
+def test_impacts_never_gain_energy_and_respect_the_friction_cone():
+    rng = np.random.default_rng(4)
+    for _ in range(3000):
+        rx, ry = rng.uniform(-0.05, 0.05), rng.uniform(-0.05, 0.0)
+        vx, vy, om = rng.uniform(-1, 1), rng.uniform(-2, 0.5), rng.uniform(-8, 8)
+        rho2 = rng.uniform(1e-4, 2e-3)
+        e, mu = rng.uniform(0, 1), rng.uniform(0, 2)
+        ke0 = 0.5 * (vx * vx + vy * vy + rho2 * om * om)
+        vx1, vy1, om1 = general.impact(rx, ry, vx, vy, om, rho2, e, mu)
+        ke1 = 0.5 * (vx1 * vx1 + vy1 * vy1 + rho2 * om1 * om1)
+        assert ke1 <= ke0 * (1 + 1e-12) + 1e-15
+        pt, pn = vx1 - vx, vy1 - vy
+        assert pn >= 0.0 and abs(pt) <= mu * pn + 1e-12
+        if vy + om * rx < 0:    # approaching: the contact point does not keep sinking
+            assert vy1 + om1 * rx >= -1e-12
+
+
+def test_restitution_zero_with_high_friction_reproduces_sticking(base):
+    model = scene(contact={'restitution': 0.0, 'mu': 1e6},
+                  effects=['impact_restitution']).model
+    e, r = states(base, 120, 5)
+    ref = base.f_batch(e, r)
+    got = model.f_batch(e, r)
+    assert (got['edge'] == ref['edge']).all()
+    assert np.abs(got['R'] - ref['R']).max() < 1e-8
+
+
+def test_restitution_bounces_and_energy_only_falls():
+    model = scene(contact={'restitution': 0.5, 'mu': 0.6, 'bounce_threshold': 0.02},
+                  effects=['impact_restitution']).model
+    kinds = set()
+    e, r = states(model, 40, 6)
+    for edge, R in zip(e, r):
+        res = model.throw(int(edge), float(R))
+        assert model.part.stable[res.edge]
+        for imp in res.impacts:
+            assert imp.energy_after <= imp.energy_before + 1e-9
+        for a, b in zip(res.impacts, res.impacts[1:]):
+            assert b.energy_before <= a.energy_after + 1e-6   # no gain between events
+        kinds.update(i.kind for i in res.impacts)
+    assert 'bounce' in kinds
+
+
+def test_finite_arm_loses_parts_that_leave_it_and_orbits_say_so(base):
+    s = scene(arm={'length_cm': 40}, effects=['finite_arm'])
+    model = s.model
+    e, r = states(base, 100, 7, r_hi=0.3)
+    ref = base.f_batch(e, r)
+    got = model.f_batch(e, r)
+    inside = got['status'] == 0
+    assert (got['R'][inside] == ref['R'][inside]).all()    # the arm only cuts, never moves
+    assert inside.mean() > 0.9
+    assert model.f(1, 0.38) == (-1, pytest.approx(math.nan, nan_ok=True), 'lost')
+    res = model.throw(1, 0.38)
+    assert res.kind == 'lost' and 'off the arm' in res.lost_reason
+    short = scene(arm={'length_cm': 22}, effects=['finite_arm']).model
+    orb = orbit(short, 1, 0.12, 200)
+    assert orb.kinds[-1] == 'lost' and orb.edges[-1] == -1 and len(orb.edges) < 201
+    with pytest.raises(PartLost, match='lost'):
+        limit_set(short, 1, 0.12, 200)
+    long = scene(arm={'length': 1e3}, effects=['finite_arm']).model
+    assert (long.f_batch(e, r)['R'] == ref['R']).all()       # L -> inf: the base model
+
+
+def test_release_noise_off_is_exact_and_on_is_seeded(base):
+    quiet = scene(noise={'release_speed_sd': 0.0}, effects=['release_noise']).model
+    e, r = states(base, 200, 8)
+    assert (quiet.f_batch(e, r)['R'] == base.f_batch(e, r)['R']).all()
+    noisy = scene(noise={'seed': 3, 'release_speed_sd_deg': 5, 'offset_sd_cm': 0.02},
+                  effects=['release_noise']).model
+    a = noisy.f_batch(e, r)['R']
+    noisy.reseed(3)
+    b = noisy.f_batch(e, r)['R']
+    noisy.reseed(4)
+    c = noisy.f_batch(e, r)['R']
+    assert np.array_equal(a, b) and not np.array_equal(a, c)
+    res = noisy.throw(1, 0.12)
+    assert res.release_speed != base.w and res.offset != base.h
+
+
+def test_sensor_noise_rates(base):
+    part = base.part
+    e, r = states(base, 400, 9)
+    exact = sees(part, e, r, 0.2, 0.005)
+    quiet = scene(sensor={'false_positive': 0.0, 'false_negative': 0.0},
+                  effects=['sensor_noise'])
+    assert np.array_equal(quiet.sense(e, r, 0.2, 0.005), exact)
+    always = scene(sensor={'false_positive': 1.0}, effects=['sensor_noise'])
+    assert always.sense(e, r, 0.2, 0.005).all()
+    blind = scene(sensor={'false_negative': 1.0}, effects=['sensor_noise'])
+    assert not blind.sense(e, r, 0.2, 0.005).any()
+    some = scene(sensor={'false_positive': 0.2}, noise={'seed': 1}, effects=['sensor_noise'])
+    fp = some.sense(e, r, 0.2, 0.005)[~exact].mean()
+    assert 0.12 < fp < 0.28
+
+
+def test_sensor_guarantee_becomes_a_probability():
+    from throwmap.stochastic import sensor_probability
+    s = scene(sensor={'goal_edge': 1, 'false_positive': 0.02}, noise={'seed': 2},
+              effects=['sensor_noise'])
+    exact = sensor_probability(scene().model, 1, 0.27, 0.0, (1, 0.12), 600, seeds=2)
+    assert exact.p_goal == 1.0 and exact.detections > 10     # beyond the guarantee radius
+    noisy = sensor_probability(s.model, 1, 0.27, 0.0, (1, 0.12), 600, seeds=2)
+    assert noisy.p_goal < 1.0 and noisy.p_goal_lo < noisy.p_goal <= noisy.p_goal_hi
+
+
+def test_finite_carry_tends_to_the_impulsive_throw(base):
+    part = base.part
+    st = release_state(1, 0.12, base.w, base.h, 1e-9, part.d)
+    hd = base.h + part.d[1]
+    assert st == pytest.approx((0.12, hd, 0.0, -hd * base.w, 0.12 * base.w, base.w), abs=1e-9)
+    model = scene(contact={'mu': 0.8}, throw={'carry': {'release_angle': 1e-8}},
+                  effects=['finite_carry']).model
+    e, r = states(base, 100, 10)
+    ok = np.array([model.domain_error(int(a), float(b)) is None for a, b in zip(e, r)])
+    ref = base.f_batch(e[ok], r[ok])
+    got = model.f_batch(e[ok], r[ok])
+    assert (got['edge'] == ref['edge']).all()
+    assert np.abs(got['R'] - ref['R']).max() < 1e-6
+    # The wrench-cone test along a short carry has the impulse cone's boundary R_grasp.
+    mu = 0.8
+    grasp = ThrowModel(part, base.h, base.w, base.g, mu=mu)
+    for edge in part.stable_edges:
+        rg = grasp.r_grasp[edge]
+        args = (base.w, base.h, base.g, mu, 1e-7, 50, part.rho2, part.d, part.u_l, part.u_r)
+        assert carry_margin(edge, rg * 1.01, *args)[0] <= 0
+        assert carry_margin(edge, rg * 0.99, *args)[0] > 0
+
+
+def test_finite_carry_grasp_and_returning_arm_are_checked():
+    s = scene(contact={'mu': 0.3}, throw={'carry': {'release_angle_deg': 40}},
+              effects=['finite_carry'])
+    err = s.model.domain_error(2, 0.06)
+    assert err is not None and err.condition == 'carry_grasp' and 'constraint' in str(err)
+    slow = scene(contact={'mu': 0.8},
+                 throw={'carry': {'release_angle_deg': 3, 'return_time': 2.0}},
+                 effects=['finite_carry']).model
+    with pytest.raises(ValueError, match='returning arm'):
+        slow.f(1, 0.12)
+    fast = scene(contact={'mu': 0.8},
+                 throw={'carry': {'release_angle_deg': 3, 'return_time': 0.01}},
+                 effects=['finite_carry']).model
+    assert fast.f(1, 0.12)[2] in ('jog', 'flip')
+
+
+def test_scan_contact_finder_misses_what_advancement_finds(base):
+    fine = scene(accuracy={'contact_method': 'scan', 'contact_scan_step': 1e-4}).model
+    coarse = scene(accuracy={'contact_method': 'scan', 'contact_scan_step': 0.05}).model
+    e, r = states(base, 300, 11)
+    ref = base.f_batch(e, r)
+    assert np.abs(fine.f_batch(e, r)['R'] - ref['R']).max() < 1e-9
+    bad = coarse.f_batch(e, r)
+    wrong = (bad['edge'] != ref['edge']) | (np.abs(bad['R'] - ref['R']) > 1e-6)
+    assert wrong.any()
+
+
+@pytest.mark.parametrize('sections, field, words', [
+    ({'effects': ['backplate']}, 'effects[0]', 'allowed effects: backplate_friction'),
+    ({'effects': ['finite_arm', 'finite_arm'], 'arm': {'length': 0.4}}, 'effects[1]', 'twice'),
+    ({'effects': 'finite_arm'}, 'effects', 'must be a list'),
+    ({'effects': ['backplate_friction']}, 'effects.backplate_friction', 'plate'),
+    ({'plate': {'inclination_deg': 80}}, 'gravity', 'not both'),
+    ({'gravity': None, 'plate': {'inclination_deg': 80, 'mu': 0.1}}, 'plate.mu',
+     'add backplate_friction to effects'),
+    ({'gravity': None, 'plate': {'inclination_deg': 95}}, 'plate.inclination_deg', '(0, 90]'),
+    ({'gravity': None, 'plate': {'inclination_deg': 80}, 'effects': ['backplate_friction']},
+     'plate.mu', 'missing'),
+    ({'contact': {'restitution': 1.5}, 'effects': ['impact_restitution']},
+     'contact.restitution', '<= 1'),
+    ({'contact': {'restitution': 0.2}}, 'contact.restitution', 'add impact_restitution'),
+    ({'contact': {'restitution': 0.2, 'pivot': 'glue'}, 'effects': ['impact_restitution']},
+     'contact.pivot', 'hinge, unilateral'),
+    ({'throw': {'carry': {'release_angle_deg': 5}}, 'effects': ['finite_carry']}, 'contact.mu',
+     'wrench cone'),
+    ({'throw': {'carry': {'release_angle_deg': 5, 'spin': 1}}, 'contact': {'mu': 1},
+      'effects': ['finite_carry']}, 'throw.carry.spin', 'allowed here'),
+    ({'throw': {'carry': {'profile': 'jerk', 'release_angle_deg': 5}}, 'contact': {'mu': 1},
+      'effects': ['finite_carry']}, 'throw.carry.profile', 'constant_acceleration'),
+    ({'effects': ['finite_arm']}, 'arm.length', 'missing'),
+    ({'arm': {'length_cm': 40}}, 'arm.length_cm', 'add finite_arm'),
+    ({'effects': ['release_noise']}, 'noise', 'release_speed_sd'),
+    ({'noise': {'release_speed_sd': -1}, 'effects': ['release_noise']},
+     'noise.release_speed_sd', '>= 0'),
+    ({'noise': {'seed': -2}}, 'noise.seed', 'integer >= 0'),
+    ({'sensor': {'false_positive': 2}, 'effects': ['sensor_noise']}, 'sensor.false_positive',
+     '<= 1'),
+    ({'accuracy': {'contact_method': 'newton'}}, 'accuracy.contact_method',
+     'advancement, scan'),
+    ({'accuracy': {'integrator_step': 0}}, 'accuracy.integrator_step', '> 0'),
+    ({'accuracy': {'plate_quadrature': 1.5}}, 'accuracy.plate_quadrature', 'integer'),
+])
+def test_effect_errors_name_the_field_and_the_fix(sections, field, words):
+    with pytest.raises(InputError) as err:
+        scene(**sections)
+    assert err.value.field == field
+    assert words in str(err.value)
+
+
+def test_every_shipped_scene_loads_and_throws():
+    for path in sorted(SCENES.glob('*.yaml')):
+        s = load_scene(str(path))
+        edge, R = s.default_start()
+        res = s.model.f(edge, R)
+        assert res[2] in ('jog', 'flip', 'lost'), path
