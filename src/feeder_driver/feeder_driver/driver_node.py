@@ -68,7 +68,7 @@ class DriverNode(LifecycleNode):
             try:
                 self.declare_parameter(spec.name, spec.default, descs[spec.name])
             except Exception as exc:    # noqa: B902 - rclpy raises several types here
-                given = self._parameter_overrides.get(spec.name)
+                given = getattr(self, '_parameter_overrides', {}).get(spec.name)
                 reason = params.check(spec.name, given.value) if given is not None else None
                 raise ParameterError(f'parameter {reason or f"{spec.name}: {exc}"}') from None
         values = {s.name: self.get_parameter(s.name).value for s in params.SPECS}
