@@ -341,3 +341,31 @@ def test_every_shipped_scene_loads_and_throws():
         edge, R = s.default_start()
         res = s.model.f(edge, R)
         assert res[2] in ('jog', 'flip', 'lost'), path
+
+
+def test_cli_reports_lost_states_and_takes_a_seed(tmp_path):
+    import io
+    import json
+    import yaml
+    from throwmap.cli import main
+
+    def run(*argv):
+        out = io.StringIO()
+        code = main(list(argv), out=out)
+        return code, out.getvalue()
+
+    code, text = run('throw', str(SCENES / 'experiment.yaml'), '--edge', '1', '--R', '0.38')
+    assert code == 0 and '-> lost: first contact' in text
+    short = tmp_path / 'short.yaml'
+    data = copy.deepcopy(BASE)
+    data.update({'arm': {'offset': -0.005, 'length_cm': 22}, 'effects': ['finite_arm']})
+    short.write_text(yaml.safe_dump(data))
+    code, text = run('orbit', str(short), '--edge', '1', '--R', '0.12', '--throws', '200')
+    assert code == 0 and 'lost' in text and 'the orbit ends there' in text
+    code, text = run('limit-set', str(short), '--edge', '1', '--R', '0.12', '--throws', '200')
+    assert code == 2
+    house = str(SCENES / 'house.yaml')
+    a = json.loads(run('throw', house, '--edge', '0', '--R', '0.15', '--json', '--seed', '1')[1])
+    b = json.loads(run('throw', house, '--edge', '0', '--R', '0.15', '--json', '--seed', '1')[1])
+    c = json.loads(run('throw', house, '--edge', '0', '--R', '0.15', '--json', '--seed', '2')[1])
+    assert a == b and a['release_speed'] != c['release_speed']

@@ -129,10 +129,14 @@ def cmd_throw(scene, args, out):
         res = model.throw(args.edge, args.R)
         if args.json:
             _dump(res.as_dict(), out)
+        elif res.kind == 'lost':
+            out.write(f'({res.edge0}, {res.R0 * 100:.4f} cm) -> lost: '
+                      f'{getattr(res, "lost_reason", "")}\n')
         else:
             out.write(f'({res.edge0}, {res.R0 * 100:.4f} cm) -> ({res.edge}, '
                       f'{res.R * 100:.4f} cm): {res.kind}, flight {res.flight_time * 1000:.2f} '
                       f'ms, net rotation {math.degrees(res.net_rotation):.2f} deg\n')
+        if not args.json:
             _table([{'impact': k, 'kind': i.kind, 'vertex': i.vertex,
                      'edge landed': i.edge if i.edge >= 0 else '-',
                      'x (cm)': f'{i.x * 100:.3f}', 'omega- (rad/s)': f'{i.omega_before:.3f}',
@@ -189,9 +193,13 @@ def cmd_orbit(scene, args, out):
     if args.json:
         _dump({'scene': scene.name, 'states': orb.rows()}, out)
         return 0
-    _table([{'throw': r['throw'], 'edge': r['edge'], 'R (cm)': f'{r["R"] * 100:.3f}',
+    _table([{'throw': r['throw'], 'edge': r['edge'] if r['edge'] >= 0 else '-',
+             'R (cm)': f'{r["R"] * 100:.3f}' if r['edge'] >= 0 else '-',
              'kind': r['kind'] or 'start'} for r in orb.rows()],
            ['throw', 'edge', 'R (cm)', 'kind'], out)
+    if orb.kinds[-1] == 'lost':
+        out.write(f'the part was lost (it left the arm) at throw {len(orb.edges) - 1}; the '
+                  'orbit ends there\n')
     return 0
 
 
@@ -263,6 +271,18 @@ def cmd_design(scene, args, out):
               f'{s.reach_radius * 100:.2f} cm\n')
     out.write(f'  sensor at {s.radius * 100:.2f} cm: fires on {s.detection_rate * 100:.1f} % of '
               f'limit-set throws; trust it after {s.warmup_throws} warm-up throws\n')
+    if an.stochastic is not None:
+        st = an.stochastic
+        sp = st['sensor']
+        out.write(f'  with noise (seed {scene.seed}, {st["seeds"]} Monte Carlo seeds): basin '
+                  'outcomes ' + ', '.join(f'{k} {v * 100:.1f} %' for k, v in
+                                          sorted(st['basin_outcomes'].items())) + '\n')
+        out.write(f'  P(goal edge | detection at {sp["radius"] * 100:.2f} cm) = '
+                  f'{sp["p_goal"]:.4f} (95 % interval {sp["p_goal_lo"]:.4f}..'
+                  f'{sp["p_goal_hi"]:.4f}, {sp["detections"]} detections in {sp["throws"]} '
+                  f'throws; sensor false positive {sp["false_positive"]:g}, false negative '
+                  f'{sp["false_negative"]:g}; parts lost in {sp["lost_fraction"] * 100:.0f} % '
+                  'of runs)\n')
     return 0
 
 
@@ -300,6 +320,9 @@ def build_parser():
         p.add_argument('scene', help='scene YAML file (e.g. scenes/triangle.yaml)')
         p.add_argument('--json', action='store_true', help='print JSON instead of a table')
         p.add_argument('--quiet', action='store_true', help='no progress on stderr')
+        p.add_argument('--seed', type=int, default=None,
+                       help="seed of the scene's random numbers (effects release_noise, "
+                       'sensor_noise); default: the scene\'s noise.seed')
         return p
 
     add('grasp', 'R_grasp and mu_min per edge (impulse cone)')
@@ -337,7 +360,7 @@ def main(argv=None, out=None):
         _positive(args)
         with warnings.catch_warnings():
             warnings.simplefilter('ignore')   # the scene's warnings are printed below, once
-            scene = load_scene(args.scene)
+            scene = load_scene(args.scene, seed=args.seed)
         for msg in scene.warnings:
             sys.stderr.write(f'throwmap: warning: {args.scene}: {msg}\n')
         return COMMANDS[args.command](scene, args, out)

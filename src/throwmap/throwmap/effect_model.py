@@ -407,6 +407,45 @@ class EffectModel(ThrowModel):
                        # kernel it calls gets no bound
                        np.full(part.n, -np.inf))
 
+        if eff.carry is not None:
+            self.r_grasp = self._carry_domain()
+
+    def _carry_domain(self, r_top=1.0, step=1e-3):
+        """Lower end of the domain per stable edge with a finite carry: above it the carry
+        keeps the dynamic grasp and the returning arm clears the part (on a 1 mm grid up to
+        1 m, then bisection to 1e-7 m). The impulse-cone R_grasp does not apply here."""
+        part = self.part
+        out = np.full(part.n, np.inf)
+        bad = (ERR_CARRY_GRASP, ERR_ARM_STRIKE, kernel.ERR_TOE_STUB)
+        for i in part.stable_edges:
+            rs = np.arange(max(-part.u_l[i], 0.0) + step / 2, r_top, step)
+            st = self._nominal_status(np.full(rs.size, i), rs)
+            failing = np.flatnonzero(np.isin(st, bad))
+            if failing.size == 0:
+                out[i] = max(-part.u_l[i], 0.0)
+                continue
+            k = int(failing[-1])
+            if k + 1 >= rs.size:
+                continue        # no domain on this edge below r_top
+            lo, hi = float(rs[k]), float(rs[k + 1])
+            while hi - lo > 1e-7:
+                mid = 0.5 * (lo + hi)
+                if self._nominal_status(np.array([i]), np.array([mid]))[0] in bad:
+                    lo = mid
+                else:
+                    hi = mid
+            out[i] = hi
+        return out
+
+    def _nominal_status(self, edges, radii):
+        m = edges.size
+        out = (np.empty(m, dtype=np.int64), np.empty(m), np.empty(m, dtype=np.int64),
+               np.empty(m), np.empty(m))
+        throw_batch(np.ascontiguousarray(edges, dtype=np.int64),
+                    np.ascontiguousarray(radii, dtype=float), np.zeros((m, 2)), *self._cargs,
+                    *out)
+        return out[2]
+
     # ------------------------------------------------------------------------- randomness
     def reseed(self, seed):
         self.seed = seed
@@ -467,6 +506,11 @@ class EffectModel(ThrowModel):
         if not R + part.u_l[edge] > 0:
             return super().domain_error(edge, R) or DomainError(
                 'toe_stub', f'the left vertex of edge {edge} is not right of the pivot')
+        if R < self.r_grasp[edge]:
+            return DomainError('carry_domain', f'on edge {edge} the finite carry needs R >= '
+                               f'{self.r_grasp[edge]:.6g} m (below it the carry loses the '
+                               'grasp or the returning arm meets the part); got R = '
+                               f'{R:.6g} m', margin=self.r_grasp[edge] - R)
         return None
 
     # ------------------------------------------------------------------------- the map
@@ -486,11 +530,10 @@ class EffectModel(ThrowModel):
         return out[1], out[2], _classify(edge, out[1], out[4])
 
     def throw(self, edge, R, trajectory=False, samples=60):
+        """Full result; ``trajectory`` is filled only where the flight and catch are the base
+        model's (effects finite_arm, sensor_noise alone), else None: the general simulator
+        does not keep sampled poses."""
         self._check_types(edge, R)
-        if trajectory:
-            raise InputError('trajectory', 'sampled trajectories are drawn for the base model '
-                             'only', 'plot the scene without effects, or use throw() without '
-                             'trajectory')
         rec = np.empty((REC_ROWS, kernel.REC_COLS))
         z = self._draw((1,))[0]
         out = self._core(int(edge), float(R), z, rec)
@@ -509,9 +552,17 @@ class EffectModel(ThrowModel):
         kind = 'lost' if status == LOST else _classify(edge, j, rot)
         if status == LOST:
             reason = self._lost_reason(rows, r1)
+        traj = None
+        if trajectory and status == kernel.OK and self._base_path():
+            traj = super().throw(edge, R, trajectory=True, samples=samples).trajectory
         return EffectThrowResult(int(edge), float(R), int(j), float(r1), kind, float(t),
-                                 float(rot), int(k0), impacts, float(e0), None, float(w),
+                                 float(rot), int(k0), impacts, float(e0), traj, float(w),
                                  float(h), reason)
+
+    def _base_path(self):
+        """True when throws are the base kernel's own (only range checks or sensor noise)."""
+        return (not self.effects.general and self.theta_r == 0.0 and self.sd_w == 0.0
+                and self.sd_h == 0.0 and self.knobs.contact_method == 'advancement')
 
     def _lost_reason(self, rows, r1):
         xs = rows[:, kernel.REC_X] if len(rows) else np.array([])
@@ -577,7 +628,8 @@ class EffectModel(ThrowModel):
         if status == LOST:
             return (f'lost: from ({edge}, {R:.6g} m) the part left the arm [0, '
                     f'{self.arm_length:g} m]')
-        if status in (ERR_ARM_STRIKE, ERR_RECORDS, ERR_RELEASE, general.ERR_PAINLEVE):
+        if status in (ERR_ARM_STRIKE, ERR_RECORDS, ERR_RELEASE, general.ERR_PAINLEVE,
+                      general.ERR_SIM_CAP):
             return str(self._effect_error(status, edge, R))
         return super().error_message(status, edge, R)
 
@@ -593,11 +645,16 @@ class EffectModel(ThrowModel):
         if status == general.ERR_PAINLEVE:
             return NumericalError(f'catch after ({edge}, {R:.6g} m): sliding contact with no '
                                   'consistent normal force (Painleve paradox); lower contact.mu')
+        if status == general.ERR_SIM_CAP:
+            return NumericalError(f'throw from ({edge}, {R:.6g} m) did not settle within '
+                                  f'accuracy.max_sim_steps = {self.knobs.max_sim_steps} '
+                                  'integrator steps; raise it, or integrator_step / roll_step')
         return NumericalError(f'catch after ({edge}, {R:.6g} m) has more than {REC_ROWS} events '
                               'to check against the arm length')
 
     def _raise(self, status, edge, R, after=None):
-        if status in (ERR_ARM_STRIKE, ERR_RECORDS, ERR_RELEASE, general.ERR_PAINLEVE):
+        if status in (ERR_ARM_STRIKE, ERR_RECORDS, ERR_RELEASE, general.ERR_PAINLEVE,
+                      general.ERR_SIM_CAP):
             err = self._effect_error(status, edge, R)
         elif status == ERR_CARRY_GRASP or (status == kernel.ERR_GRASP and self.sd_h > 0):
             err = self.domain_error(edge, R)

@@ -45,11 +45,12 @@ import math
 import numpy as np
 
 from . import _jitcache  # noqa: F401  (drops stale compiled code first)
-from .kernel import (ERR_FLIGHT_CAP, ERR_NONFINITE, ERR_SETTLE_CAP, EV_FLAT_LANDING,
+from .kernel import (ERR_NONFINITE, ERR_SETTLE_CAP, EV_FLAT_LANDING,
                      EV_FLIGHT_IMPACT, EV_LANDING, EV_TIP_FROM_REST, njit, OK, REC_COLS,
                      sticking_impact)
 
 ERR_PAINLEVE = 9        # sliding contact with no consistent normal force (mu too large)
+ERR_SIM_CAP = 10        # more integrator steps than accuracy.max_sim_steps
 EV_BOUNCE = 4           # an impact that sends the part back into flight
 EV_LIFTOFF = 5          # the normal force at the pivot reached zero: back into flight
 EV_SETTLE_SNAP = 6      # rocking energy below settle_energy: laid flat about the pivot
@@ -338,7 +339,7 @@ def _contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, h, g, rho2, mu
     if n < 0.0 and unilateral:
         return 2, -1
     if sliding:
-        if vxp * sigma <= 0.0:
+        if vxp * sigma < 0.0:
             return 4, -1
     elif unilateral and abs(ft) > mu * n:
         return 3, -1
@@ -433,7 +434,7 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
     while True:
         steps += 1
         if steps > max_steps:
-            return ERR_FLIGHT_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
+            return ERR_SIM_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
         if impacts > max_imp:
             return ERR_SETTLE_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
         if mode == MODE_FLIGHT:
@@ -792,7 +793,14 @@ def _contact_mode(vxp, xp, phi, om, p, bu, bv, h, g, rho2, mu, qu, qv, qw, coef,
                                     qu, qv, qw, coef, vreg)
     if abs(ft) <= mu * n:
         return False, 0.0
-    return True, -math.copysign(1.0, ft)
+    # Slip starts in the direction in which, with friction opposing it, the point accelerates.
+    first = -math.copysign(1.0, ft)
+    for sigma in (first, -first):
+        axp, _, _, _, ok = _contact_accel(xp, phi, 0.0, om, True, sigma, bu[p], bv[p], h, g,
+                                          rho2, mu, qu, qv, qw, coef, vreg)
+        if ok and axp * sigma > 0.0:
+            return True, sigma
+    return False, 0.0   # no consistent slip (Painleve): the point sticks
 
 
 @njit

@@ -77,10 +77,11 @@ def plot_cycle(scene, orb, ls, path):
         if k + 1 < len(edges) and k < b:
             res = model.throw(e, R, trajectory=True, samples=12)
             tr = res.trajectory
-            for s in range(0, len(tr.t), max(1, len(tr.t) // 6)):
-                v = tr.vertices_at(s) * 100
-                ax.fill(v[:, 0], v[:, 1], facecolor='none', edgecolor='0.7', lw=0.6)
-            ax.plot(tr.x * 100, tr.y * 100, color='0.6', lw=0.6)
+            if tr is not None:   # scenes with effects may have no sampled poses
+                for s in range(0, len(tr.t), max(1, len(tr.t) // 6)):
+                    v = tr.vertices_at(s) * 100
+                    ax.fill(v[:, 0], v[:, 1], facecolor='none', edgecolor='0.7', lw=0.6)
+                ax.plot(tr.x * 100, tr.y * 100, color='0.6', lw=0.6)
             title = f'{k - a}: E{e}, {R * 100:.1f} cm -> {res.kind}'
         else:
             title = f'{k - a}: E{e}, {R * 100:.1f} cm'

@@ -34,7 +34,8 @@ def _seeds(model, count):
 
 
 def basin_distribution(model, start_edges, start_radii, throws=100, seeds=8, reference=None):
-    """Per start, the fraction of seeds whose orbit ends in each limit pattern ('lost' too).
+    """Per start, the fraction of seeds whose orbit ends in each limit pattern ('lost', and
+    'left the domain' for orbits that a noisy throw took out of the domain of f).
 
     Returns (per_start, overall): per_start a list of {signature: fraction}, overall the mean
     over starts.
@@ -45,6 +46,8 @@ def basin_distribution(model, start_edges, start_radii, throws=100, seeds=8, ref
             model.reseed(seed)
         bas = basin(model, start_edges, start_radii, throws, reference=reference)
         for k, sig in enumerate(bas.signatures):
+            if sig.startswith('error'):
+                sig = 'left the domain'     # a noisy throw lost the grasp (one message each)
             counts[k][sig] = counts[k].get(sig, 0) + 1
     per_start = [{s: c / seeds for s, c in row.items()} for row in counts]
     overall = {}
