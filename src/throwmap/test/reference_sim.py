@@ -199,12 +199,27 @@ class ReferenceSimulator:
         self.last_contact_from_graze = False
 
     # ------------------------------------------------------------------ flight (eqs 5-6)
-    def _flight_heights(self, i, R, t, u, v):
-        """Height over the arm of vertices (u, v) of F^i at times t (eqs 5 and 6)."""
-        d = self.part.d[i]
+    def _vertex_in_frame(self, i, k):
+        """(c0, u, v) of V^k in F^i, c0 = d^i + v its resting height over the arm.
+
+        c0 is exactly 0 for the two vertices of the resting edge (they lie on the arm by
+        definition), which keeps their heights right in the first instants of the flight.
+        """
+        u, v = self.part.uv(i)
+        c0 = 0.0 if k in (i, (i + 1) % self.part.n) else self.part.d[i] + v[k]
+        return c0, u[k], v[k]
+
+    def _flight_heights(self, i, R, t, vertex):
+        """Height over the arm at times t of a vertex (c0, u, v) of F^i (eqs 5 and 6).
+
+        d + R w t + g t^2 / 2 + u sin(w t) + v cos(w t), summed as c0 + (R + u) w t
+        + u (sin(w t) - w t) - 2 v sin^2(w t / 2) + g t^2 / 2 so that no term cancels another
+        near t = 0 (a part thrown from just right of the pivot hops for only ~1e-7 s).
+        """
+        c0, u, v = vertex
         wt = self.w * t
-        base = d + R * self.w * t + 0.5 * self.g * t * t
-        return base + u * np.sin(wt) + v * np.cos(wt)
+        return (c0 + (R + u) * wt + u * (np.sin(wt) - wt) - 2.0 * v * np.sin(0.5 * wt) ** 2
+                + 0.5 * self.g * t * t)
 
     def _flight_time_bound(self, i, R):
         """Time by which the part has certainly touched the arm.
@@ -216,13 +231,13 @@ class ReferenceSimulator:
         vy = R * self.w
         return (vy + math.sqrt(vy * vy + 2.0 * self.g_abs * drop)) / self.g_abs
 
-    def _first_root(self, i, R, u, v, ts, hs, bound_dd):
-        """First time the vertex (u, v) reaches the arm, from samples hs at ts.
+    def _first_root(self, i, R, vertex, ts, hs, bound_dd):
+        """First time the vertex (c0, u, v) reaches the arm, from samples hs at ts.
 
         Returns (time, whether it was found as a dip between two samples).
         """
         def height(t):
-            return float(self._flight_heights(i, R, np.array([t]), u, v)[0])
+            return float(self._flight_heights(i, R, np.array([t]), vertex)[0])
 
         def bisect(lo, hi):
             # height(lo) > 0 >= height(hi)
@@ -266,14 +281,12 @@ class ReferenceSimulator:
         turns = math.ceil(self.w * t_end / MAX_STEP_ANGLE)
         steps = max(self.samples, min(MAX_FLIGHT_SAMPLES, turns))
         ts = np.linspace(0.0, t_end, steps + 1)
-        u, v = part.uv(i)
         best_t, best_k, best_graze = math.inf, -1, False
         for k in range(part.n):
-            hs = self._flight_heights(i, R, ts, u[k], v[k])
-            # The resting edge's vertices start on the arm (rounding may say -1e-18).
-            hs[0] = max(hs[0], 0.0)
+            vertex = self._vertex_in_frame(i, k)
+            hs = self._flight_heights(i, R, ts, vertex)
             bound_dd = self.g_abs + self.w * self.w * part.dist[k]     # >= |F''|
-            t, graze = self._first_root(i, R, u[k], v[k], ts, hs, bound_dd)
+            t, graze = self._first_root(i, R, vertex, ts, hs, bound_dd)
             if t < best_t:
                 best_t, best_k, best_graze = t, k, graze
         return best_t, best_k, best_graze
