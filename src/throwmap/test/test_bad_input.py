@@ -161,3 +161,111 @@ def test_cli_file_system_errors_name_the_path(tmp_path, capsys):
     assert main(argv, out=io.StringIO()) == 2
     assert capsys.readouterr().err == (f'throwmap: error: {out_dir}: Not a directory; check the '
                                        'path and its permissions\n')
+
+
+# ------------------------------------------------------------------------------ scene files
+SCENE = ('name: t\n'
+         'part: {vertices: [[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]]}\n'
+         'arm: {offset: -0.005}\n'
+         'throw: {release_speed: 5.5851}\n'
+         'gravity: -9.66\n')
+
+
+def _scene_file(tmp_path, text, name='scene.yaml'):
+    path = tmp_path / name
+    path.write_text(text, encoding='utf-8')
+    return str(path)
+
+
+def _load_error(path):
+    from throwmap import load_scene
+    with pytest.raises(InputError) as err:
+        load_scene(path)
+    return str(err.value)
+
+
+def test_scene_path_that_is_a_directory(tmp_path, capsys):
+    """Used to escape as IsADirectoryError (a traceback from the CLI)."""
+    message = (f'scene: {tmp_path} is a directory, not a file; give the path of a scene YAML '
+               '(e.g. scenes/triangle.yaml)')
+    assert _load_error(str(tmp_path)) == message
+    assert main(['grasp', str(tmp_path)], out=io.StringIO()) == 2
+    assert capsys.readouterr().err == f'throwmap: error: {message}\n'
+
+
+def test_scene_file_that_is_not_utf8(tmp_path, capsys):
+    """Used to escape as UnicodeDecodeError (a traceback from the CLI)."""
+    path = tmp_path / 'latin1.yaml'
+    path.write_bytes(SCENE.replace('name: t', 'name: caf\xe9').encode('latin-1'))
+    message = (f'{path}: is not UTF-8 text (byte 9: invalid continuation byte); save the '
+               'scene as UTF-8 YAML')
+    assert _load_error(str(path)) == message
+    assert main(['grasp', str(path)], out=io.StringIO()) == 2
+    assert capsys.readouterr().err == f'throwmap: error: {message}\n'
+
+
+@pytest.mark.parametrize('extra, key, lines', [
+    ('arm: {offset: -0.004}\n', 'arm', (3, 6)),
+    ('name: u\n', 'name', (1, 6)),
+    ('sensor: {goal_edge: 1, goal_edge: 2}\n', 'goal_edge', (6, 6)),
+])
+def test_scene_key_given_twice(tmp_path, extra, key, lines):
+    """Refuse a key given twice: PyYAML kept the last one silently, hiding the mistake."""
+    path = _scene_file(tmp_path, SCENE + extra)
+    assert _load_error(path) == (f'{path}: gives {key!r} twice in one mapping (lines '
+                                 f'{lines[0]} and {lines[1]}); YAML would keep the last '
+                                 'silently; keep one of them')
+
+
+@pytest.mark.parametrize('part, message', [
+    ('{vertices_cm: [[6, 0], [0, 0], [6, 8]]}',
+     'part.vertices_cm: the outline is listed clockwise; list the vertices counterclockwise '
+     '(paper numbering), e.g. reversed: [[6, 8], [0, 0], [6, 0]]'),
+    ('{vertices_cm: [[0, 0], [1, 0]]}',
+     'part.vertices_cm: fewer than 3 distinct points (2); give at least 3 distinct points, '
+     'counterclockwise'),
+    ('{vertices_cm: abc}',
+     "part.vertices_cm: not a list of [x, y] pairs: 'abc'; give vertices as [[x0, y0], "
+     '[x1, y1], ...] in centimetres'),
+    ('{vertices_cm: [[6, 0], [6, 8], [0, 0]], cm_cm: [1]}',
+     'part.cm_cm: must be two finite numbers, got [0.01] (numbers converted to metres); give '
+     'the centre of mass as [x, y] in centimetres'),
+    ('{vertices_cm: [[6, 0], [6, 8], [0, 0]], cm_cm: [6, 8]}',
+     'part.cm_cm: the centre of mass [0.06, 0.08] is not strictly inside the convex hull '
+     '(distance -0 m to edge E0) (numbers converted to metres); move the centre of mass '
+     'inside the part, or omit it to use the centroid'),
+])
+def test_scene_part_errors_name_the_key_the_file_used(tmp_path, part, message):
+    """A part given in centimetres used to be reported as part.vertices / part.cm, in metres."""
+    path = _scene_file(tmp_path, SCENE.replace(
+        'part: {vertices: [[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]]}', 'part: ' + part))
+    assert _load_error(path) == f'{path}: {message}'
+
+
+def test_scene_release_speed_in_degrees_is_named_as_written(tmp_path):
+    """Used to say 'throw.release_speed: must be > 0 rad/s, got -0.0873' for -5 deg/s."""
+    path = _scene_file(tmp_path, SCENE.replace('release_speed: 5.5851',
+                                               'release_speed_deg: -5'))
+    assert _load_error(path) == (f'{path}: throw.release_speed_deg: must be > 0 deg/s, got -5; '
+                                 'give the arm speed at release, e.g. 320')
+
+
+def test_scene_start_with_an_edge_and_no_radius_is_valid(tmp_path):
+    """Used to fail with 'R must be a finite number of metres, got inf' at load time."""
+    from throwmap import load_scene
+    scene = load_scene(_scene_file(tmp_path, SCENE + 'start: {edge: 1}\n'))
+    assert scene.default_start() == (1, pytest.approx(1.5 * 0.0546666666666667))
+
+
+@pytest.mark.parametrize('start, message', [
+    ("{edge: '1', R: 0.1}", "start.edge: edge must be an integer, got '1'; pick a stable edge"),
+    ('{edge: 5}', 'start.edge: edge 5 does not exist: the part has edges 0..2; pick a stable '
+     'edge'),
+    ('{R: 0.01}', 'start: no dynamic grasp on edge 0 at R = 0.01 m: bound (3) (line of force '
+     'passes right of the right vertex) needs R >= 0.0160417 m (short by 0.00604 m); throw '
+     'from R >= R_grasp; pick a start inside the domain of f'),
+])
+def test_scene_start_is_checked_as_it_will_be_used(tmp_path, start, message):
+    """A start with only R (on the default edge) used not to be checked at all."""
+    path = _scene_file(tmp_path, SCENE + f'start: {start}\n')
+    assert _load_error(path) == f'{path}: {message}'

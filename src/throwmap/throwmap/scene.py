@@ -23,6 +23,7 @@ the base ThrowModel itself.
 
 import math
 import os
+import re
 import warnings
 
 import yaml
@@ -155,6 +156,55 @@ def _seed(data, seed):
     return value
 
 
+def _as_written(exc, section, spelled):
+    """Return the Part's InputError under the key the file used (``vertices_cm``, ...).
+
+    Part sees metres and names ``part.vertices`` / ``part.cm``; a file that gave centimetres
+    gets its own key, a note that the numbers shown are converted, and a fix in its units.
+    """
+    field = spelled.get(exc.field)
+    if not field or field == exc.field:
+        return exc
+    key = field.split('.', 1)[1]
+    fix = exc.fix.replace(' in metres', ' in centimetres')
+    if 'clockwise' in exc.problem and isinstance(section.get(key), list):
+        fix = ('list the vertices counterclockwise (paper numbering), e.g. reversed: '
+               f'{list(reversed(section[key]))}')
+    note = ' (numbers converted to metres)' if re.search(r'\d\.\d', exc.problem) else ''
+    return InputError(field, exc.problem + note, fix)
+
+
+class _DuplicateKey(yaml.YAMLError):
+    """A key given twice in one YAML mapping."""
+
+    def __init__(self, key, first, second):
+        self.key, self.first, self.second = key, first, second
+        super().__init__(f'{key!r} given twice (lines {first} and {second})')
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """yaml.SafeLoader that refuses a key given twice in one mapping (PyYAML keeps the last)."""
+
+
+def _mapping_without_repeats(loader, node, deep=False):
+    seen = {}
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=deep)
+        try:
+            hash(key)
+        except TypeError:
+            continue                    # construct_mapping reports unhashable keys itself
+        line = key_node.start_mark.line + 1
+        if key in seen:
+            raise _DuplicateKey(key, seen[key], line)
+        seen[key] = line
+    return loader.construct_mapping(node, deep=deep)
+
+
+_StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
+                              _mapping_without_repeats)
+
+
 class Scene:
     """A validated scene: the part, the throw-map model and the sensor/start settings.
 
@@ -184,10 +234,17 @@ class Scene:
             key = 'radius_of_gyration' if 'radius_of_gyration' in pd else 'radius_of_gyration_cm'
             raise InputError(f'part.{key}', f'must be > 0, got {pd[key]!r}',
                              'give rho = sqrt(I_cm / m), or omit it for a uniform lamina')
-        self.part = Part(vertices, cm=cm, radius_of_gyration=rho, field='part')
+        try:
+            self.part = Part(vertices, cm=cm, radius_of_gyration=rho, field='part')
+        except InputError as exc:
+            raise _as_written(exc, pd, {'part.vertices': vfield, 'part.cm': cm_field}) from None
         h = _unit(data['arm'], 'offset', 'arm', [('offset', 1.0), ('offset_cm', 0.01)])
         w = _unit(data['throw'], 'release_speed', 'throw',
                   [('release_speed', 1.0), ('release_speed_deg', math.pi / 180.0)])
+        if 'release_speed_deg' in data['throw'] and w <= 0:
+            raise InputError('throw.release_speed_deg',
+                             f'must be > 0 deg/s, got {data["throw"]["release_speed_deg"]!r}',
+                             'give the arm speed at release, e.g. 320')
         g, self.plate = _plate(data)
         mu = data.get('contact', {}).get('mu')
         rule = data.get('catch', {}).get('settle_rule', 'full')
@@ -239,8 +296,12 @@ class Scene:
         self.start_edge = start.get('edge')
         self.start_R = _unit(start, 'R', 'start', [('R', 1.0), ('R_cm', 0.01)])
         if self.start_edge is not None:
-            err = self.model.domain_error(self.start_edge, self.start_R if self.start_R
-                                          is not None else math.inf)
+            err = self.model.domain_error(self.start_edge, 0.0)
+            if err is not None and err.condition in ('edge_index', 'stable_edge'):
+                raise InputError('start.edge', str(err), 'pick a stable edge')
+        if self.start_edge is not None or self.start_R is not None:
+            # The state default_start gives: R defaults to 1.5 R_min, the edge to the goal edge.
+            err = self.model.domain_error(*self.default_start())
             if err is not None:
                 raise InputError('start', str(err), 'pick a start inside the domain of f')
 
@@ -292,11 +353,24 @@ def load_scene(path, seed=None):
     if not os.path.exists(path):
         raise InputError('scene', f'no such file: {path}',
                          'give the path of a scene YAML (e.g. scenes/triangle.yaml)')
+    if os.path.isdir(path):
+        raise InputError('scene', f'{path} is a directory, not a file',
+                         'give the path of a scene YAML (e.g. scenes/triangle.yaml)')
     try:
         with open(path, encoding='utf-8') as fh:
-            data = yaml.safe_load(fh)
+            data = yaml.load(fh, Loader=_StrictLoader)
+    except _DuplicateKey as exc:
+        raise InputError(f'{path}', f'gives {exc.key!r} twice in one mapping (lines '
+                         f'{exc.first} and {exc.second}); YAML would keep the last silently',
+                         'keep one of them') from None
     except yaml.YAMLError as exc:
         raise InputError(f'{path}', f'is not valid YAML ({exc})', 'fix the syntax') from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f'{path}', f'is not UTF-8 text (byte {exc.start}: {exc.reason})',
+                         'save the scene as UTF-8 YAML') from None
+    except OSError as exc:
+        raise InputError(f'{path}', f'cannot be read ({exc.strerror})',
+                         'check the path and its permissions') from None
     if data is None:
         raise InputError(f'{path}', 'is empty', 'see scenes/triangle.yaml for a scene')
     try:
