@@ -58,8 +58,8 @@ def parse_args(argv):
                    help='stop after S seconds')
     p.add_argument('--max-messages', type=int, default=None, metavar='N',
                    help='stop after N messages in total')
-    p.add_argument('--discovery-period', type=float, default=0.2, metavar='S',
-                   help='seconds between looks for new topics (default 0.2)')
+    p.add_argument('--discovery-period', type=float, default=0.5, metavar='S',
+                   help='seconds between looks for new topics (default 0.5)')
     args = p.parse_args(argv)
     if args.duration is not None and args.duration <= 0:
         p.error('--duration must be > 0')
@@ -98,7 +98,7 @@ def subscription_qos(publisher_qos):
 class BagRecorder(Node):
     """Subscribes (raw) to the selected topics as they appear and writes them to a bag."""
 
-    def __init__(self, writer, topics=None, exclude=None, discovery_period=0.2,
+    def __init__(self, writer, topics=None, exclude=None, discovery_period=0.5,
                  max_messages=None, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         self.writer = writer
@@ -176,7 +176,7 @@ def main(argv=None):
             start = node.get_clock().now()
             reason = None
             while reason is None:
-                executor.spin_once(timeout_sec=0.05)
+                executor.spin_once(timeout_sec=0.25)
                 elapsed = (node.get_clock().now() - start).nanoseconds * 1e-9
                 if stop['signal']:
                     reason = stop['signal']

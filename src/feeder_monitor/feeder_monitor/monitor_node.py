@@ -19,6 +19,7 @@ ROS glue only: the rules and the state machine are feeder_monitor.readiness's, t
 throwmap's (through feeder_sim.analysis, the same numbers the sim uses).
 """
 
+import gc
 import math
 import sys
 import time
@@ -232,6 +233,9 @@ def main(args=None):
             except InvalidParameterValueException as exc:
                 print(f'monitor_node: {exc}', file=sys.stderr)
                 return 2
+            # Start-up objects (numba, throwmap's analysis) never die: keep them out of the
+            # garbage collector's way, so that a collection cannot stall a cycle.
+            gc.freeze()
             rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

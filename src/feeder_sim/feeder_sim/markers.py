@@ -123,9 +123,14 @@ def static_markers(scene, analysis, sensor_radius):
     return out
 
 
+def state_markers(scene, analysis, sensor_radius, edge, R, detected):
+    """Markers that change with the state: the part and the sensor."""
+    reach = 2.0 * scene.part.r
+    return (part_markers(scene.part, edge, R, scene.h, edge == analysis.sensor.goal_edge)
+            + sensor_markers(sensor_radius, scene.h, reach, detected))
+
+
 def feeder_markers(scene, analysis, sensor_radius, edge, R, detected):
     """Every marker for the part resting at (edge, R) with sensor bit ``detected``."""
-    reach = 2.0 * scene.part.r
     return (static_markers(scene, analysis, sensor_radius)
-            + part_markers(scene.part, edge, R, scene.h, edge == analysis.sensor.goal_edge)
-            + sensor_markers(sensor_radius, scene.h, reach, detected))
+            + state_markers(scene, analysis, sensor_radius, edge, R, detected))

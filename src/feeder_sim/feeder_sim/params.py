@@ -68,6 +68,9 @@ SIM_PARAMS = (
               "analysis's choice (throwmap sensor design)", minimum=0.0, maximum=10.0),
     ParamSpec('cycle_period', 1.0, 'hardware mode: seconds between cycles while enabled',
               minimum=0.005, maximum=60.0),
+    ParamSpec('markers_period', 0.1, 'at most one markers message per this many seconds (the '
+              'last state always follows within it); 0: one after every throw', minimum=0.0,
+              maximum=10.0),
     ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages', minimum=0.1,
               maximum=60.0, read_only=True),
 )

@@ -19,6 +19,7 @@ ROS glue only: the throw map is throwmap's, the state is feeder_sim.predictor's,
 geometry feeder_sim.markers'. Interfaces: docs/interfaces.md; parameters: docs/nodes.md.
 """
 
+import gc
 import sys
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -34,7 +35,7 @@ from throwmap import analyse, ThrowmapError
 from visualization_msgs.msg import MarkerArray
 
 from . import analysis as scene_analysis_mod
-from .markers import feeder_markers
+from .markers import state_markers, static_markers
 from .params import check_scene, check_start, SIM_PARAMS
 from .predictor import Predictor, yaw_quaternion
 from .ros_glue import (CYCLE_STATUS_QOS, declare, DEFAULT_DEPTH, diagnostic_array,
@@ -69,6 +70,9 @@ class SimNode(LifecycleNode):
                         'bad_status': 0}
         self._rate_mark = (0, self.get_clock().now())
         self._last_followed_seq = None
+        self._static_markers = None     # Marker messages that only change with the analysis
+        self._markers_timer = None      # one-shot: sends markers that were due
+        self._markers_sent = None       # time of the last markers message
         ParameterGate(self, self._validate, self._apply)
         autostart = declare(self, self._specs['autostart'])
         self._hardware = declare(self, self._specs['hardware_mode'])
@@ -78,6 +82,7 @@ class SimNode(LifecycleNode):
         declare(self, self._specs['start_radius'], r0)
         declare(self, self._specs['sensor_radius'])
         declare(self, self._specs['cycle_period'])
+        declare(self, self._specs['markers_period'])
         period = declare(self, self._specs['diagnostics_period'])
 
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', DIAGNOSTICS_QOS)
@@ -136,6 +141,7 @@ class SimNode(LifecycleNode):
             self._analysis = scene_analysis_mod.scene_analysis(
                 self._scene, changes['sensor_radius'], self._base_analysis)
             self._predictor.sensor_radius = self._analysis.sensor.radius
+            self._static_markers = None
             self.get_logger().info(f'sensor at {self._analysis.sensor.radius:.4f} m')
             self._publish_latched()
         if 'cycle_period' in changes and self._cycle_timer is not None:
@@ -217,6 +223,7 @@ class SimNode(LifecycleNode):
             self._sub = None
         self._predictor = None
         self._analysis = None
+        self._static_markers = None
 
     # ------------------------------------------------------------------ hardware mode
     def _on_trigger(self, request, response):
@@ -357,15 +364,34 @@ class SimNode(LifecycleNode):
         self._pubs['radius'].publish(Float64(data=throw.R))
         self._publish_markers(stamp)
 
-    def _publish_markers(self, stamp=None):
+    def _publish_markers(self, stamp=None, force=False):
+        """Publish the markers now, or once markers_period has passed since the last ones."""
         if not self._active:
             return
-        stamp = stamp or self.get_clock().now().to_msg()
+        now = self.get_clock().now()
+        period = self._param('markers_period')
+        wait = 0.0 if force or self._markers_sent is None else \
+            period - (now - self._markers_sent).nanoseconds * 1e-9
+        if wait > 0.0:
+            if self._markers_timer is None:
+                self._markers_timer = self.create_timer(wait, self._flush_markers)
+            return
+        self._markers_sent = now
+        stamp = stamp or now.to_msg()
+        radius = self._analysis.sensor.radius
+        if self._static_markers is None:
+            self._static_markers = marker_array(
+                static_markers(self._scene, self._analysis, radius), FRAME, stamp).markers
         edge, R = self._predictor.state
-        detected = self._predictor.sees(edge, R)
-        specs = feeder_markers(self._scene, self._analysis, self._analysis.sensor.radius, edge,
-                               R, detected)
-        self._pubs['markers'].publish(marker_array(specs, FRAME, stamp))
+        state = marker_array(state_markers(self._scene, self._analysis, radius, edge, R,
+                                           self._predictor.sees(edge, R)), FRAME, stamp)
+        self._pubs['markers'].publish(MarkerArray(markers=self._static_markers + state.markers))
+
+    def _flush_markers(self):
+        self.destroy_timer(self._markers_timer)
+        self._markers_timer = None
+        if self._predictor is not None:
+            self._publish_markers(force=True)
 
     def _publish_latched(self):
         if not self._active:
@@ -380,7 +406,7 @@ class SimNode(LifecycleNode):
         self._pubs['limit_set'].publish(msg)
         self._pubs['analysis'].publish(
             String(data=scene_analysis_mod.analysis_json(self._analysis)))
-        self._publish_markers()
+        self._publish_markers(force=True)
 
     def _publish_diagnostics(self):
         name = self.get_name()
@@ -434,6 +460,9 @@ def main(args=None):
             except InvalidParameterValueException as exc:
                 print(f'sim_node: {exc}', file=sys.stderr)
                 return 2
+            # Start-up objects (numba, throwmap's analysis) never die: keep them out of the
+            # garbage collector's way, so that a collection cannot stall a cycle.
+            gc.freeze()
             rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

@@ -1,0 +1,262 @@
+#!/usr/bin/env python3
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Benchmarks of the sim and the monitor as processes on loopback DDS (prints a table).
+
+1. Latency from a ``proximity`` message to the monitor's ``edge1_ready`` for the same cycle,
+   over many cycles (sim as hardware + monitor). Times are the DDS source timestamp of the
+   proximity message (when the sim published it) and the receive timestamps at a probe node
+   (rmw ``MessageInfo``, system clock), so the probe's own executor adds nothing.
+2. Cycles per second the sim sustains at ``cycle_period`` 0.005 s (its minimum), alone and
+   with the whole graph listening (monitor, predictor, bag recorder).
+3. CPU of each node process at 1 Hz cycling, from /proc/<pid>/stat (utime + stime) over a
+   window, in % of one core.
+
+Asserts nothing. Usage (after ``. scripts/setup.sh``):
+
+    python bench/graph_bench.py [--latency-cycles 1000] [--rate-seconds 5] [--cpu-seconds 20]
+"""
+
+import argparse
+import os
+import pathlib
+import shutil
+import statistics
+import sys
+import tempfile
+import time
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / 'scripts'))
+
+from demo_graph import free_domain, Processes  # noqa: E402
+
+SCENE = str(REPO / 'scenes' / 'triangle.yaml')
+CLK_TCK = os.sysconf('SC_CLK_TCK')
+
+
+def pct(xs, q):
+    xs = sorted(xs)
+    return xs[min(len(xs) - 1, int(round(q / 100 * (len(xs) - 1))))]
+
+
+def cpu_seconds(pid):
+    """User + system CPU time of a process so far, s (fields 14 and 15 of /proc/pid/stat)."""
+    with open(f'/proc/{pid}/stat') as fh:
+        fields = fh.read().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / CLK_TCK
+
+
+class Probe:
+    """The benchmark's node: subscriptions with receive timestamps, service calls."""
+
+    def __init__(self, rclpy):
+        from diagnostic_msgs.msg import DiagnosticStatus
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from sensor_msgs.msg import Range
+        from std_msgs.msg import Bool
+        self.rclpy = rclpy
+        self.node = rclpy.create_node('feeder_bench')
+        reliable = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE)
+        latched = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.prox, self.ready, self.status = [], [], []
+        self.node.create_subscription(Range, '/feeder/proximity',
+                                      lambda m, i: self.prox.append(i), reliable)
+        self.node.create_subscription(Bool, '/feeder/edge1_ready',
+                                      lambda m, i: self.ready.append(i), latched)
+        self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
+                                      lambda m, i: self.status.append(i), reliable)
+
+    def spin_until(self, cond, timeout, what):
+        end = time.monotonic() + timeout
+        while not cond():
+            if time.monotonic() > end:
+                raise SystemExit(f'graph_bench: timed out waiting for {what}')
+            self.rclpy.spin_once(self.node, timeout_sec=0.05)
+
+    def spin_for(self, seconds):
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.rclpy.spin_once(self.node, timeout_sec=0.02)
+
+    def enable(self, on):
+        from std_srvs.srv import SetBool
+        client = self.node.create_client(SetBool, '/feeder/feeder_driver/enable')
+        self.spin_until(client.service_is_ready, 90, 'the sim')
+        fut = client.call_async(SetBool.Request(data=on))
+        self.spin_until(fut.done, 10, 'enable')
+        assert fut.result().success, fut.result().message
+        self.node.destroy_client(client)
+
+    def clear(self):
+        self.prox.clear()
+        self.ready.clear()
+        self.status.clear()
+
+    def close(self):
+        self.node.destroy_node()
+
+
+def start(procs, which, period):
+    if 'sim' in which:
+        procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
+                    '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p',
+                    f'scene:={SCENE}', '-p', f'cycle_period:={period}')
+    if 'monitor' in which:
+        procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', '-r',
+                    '__ns:=/feeder', '-p', f'scene:={SCENE}')
+    if 'predictor' in which:
+        procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', '-r',
+                    '__ns:=/feeder/predictor', '-r', 'cycle_status:=/feeder/cycle_status',
+                    '-p', f'scene:={SCENE}')
+    if 'recorder' in which:
+        bag = pathlib.Path(procs.log_dir) / 'bag'
+        shutil.rmtree(bag, ignore_errors=True)
+        procs.start('recorder', 'feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
+                    '__ns:=/feeder')
+
+
+def wait_graph(probe, which):
+    readers = 1 + ('monitor' in which) + ('predictor' in which) + ('recorder' in which)
+    if 'monitor' in which:
+        probe.spin_until(lambda: probe.ready, 90, 'the monitor')
+    probe.spin_until(lambda: probe.node.count_subscribers('/feeder/cycle_status') >= readers,
+                     90, 'the readers of cycle_status')
+    probe.spin_for(1.0)
+
+
+def latency(rclpy, log_dir, cycles, period=0.01):
+    procs = Processes(log_dir)
+    probe = Probe(rclpy)
+    try:
+        start(procs, ('sim', 'monitor'), period)
+        wait_graph(probe, ('sim', 'monitor'))
+        base = len(probe.ready)
+        probe.enable(True)
+        probe.spin_until(lambda: len(probe.status) >= cycles, 30 + 3 * cycles * period,
+                         'cycles')
+        probe.enable(False)
+        probe.spin_for(1.0)
+        verdicts = probe.ready[base:]
+        n = min(len(probe.prox), len(verdicts))
+        off = len(probe.prox) - len(verdicts)
+        pub = [(verdicts[j]['received_timestamp'] - probe.prox[j + off]['source_timestamp'])
+               * 1e-6 for j in range(n - max(off, 0))]
+        recv = [(verdicts[j]['received_timestamp'] - probe.prox[j + off]['received_timestamp'])
+                * 1e-6 for j in range(n - max(off, 0))]
+        return pub, recv
+    finally:
+        probe.close()
+        procs.stop_all()
+
+
+def rate(rclpy, log_dir, seconds, which, period=0.005):
+    procs = Processes(log_dir)
+    probe = Probe(rclpy)
+    try:
+        start(procs, which, period)
+        wait_graph(probe, which)
+        probe.enable(True)
+        probe.spin_for(1.0)             # steady state
+        probe.clear()
+        t0 = time.monotonic()
+        probe.spin_for(seconds)
+        n = len(probe.status)
+        dt = time.monotonic() - t0
+        probe.enable(False)
+        return n / dt
+    finally:
+        probe.close()
+        procs.stop_all()
+
+
+def cpu(rclpy, log_dir, seconds, period):
+    procs = Processes(log_dir)
+    probe = Probe(rclpy)
+    which = ('sim', 'monitor', 'predictor', 'recorder')
+    try:
+        start(procs, which, period)
+        wait_graph(probe, which)
+        probe.enable(True)
+        probe.spin_for(2.0)
+        before = {name: cpu_seconds(p.pid) for name, p in procs.procs.items()}
+        t0 = time.monotonic()
+        probe.spin_for(seconds)
+        wall = time.monotonic() - t0
+        after = {name: cpu_seconds(p.pid) for name, p in procs.procs.items()}
+        probe.enable(False)
+        return {name: 100.0 * (after[name] - before[name]) / wall for name in before}
+    finally:
+        probe.close()
+        procs.stop_all()
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0].strip())
+    ap.add_argument('--latency-cycles', type=int, default=1000)
+    ap.add_argument('--latency-period', type=float, default=0.01,
+                    help='cycle period of the latency run, s (default 0.01)')
+    ap.add_argument('--only', choices=('latency', 'rate', 'cpu'), default=None)
+    ap.add_argument('--rate-seconds', type=float, default=5.0)
+    ap.add_argument('--cpu-seconds', type=float, default=20.0)
+    args = ap.parse_args()
+    domain, lock = free_domain()
+    os.environ['ROS_DOMAIN_ID'] = str(domain)
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    import rclpy
+    rclpy.init()
+    log_dir = pathlib.Path(tempfile.mkdtemp(prefix='feeder-bench-'))
+    rows = []
+
+    def row(*cells):
+        rows.append(cells)
+        print(' | '.join(cells), flush=True)
+
+    try:
+        print(f'graph_bench: ROS_DOMAIN_ID={domain} (loopback), {os.cpu_count()} cores, '
+              f'logs in {log_dir}', flush=True)
+        if args.only in (None, 'latency'):
+            pub, recv = latency(rclpy, log_dir, args.latency_cycles, args.latency_period)
+            over = f'{len(pub)} cycles at {1 / args.latency_period:.0f} Hz'
+            for label, xs, target in (('proximity published -> edge1_ready received', pub,
+                                       'p99 < 5 ms'),
+                                      ('proximity received -> edge1_ready received', recv, '')):
+                row(label, over, f'p50 {statistics.median(xs):.2f} ms, p90 {pct(xs, 90):.2f} '
+                    f'ms, p99 {pct(xs, 99):.2f} ms, max {max(xs):.2f} ms', target)
+        if args.only in (None, 'rate'):
+            for label, which in (('sim alone', ('sim',)),
+                                 ('sim + monitor + predictor + recorder',
+                                  ('sim', 'monitor', 'predictor', 'recorder'))):
+                r = rate(rclpy, log_dir, args.rate_seconds, which)
+                row(f'cycles/s at cycle_period 0.005 s, {label}', f'{args.rate_seconds:.0f} s',
+                    f'{r:.1f} cycles/s', '>= 100')
+        if args.only in (None, 'cpu'):
+            for period, label, secs in ((1.0, '1 Hz', args.cpu_seconds),
+                                        (0.01, '100 Hz', min(args.cpu_seconds, 10.0))):
+                for name, use in cpu(rclpy, log_dir, secs, period).items():
+                    row(f'CPU of {name} at {label} cycling', f'{secs:.0f} s',
+                        f'{use:.2f} % of a core', '< 3 %' if period == 1.0 else '')
+    finally:
+        rclpy.shutdown()
+        lock.close()
+    print('\n| measurement | over | result | target |\n|---|---|---|---|')
+    for r in rows:
+        print('| ' + ' | '.join(r) + ' |')
+
+
+if __name__ == '__main__':
+    main()
