@@ -57,9 +57,8 @@ def type_name(cls):
     return f'{module[0]}/{module[1]}/{cls.__name__}'
 
 
-def recorder_subscribed(ros, topic):
-    return any(i.node_name == 'feeder_bag_recorder'
-               for i in ros.node.get_subscriptions_info_by_topic(topic))
+def recorder_subscribed(ros, topic, name='feeder_bag_recorder'):
+    return any(i.node_name == name for i in ros.node.get_subscriptions_info_by_topic(topic))
 
 
 def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
@@ -71,8 +70,19 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     wait_for_monitor(ros, ready)
     rec = graph.start('feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
                       '__ns:=/feeder', name='recorder')
+    # Two more: selected topics until 10 messages; everything but /diagnostics for 3 s.
+    few = graph.start('feeder_monitor', 'bag_recorder', tmp_path / 'few', '--topics',
+                      'proximity', '/feeder/cycle_status', '--max-messages', '10',
+                      '--ros-args', '-r', '__ns:=/feeder', '-r', '__node:=few_recorder',
+                      name='few')
+    timed = graph.start('feeder_monitor', 'bag_recorder', tmp_path / 'timed', '--duration', '3',
+                        '--exclude', '^/diagnostics$', '--ros-args', '-r', '__ns:=/feeder',
+                        '-r', '__node:=timed_recorder', name='timed')
     ros.spin_until(lambda: all(recorder_subscribed(ros, t) for t in EXPECTED), STARTUP_TIMEOUT,
                    'the recorder on every topic')
+    ros.spin_until(lambda: all(recorder_subscribed(ros, t, 'few_recorder') for t in
+                               ('/feeder/proximity', '/feeder/cycle_status')), STARTUP_TIMEOUT,
+                   'the second recorder')
     ros.spin_for(1.0)       # latched messages reach the recorder
     for k in range(N):
         res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
@@ -81,6 +91,14 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     ros.spin_until(lambda: len(statuses) == N and len(ready) == N + 1, 20.0, 'all cycles')
     ros.spin_for(1.2)       # and /diagnostics once more
     assert graph.stop(rec) == 0
+    assert few.wait(timeout=10) == 0 and '(10 messages)' in graph.log(few)
+    assert timed.wait(timeout=10) == 0 and '(3.0 s)' in graph.log(timed)
+    with Reader(tmp_path / 'few') as reader:
+        assert {c.topic: c.msgcount for c in reader.connections} == {
+            '/feeder/proximity': 5, '/feeder/cycle_status': 5}
+    with Reader(tmp_path / 'timed') as reader:
+        topics = {c.topic for c in reader.connections}
+        assert '/diagnostics' not in topics and '/feeder/edge1_ready' in topics
     assert f'in {bag}' in graph.log(rec) and 'stopped (SIGINT)' in graph.log(rec)
 
     meta = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
