@@ -16,6 +16,7 @@
 
 import json
 import math
+import signal
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from feeder_nodes import (Collector, LATCHED, monitor, sim_as_hardware, STARTUP_TIMEOUT,
@@ -90,7 +91,9 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
         assert res.message.startswith(f'fired cycle seq={k + 1}')
     ros.spin_until(lambda: len(statuses) == N and len(ready) == N + 1, 20.0, 'all cycles')
     ros.spin_for(1.2)       # and /diagnostics once more
-    assert graph.stop(rec) == 0
+    rec.send_signal(signal.SIGTERM)     # (the demo stops its recorder with SIGINT)
+    assert rec.wait(timeout=10) == 0
+    assert f'in {bag}' in graph.log(rec) and 'stopped (SIGTERM)' in graph.log(rec)
     assert few.wait(timeout=10) == 0 and '(10 messages)' in graph.log(few)
     assert timed.wait(timeout=10) == 0 and '(3.0 s)' in graph.log(timed)
     with Reader(tmp_path / 'few') as reader:
