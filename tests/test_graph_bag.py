@@ -102,7 +102,6 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     with Reader(tmp_path / 'timed') as reader:
         topics = {c.topic for c in reader.connections}
         assert '/diagnostics' not in topics and '/feeder/edge1_ready' in topics
-    assert f'in {bag}' in graph.log(rec) and 'stopped (SIGINT)' in graph.log(rec)
 
     meta = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
     assert meta['storage_identifier'] == 'mcap' and meta['version'] == 9
