@@ -227,8 +227,10 @@ def main():
         print(' | '.join(cells), flush=True)
 
     try:
-        print(f'graph_bench: ROS_DOMAIN_ID={domain} (loopback), {os.cpu_count()} cores, '
-              f'logs in {log_dir}', flush=True)
+        load = ', '.join(f'{x:.1f}' for x in os.getloadavg())
+        print(f'graph_bench: ROS_DOMAIN_ID={domain} (loopback), {os.cpu_count()} cores, load '
+              f'average {load} (other work on the machine skews latency), logs in {log_dir}',
+              flush=True)
         if args.only in (None, 'latency'):
             pub, recv = latency(rclpy, log_dir, args.latency_cycles, args.latency_period)
             over = f'{len(pub)} cycles at {1 / args.latency_period:.0f} Hz'
@@ -253,6 +255,8 @@ def main():
     finally:
         rclpy.shutdown()
         lock.close()
+    load = ', '.join(f'{x:.1f}' for x in os.getloadavg())
+    print(f'\nload average at the end: {load}')
     print('\n| measurement | over | result | target |\n|---|---|---|---|')
     for r in rows:
         print('| ' + ' | '.join(r) + ' |')

@@ -77,7 +77,10 @@ class MonitorNode(Node):
         self.create_subscription(Range, 'proximity', self._on_proximity, qos_profile_sensor_data)
         self.create_subscription(DiagnosticStatus, 'cycle_status', self._on_cycle_status,
                                  CYCLE_STATUS_QOS)
-        self.create_timer(min(0.1, self._param('pair_timeout') / 2), self._on_expire)
+        # Runs only while a cycle waits for its other half (see _decide).
+        self._expire_timer = self.create_timer(min(0.1, self._param('pair_timeout') / 2),
+                                               self._on_expire)
+        self._expire_timer.cancel()
         self.create_timer(self._param('diagnostics_period'), self._publish_diagnostics)
         self._ready_pub.publish(Bool(data=False))
         self._log_rules(rules)
@@ -174,6 +177,10 @@ class MonitorNode(Node):
         self._decide(self._pairer.expire(time.monotonic()))
 
     def _decide(self, cycles):
+        if self._pairer.pending == (0, 0):
+            self._expire_timer.cancel()
+        elif self._expire_timer.is_canceled():
+            self._expire_timer.reset()
         for c in cycles:
             if c.completed:
                 v = self._monitor.completed(c.seq, c.detected, c.note)
