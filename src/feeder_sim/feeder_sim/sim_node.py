@@ -286,9 +286,9 @@ class SimNode(LifecycleNode):
         rng.field_of_view = 0.0
         rng.min_range = rng.max_range = float(self._analysis.sensor.radius)
         rng.range = float('-inf') if throw.detected else float('inf')
-        self._pubs['proximity'].publish(rng)
-        self._pubs['cycle_status'].publish(
-            self._cycle_status(stamp, True, 'completed', '1' if throw.detected else '0'))
+        status = self._cycle_status(stamp, True, 'completed', '1' if throw.detected else '0')
+        self._pubs['proximity'].publish(rng)        # back to back: the monitor needs both
+        self._pubs['cycle_status'].publish(status)
         self._publish_prediction(stamp, throw)
         return self._seq, None
 
