@@ -322,7 +322,7 @@ def build_parser():
         p.add_argument('--quiet', action='store_true', help='no progress on stderr')
         p.add_argument('--seed', type=int, default=None,
                        help="seed of the scene's random numbers (effects release_noise, "
-                       'sensor_noise); default: the scene\'s noise.seed')
+                       "sensor_noise); default: the scene's noise.seed")
         return p
 
     add('grasp', 'R_grasp and mu_min per edge (impulse cone)')

@@ -39,8 +39,11 @@ METHOD_SCAN = 1
 
 @njit
 def _height(t, f0, vy, g, phi0, om, u, v):
-    """F(t) = f0 + terms that vanish at t = 0 (as kernel.flight_height: a short hop keeps its
-    relative precision instead of being rounded to units of the last place of d)."""
+    """Return F(t), the vertex height over the arm, as f0 plus terms that vanish at t = 0.
+
+    As kernel.flight_height: a short hop keeps its relative precision instead of being rounded
+    to units of the last place of d.
+    """
     b = 0.5 * om * t
     sb = math.sin(b)
     mid = phi0 + b
@@ -56,8 +59,10 @@ def _rate(t, vy, g, phi0, om, u, v):
 
 @njit
 def advance_contact(f0, vy, g, phi0, om, u, v, t_limit, tol_t, max_steps):
-    """First t in (0, t_limit) with F(t) = 0 and F decreasing (conservative advancement); f0 is
-    F(0) >= 0. inf if none; -1 at the step cap."""
+    """Return the first t in (0, t_limit) where F falls through 0 (conservative advancement).
+
+    f0 = F(0) >= 0. Returns inf if there is none, -1 at the step cap.
+    """
     s = math.sqrt(u * u + v * v)
     m = abs(g) + om * om * s
     a = 0.0
@@ -90,8 +95,10 @@ def advance_contact(f0, vy, g, phi0, om, u, v, t_limit, tol_t, max_steps):
 
 @njit
 def scan_contact(f0, vy, g, phi0, om, u, v, t_limit, step, root_tol, max_steps):
-    """First sampled crossing of F through 0 downwards, refined by bisection: samples every
-    ``step`` seconds, so a dip below the arm shorter than a step goes unseen."""
+    """Return the first sampled downward crossing of F through 0, refined by bisection.
+
+    Samples every ``step`` seconds, so a dip below the arm shorter than a step goes unseen.
+    """
     a = 0.0
     fa = f0
     for _ in range(max_steps):
@@ -116,8 +123,11 @@ def scan_contact(f0, vy, g, phi0, om, u, v, t_limit, step, root_tol, max_steps):
 
 @njit
 def release_state(edge, R, w, h, theta_r, d):
-    """(x0, y0, phi0, vx, vy, omega): the part carried rigidly on an arm at angle theta_r turning
-    at w about the pivot, resting on ``edge`` at radius R (theta_r = 0 is eq 5 at t = 0)."""
+    """Return the release state (x0, y0, phi0, vx, vy, omega) in frame F.
+
+    The part rests on ``edge`` at radius R of an arm at angle theta_r turning at w about the
+    pivot (theta_r = 0 is eq 5 at t = 0).
+    """
     c = math.cos(theta_r)
     s = math.sin(theta_r)
     px = c * R - s * (h + d[edge])

@@ -72,9 +72,9 @@ class EffectAccuracy:
     contact_method: str = 'advancement'
     contact_scan_step: float = 1e-3
     contact_root_tol: float = 1e-12
-    integrator_step: float = 2e-4
-    roll_step: float = 2e-4
-    plate_quadrature: int = 3
+    integrator_step: float = 1e-3
+    roll_step: float = 1e-3
+    plate_quadrature: int = 4
     plate_v_reg: float = 1e-4
     settle_energy: float = 1e-8
     max_sim_steps: int = 2_000_000
@@ -122,9 +122,10 @@ def impulse_grasp_radius(edge, h, mu, rho2, d, u_l, u_r):
 
 @kernel.njit
 def carry_margin(edge, R, w, h, g, mu, theta_r, samples, rho2, d, u_l, u_r):
-    """Largest wrench-cone margin along the constant-acceleration carry (<= 0: in grasp).
+    """Return the largest wrench-cone margin along the carry (<= 0: in a dynamic grasp).
 
-    Returns (margin, sample index, constraint 1..4) of the worst instant."""
+    Returns (margin, sample index, constraint 1..4) of the worst instant.
+    """
     hd = h + d[edge]
     vl = -d[edge]
     a = w * w / (2.0 * theta_r)
@@ -164,8 +165,11 @@ def carry_margin(edge, R, w, h, g, mu, theta_r, samples, rho2, d, u_l, u_r):
 @kernel.njit
 def arm_clearance(edge, x0, y0, phi0, vx, vy, om, g, h, theta_r, w, ret_time, samples, arm_len,
                   n, U, V):
-    """Smallest clearance of the part's vertices over the returning arm (Hermite profile from
-    (theta_r, w) to (0, 0) in ret_time), over vertices above the arm's extent [0, L]."""
+    """Return the smallest clearance of the part's vertices over the returning arm.
+
+    The arm follows the Hermite profile from (theta_r, w) to (0, 0) in ret_time; only vertices
+    above the arm's extent [0, L] count.
+    """
     worst = math.inf
     for k in range(1, samples + 1):
         t = ret_time * k / samples
@@ -195,8 +199,11 @@ def throw_core(edge, R, zw, zh, w0, h0, g, sd_w, sd_h, mu, theta_r, ret_time, ca
                use_general, prm, method, scan_step, root_tol, tol_t, flat_tol, max_steps,
                max_impacts, first_stable, n, rho2, d, u_l, u_r, stable, edge_len, vrad, acw,
                accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, nobound, rec):
-    """One throw with effects. Returns (status, edge, R, first contact time, net rotation,
-    impacts, first contact vertex, records written, w used, h used)."""
+    """Evaluate one throw with effects.
+
+    Returns (status, edge, R, first contact time, net rotation, impacts, first contact vertex,
+    records written, w used, h used).
+    """
     nan = math.nan
     if edge < 0 or edge >= n:
         return kernel.ERR_EDGE_INDEX, -1, nan, nan, nan, 0, -1, 0, nan, nan
@@ -287,8 +294,10 @@ def orbit_batch(edges, radii, steps, z, w0, h0, g, sd_w, sd_h, mu, theta_r, ret_
                 max_steps, max_impacts, first_stable, n, rho2, d, u_l, u_r, stable, edge_len,
                 vrad, acw, accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, nobound, out_edge,
                 out_r, out_rot, out_status, out_done):
-    """Orbits from many starts; z has shape (starts, steps, 2). A lost throw ends its orbit
-    with edge -1 and status LOST."""
+    """Iterate f from many starts; z has shape (starts, steps, 2).
+
+    A lost throw ends its orbit with edge -1 and status LOST.
+    """
     rec = np.empty((REC_ROWS, kernel.REC_COLS))
     for s in range(edges.shape[0]):
         edge = edges[s]
@@ -342,8 +351,10 @@ class EffectThrowResult(ThrowResult):
 
 
 class EffectModel(ThrowModel):
-    """ThrowModel over the effects of an EffectSet (same interface: f, throw, f_batch,
-    orbit_arrays, orbits, domain_error, error_message).
+    """ThrowModel over the effects of an EffectSet.
+
+    Same interface as ThrowModel: f, throw, f_batch, orbit_arrays, orbits, domain_error,
+    error_message.
 
     With release_noise or sensor_noise the model owns a seeded numpy Generator (``rng``):
     every f, f_batch and orbit call draws from it, so results depend on the seed and on the
@@ -390,6 +401,8 @@ class EffectModel(ThrowModel):
         prm[general.P_MAXIMP] = self.accuracy.max_impacts
         prm[general.P_FIRST_STABLE] = 1.0 if settle_rule == 'first_stable' else 0.0
         self.prm = prm
+        # One record buffer per model (f and throw are not re-entrant across threads).
+        self._rec = np.empty((REC_ROWS, kernel.REC_COLS))
         acc = self.accuracy
         qu, qv, qw = self.quadrature
         self._cargs = (self.w, self.h, self.g, self.sd_w, self.sd_h,
@@ -411,9 +424,12 @@ class EffectModel(ThrowModel):
             self.r_grasp = self._carry_domain()
 
     def _carry_domain(self, r_top=1.0, step=1e-3):
-        """Lower end of the domain per stable edge with a finite carry: above it the carry
-        keeps the dynamic grasp and the returning arm clears the part (on a 1 mm grid up to
-        1 m, then bisection to 1e-7 m). The impulse-cone R_grasp does not apply here."""
+        """Return the lower end of the domain per stable edge with a finite carry.
+
+        Above it the carry keeps the dynamic grasp and the returning arm clears the part (on a
+        1 mm grid up to 1 m, then bisection to 1e-7 m). The impulse-cone R_grasp does not
+        apply here.
+        """
         part = self.part
         out = np.full(part.n, np.inf)
         bad = (ERR_CARRY_GRASP, ERR_ARM_STRIKE, kernel.ERR_TOE_STUB)
@@ -452,7 +468,7 @@ class EffectModel(ThrowModel):
         self.rng = np.random.default_rng(seed)
 
     def nominal(self):
-        """The same model without release_noise and sensor_noise (the deterministic map)."""
+        """Return the same model without release_noise and sensor_noise."""
         eff = replace(self.effects, release_noise=None, sensor_noise=None,
                       names=tuple(n for n in self.effects.names
                                   if n not in ('release_noise', 'sensor_noise')))
@@ -520,8 +536,7 @@ class EffectModel(ThrowModel):
     def f(self, edge, R):
         """(edge', R', kind); kind 'lost' (edge -1, R nan) when the part leaves the arm."""
         self._check_types(edge, R)
-        out = self._core(int(edge), float(R), self._draw((1,))[0],
-                         np.empty((REC_ROWS, kernel.REC_COLS)))
+        out = self._core(int(edge), float(R), self._draw((1,))[0], self._rec)
         status = out[0]
         if status == LOST:
             return -1, math.nan, 'lost'
@@ -530,11 +545,13 @@ class EffectModel(ThrowModel):
         return out[1], out[2], _classify(edge, out[1], out[4])
 
     def throw(self, edge, R, trajectory=False, samples=60):
-        """Full result; ``trajectory`` is filled only where the flight and catch are the base
-        model's (effects finite_arm, sensor_noise alone), else None: the general simulator
-        does not keep sampled poses."""
+        """Return the full result of one throw.
+
+        ``trajectory`` is filled only where the flight and catch are the base model's (effects
+        finite_arm, sensor_noise alone), else None: the general simulator keeps no poses.
+        """
         self._check_types(edge, R)
-        rec = np.empty((REC_ROWS, kernel.REC_COLS))
+        rec = self._rec
         z = self._draw((1,))[0]
         out = self._core(int(edge), float(R), z, rec)
         status, j, r1, t, rot, nimp, k0, nrec, w, h = out
@@ -560,7 +577,7 @@ class EffectModel(ThrowModel):
                                  float(h), reason)
 
     def _base_path(self):
-        """True when throws are the base kernel's own (only range checks or sensor noise)."""
+        """Tell whether throws are the base kernel's own (range checks or sensor noise)."""
         return (not self.effects.general and self.theta_r == 0.0 and self.sd_w == 0.0
                 and self.sd_h == 0.0 and self.knobs.contact_method == 'advancement')
 
@@ -660,7 +677,7 @@ class EffectModel(ThrowModel):
             err = self.domain_error(edge, R)
             if err is None:
                 err = DomainError('grasp_noise', f'no dynamic grasp at ({edge}, {R:.6g} m) '
-                                  'with this throw\'s sampled release speed and offset '
+                                  "with this throw's sampled release speed and offset "
                                   '(release_noise); throw from further out')
         elif status == LOST:
             err = PartLost(self.error_message(status, edge, R), after)

@@ -326,8 +326,11 @@ def _contact_to_cm(xp, phi, vxp, om, bu_p, bv_p, h):
 @njit
 def _contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, h, g, rho2, mu, qu, qv, qw,
                      coef, vreg, unilateral):
-    """Event code at a contact state: 0 none, 1 landing (vertex index in 2nd value), 2 liftoff,
-    3 stick -> slip, 4 slip reversal (velocity reached zero), 5 Painleve."""
+    """Return the event code at a contact state, and the landing vertex.
+
+    0 none, 1 landing (vertex index in the second value), 2 liftoff, 3 stick -> slip, 4 slip
+    reversal (velocity reached zero), 5 Painleve.
+    """
     x, y, vx, vy = _contact_to_cm(xp, phi, vxp, om, bu[p], bv[p], h)
     k, _ = _lowest_approaching(x, y, phi, vx, vy, om, h, bu, bv, p)
     if k >= 0:
@@ -381,9 +384,11 @@ def _flat_forces(vx, j, e0, u_l, u_r, d, g, mu, rho2, qu, qv, qw, coef, vreg, ph
 @njit
 def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stable, edge_len,
              rest_angle, U, V, QU, QV, QW, acw, accw, rec):
-    """Throw and catch from a free release state, given in frame F with phi0 the rotation from
-    the resting pose on ``edge``. Returns (status, edge, R, first contact time, net rotation,
-    impacts, first contact vertex, records, lowest and highest arm x touched).
+    """Throw and catch from a free release state.
+
+    The state is given in frame F with phi0 the rotation from the resting pose on ``edge``.
+    Returns (status, edge, R, first contact time, net rotation, impacts, first contact vertex,
+    records, lowest and highest arm x touched).
     """
     g = prm[P_G]
     h = prm[P_H]
@@ -758,8 +763,11 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
 
 @njit
 def _plate_hold(phi, om, bu_p, bv_p, qu, qv, qw, g, coef):
-    """(held, turn): does plate friction hold the part at rest on pivot p, and the turn about p
-    that brings its CM just past the holding zone on the side it leans to."""
+    """Return (held, turn): whether plate friction holds the part at rest on pivot p.
+
+    ``turn`` is the rotation about p that brings the CM just past the holding zone on the side
+    it leans to.
+    """
     c = math.cos(phi)
     s = math.sin(phi)
     cx = -(c * bu_p - s * bv_p)
@@ -783,8 +791,10 @@ def _plate_hold(phi, om, bu_p, bv_p, qu, qv, qw, g, coef):
 @njit
 def _contact_mode(vxp, xp, phi, om, p, bu, bv, h, g, rho2, mu, qu, qv, qw, coef, vreg,
                   unilateral):
-    """(sliding, sigma) for a new contact phase at vertex p with slip velocity vxp. A hinge
-    pivot (not unilateral) is pinned: it never slides."""
+    """Return (sliding, sigma) for a new contact phase at vertex p with slip velocity vxp.
+
+    A hinge pivot (not unilateral) is pinned: it never slides.
+    """
     if math.isinf(mu) or not unilateral:
         return False, 0.0
     if abs(vxp) > 1e-12:
@@ -805,9 +815,11 @@ def _contact_mode(vxp, xp, phi, om, p, bu, bv, h, g, rho2, mu, qu, qv, qw, coef,
 
 @njit
 def _flat_impact(vx, vy, om, j, u_l, u_r, d, rho2, mu):
-    """Two-point plastic landing flat on edge j: vertical velocity and rotation stop; the
-    tangential impulse stops the slide if the friction cone allows, else it is clipped.
-    Returns (vx, om, vy, ok)."""
+    """Land flat on edge j: a two-point plastic impact.
+
+    Vertical velocity and rotation stop; the tangential impulse stops the slide if the friction
+    cone allows, else it is clipped. Returns (vx, om, vy, ok).
+    """
     # Normal impulse total removes vy; the tangential one removes vx if it can.
     pn = -vy
     if pn < 0.0:
@@ -861,9 +873,11 @@ def triangulate(outline):
 
 
 def plate_quadrature(part, level):
-    """Quadrature of the part's area for the plate drag: every triangle of the outline split
-    into level^2 similar ones, each weighted by its area at its centroid. Returns QU, QV (per
-    edge frame, shape (n, points)) and weights QW (sum 1)."""
+    """Return the quadrature of the part's area for the plate drag.
+
+    Every triangle of the outline is split into level^2 similar ones, each weighted by its area
+    at its centroid. Returns QU, QV (per edge frame, shape (n, points)) and weights QW (sum 1).
+    """
     pts = part.outline
     tris = triangulate(pts)
     qx, qy, qw = [], [], []

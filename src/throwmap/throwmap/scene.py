@@ -129,7 +129,7 @@ def _plate(data):
     if incl is None or not 0 < incl <= 90:
         raise InputError('plate.inclination_deg', f'must be in (0, 90], got '
                          f'{plate.get("inclination_deg")!r}',
-                         'give the back plate\'s inclination from horizontal, e.g. 80')
+                         "give the back plate's inclination from horizontal, e.g. 80")
     g0 = _unit(plate, 'g0', 'plate', [('g0', 1.0)])
     if g0 is None:
         g0 = 9.81

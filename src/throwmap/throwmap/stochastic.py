@@ -23,8 +23,6 @@ seed), so results are reproducible; the sensor readings use the model's own Gene
 from dataclasses import dataclass
 import math
 
-import numpy as np
-
 from .dynamics import basin
 
 
@@ -34,13 +32,15 @@ def _seeds(model, count):
 
 
 def basin_distribution(model, start_edges, start_radii, throws=100, seeds=8, reference=None):
-    """Per start, the fraction of seeds whose orbit ends in each limit pattern ('lost', and
-    'left the domain' for orbits that a noisy throw took out of the domain of f).
+    """Return, per start, the fraction of seeds whose orbit ends in each limit pattern.
+
+    Patterns include 'lost', and 'left the domain' for orbits that a noisy throw took out of
+    the domain of f.
 
     Returns (per_start, overall): per_start a list of {signature: fraction}, overall the mean
     over starts.
     """
-    counts = [dict() for _ in range(len(start_edges))]
+    counts = [{} for _ in range(len(start_edges))]
     for seed in _seeds(model, seeds):
         if hasattr(model, 'reseed'):
             model.reseed(seed)
@@ -95,9 +95,11 @@ def _wilson(k, n, z=1.96):
 
 def sensor_probability(model, goal_edge, radius, footprint=0.0, start=None, throws=2000,
                        seeds=8, warmup=20):
-    """P(goal edge | detection) at radius from seeds noisy orbits of throws
-    throws each (the first warmup not counted), readings through the scene's sensor
-    noise when the model has it."""
+    """Estimate P(goal edge | detection) at ``radius`` by Monte Carlo.
+
+    ``seeds`` noisy orbits of ``throws`` throws each (the first ``warmup`` not counted);
+    readings go through the scene's sensor noise when the model has it.
+    """
     if start is None:
         part = model.part
         start = (goal_edge, 1.5 * max(model.r_grasp[goal_edge], -part.u_l[goal_edge]))
@@ -134,8 +136,10 @@ def sensor_probability(model, goal_edge, radius, footprint=0.0, start=None, thro
 
 def stochastic_summary(model, sensor, start, basin_starts, throws=2000, grid_throws=100,
                        seeds=8, reference=None):
-    """The noisy scene's figures for analyse(): basin outcome distribution and the sensor's
-    P(goal | detection) at the designed radius."""
+    """Return the noisy scene's figures for analyse().
+
+    The basin outcome distribution and the sensor's P(goal | detection) at the designed radius.
+    """
     _, overall = basin_distribution(model, basin_starts[0], basin_starts[1], grid_throws, seeds,
                                     reference)
     sp = sensor_probability(model, sensor.goal_edge, sensor.radius, sensor.footprint, start,

@@ -25,7 +25,6 @@ speed).
 from dataclasses import dataclass
 from typing import Optional
 
-from ..errors import InputError
 from . import (backplate_friction, finite_arm, finite_carry, impact_restitution, release_noise,
                sensor_noise)
 from .backplate_friction import BackplateFriction
@@ -34,6 +33,7 @@ from .finite_carry import FiniteCarry
 from .impact_restitution import ImpactRestitution
 from .release_noise import ReleaseNoise
 from .sensor_noise import SensorNoise
+from ..errors import InputError
 
 MODULES = {m.NAME: m for m in (backplate_friction, finite_carry, impact_restitution, finite_arm,
                                release_noise, sensor_noise)}
@@ -66,7 +66,7 @@ class EffectSet:
 
 
 def parse_names(value):
-    """The scene's ``effects`` list: known names, each once."""
+    """Validate the scene's ``effects`` list: known names, each once."""
     if value is None:
         return ()
     if not isinstance(value, list):
@@ -97,8 +97,11 @@ OWNED = {
 
 
 def compose(names, data, plate, arm_length, mu):
-    """EffectSet for the named effects. data: the raw scene mapping; plate: the parsed plate
-    section (dict with g_normal, mu) or None; arm_length in m or None; mu: contact.mu or None."""
+    """Build the EffectSet of the named effects.
+
+    data: the raw scene mapping; plate: the parsed plate section (dict with g_normal, mu) or
+    None; arm_length in m or None; mu: contact.mu or None.
+    """
     for effect, keys in OWNED.items():
         if effect in names:
             continue

@@ -43,8 +43,8 @@ release_angle_deg: 5, return_time: 0.05}}; contact: {mu: 0.8}; effects: [finite_
 from dataclasses import dataclass
 import math
 
-from ..errors import InputError
 from ._common import check_keys, number
+from ..errors import InputError
 
 NAME = 'finite_carry'
 PROFILES = ('constant_acceleration',)

@@ -49,8 +49,8 @@ effects: [impact_restitution].
 from dataclasses import dataclass
 import math
 
-from ..errors import InputError
 from ._common import number
+from ..errors import InputError
 
 NAME = 'impact_restitution'
 PIVOTS = ('hinge', 'unilateral')

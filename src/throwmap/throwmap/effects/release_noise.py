@@ -28,8 +28,8 @@ Scene: noise: {seed: 1, release_speed_sd_deg: 5, offset_sd_cm: 0.02}; effects: [
 from dataclasses import dataclass
 import math
 
-from ..errors import InputError
 from ._common import number
+from ..errors import InputError
 
 NAME = 'release_noise'
 

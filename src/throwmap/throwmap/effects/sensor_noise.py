@@ -28,8 +28,8 @@ false_negative: 0.05}; effects: [sensor_noise].
 
 from dataclasses import dataclass
 
-from ..errors import InputError
 from ._common import number
+from ..errors import InputError
 
 NAME = 'sensor_noise'
 

@@ -1,0 +1,445 @@
+#!/usr/bin/env python3
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""What accuracy costs in time: every accuracy knob, every effect set, and pymunk side by side.
+
+For each configuration: the time per throw (f_batch, one core) and the error against a
+high-accuracy reference of the same physics:
+* throws: share of random states whose resting edge differs, and the median / max |dR| of the
+  rest (mm);
+* orbit: throws until the first edge that differs from the reference orbit (from the scene's
+  start; the map expands, so any error shows up eventually);
+* band: largest difference of the limit set's R bands (mm), from a long orbit.
+pymunk (a general-purpose 2D engine) simulates the same throw and catch from the same release
+state at several time steps; its reference is the base model (pymunk has no plate friction).
+
+Prints markdown tables and writes a Pareto plot (time per throw vs error). Asserts nothing.
+Usage: python bench/accuracy_vs_time.py [--quick] [--out docs/accuracy_pareto.png]
+"""
+
+import argparse
+import copy
+import math
+import os
+import pathlib
+import platform
+import time
+
+import numpy as np
+from throwmap import limit_set_from_orbit
+from throwmap.closed import release_state
+from throwmap.scene import Scene
+import yaml
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+WRONG_EDGE_MM = 10.0      # a throw that ends on the wrong edge counts as a 10 mm error
+
+
+def load(name, **changes):
+    with open(ROOT / 'scenes' / f'{name}.yaml', encoding='utf-8') as fh:
+        data = yaml.safe_load(fh)
+    for key, value in changes.items():
+        if value is None:
+            data.pop(key, None)
+        elif isinstance(value, dict):
+            data.setdefault(key, {}).update(value)
+        else:
+            data[key] = value
+    return Scene(copy.deepcopy(data))
+
+
+def random_states(model, count, seed=0, r_hi=0.3):
+    rng = np.random.default_rng(seed)
+    part = model.part
+    edges = rng.choice(part.stable_edges, count)
+    lo = np.array([max(model.r_grasp[e], -part.u_l[e]) * 1.01 for e in edges])
+    return edges, lo + rng.uniform(0, 1, count) * (r_hi - lo)
+
+
+def timed_batch(model, edges, radii):
+    model.f_batch(edges[:2], radii[:2])      # compile / load the cache
+    t0 = time.perf_counter()
+    res = model.f_batch(edges, radii)
+    return res, (time.perf_counter() - t0) / len(edges) * 1e6
+
+
+def orbit_of(model, start, throws):
+    e, r, rot, status, done = model.orbits([start[0]], [start[1]], throws)
+    return e[0, :done[0] + 1], r[0, :done[0] + 1], rot[0, :done[0] + 1]
+
+
+def compare(res, ref):
+    ok = (res['status'] == 0) & (ref['status'] == 0)
+    same = ok & (res['edge'] == ref['edge'])
+    d = np.abs(res['R'] - ref['R'])[same] * 1000
+    # One number for the plot: mean error per throw, a wrong resting edge counting WRONG_EDGE_MM.
+    per = np.where(same, np.abs(res['R'] - ref['R']) * 1000, WRONG_EDGE_MM)[ok]
+    return {'edge_diff': 1.0 - same.sum() / max(ok.sum(), 1),
+            'dR_med': float(np.median(d)) if d.size else math.nan,
+            'dR_max': float(d.max()) if d.size else math.nan,
+            'err': float(per.mean()) if per.size else math.nan}
+
+
+def orbit_agreement(orb, ref):
+    n = min(len(orb[0]), len(ref[0]))
+    diff = np.flatnonzero(orb[0][:n] != ref[0][:n])
+    return int(diff[0]) if diff.size else n - 1
+
+
+def band_error(orb, ref_ls):
+    ls = limit_set_from_orbit(*orb)
+    worst = 0.0
+    for e in set(ls.bands) | set(ref_ls.bands):
+        if e not in ls.bands or e not in ref_ls.bands:
+            return math.inf
+        a, b = ls.bands[e], ref_ls.bands[e]
+        worst = max(worst, abs(a[0] - b[0]), abs(a[1] - b[1]))
+    return worst * 1000
+
+
+def evaluate(label, group, model, ref, states, start, orbit_throws, band_throws):
+    res, us = timed_batch(model, *states)
+    row = {'group': group, 'config': label, 'us': us}
+    row.update(compare(res, ref['throws']))
+    orb = orbit_of(model, start, orbit_throws)
+    row['orbit'] = orbit_agreement(orb, ref['orbit'])
+    long = orbit_of(model, start, band_throws)
+    row['band'] = band_error(long, ref['ls'])
+    return row
+
+
+def reference(model, states, start, orbit_throws, band_throws):
+    res = model.f_batch(*states)
+    orb = orbit_of(model, start, orbit_throws)
+    long = orbit_of(model, start, 2 * band_throws)
+    return {'throws': res, 'orbit': orb, 'ls': limit_set_from_orbit(*long)}
+
+
+def floor_row(group, model, ref, start, orbit_throws, band_throws):
+    """Run the reference physics itself from a start moved by 1 nm.
+
+    Shows how soon orbits part and how much the bands of a finite orbit scatter: the floor
+    under every other row.
+    """
+    moved = (start[0], start[1] + 1e-9)
+    orb = orbit_of(model, moved, orbit_throws)
+    long = orbit_of(model, moved, band_throws)
+    return {'group': group, 'config': 'floor: reference from a start 1 nm away', 'us': math.nan,
+            'edge_diff': 0.0, 'dR_med': math.nan, 'dR_max': math.nan, 'err': math.nan,
+            'orbit': orbit_agreement(orb, ref['orbit']), 'band': band_error(long, ref['ls'])}
+
+
+# ----------------------------------------------------------------------------------- pymunk
+def pymunk_throw(part, edge, R, w, h, g, dt, iterations, t_max=4.0, still=0.15):
+    """Throw and catch in pymunk from the impulsive release state of eqs 5-6.
+
+    The part is a convex Poly (mass 1, moment rho^2), the arm a static segment, friction 1e3
+    (effectively sticking) and elasticity 0. Returns (edge, R, time simulated) once the part
+    has been still (|v| < 1 mm/s, |omega| < 0.02 rad/s) for ``still`` seconds.
+    """
+    import pymunk
+    space = pymunk.Space()
+    space.gravity = (0.0, g)
+    space.iterations = iterations
+    space.collision_slop = 1e-5          # m; the default 0.1 is meant for pixels
+    arm = pymunk.Segment(space.static_body, (-1.0, h), (2.0, h), 0.0)
+    arm.friction = 1000.0
+    arm.elasticity = 0.0
+    body = pymunk.Body(1.0, part.rho2)
+    verts = [(float(u), float(v)) for u, v in zip(part.U[edge], part.V[edge])]
+    shape = pymunk.Poly(body, verts, radius=0.0)
+    shape.friction = 1000.0
+    shape.elasticity = 0.0
+    x0, y0, phi0, vx, vy, om = release_state(edge, R, w, h, 0.0, part.d)
+    body.position = (x0, y0)
+    body.angle = phi0
+    body.velocity = (vx, vy)
+    body.angular_velocity = om
+    space.add(arm, body, shape)
+    t = 0.0
+    quiet = 0.0
+    while t < t_max:
+        space.step(dt)
+        t += dt
+        v = body.velocity
+        if math.hypot(v.x, v.y) < 1e-3 and abs(body.angular_velocity) < 0.02:
+            quiet += dt
+            if quiet >= still:
+                break
+        else:
+            quiet = 0.0
+    # Resting edge: the rest pose whose angle is nearest to the body's angle.
+    ang = body.angle
+    best, err = -1, math.inf
+    for j in part.stable_edges:
+        target = part.rest_angle[j] - part.rest_angle[edge]
+        dev = abs(math.remainder(ang - target, 2 * math.pi))
+        if dev < err:
+            best, err = j, dev
+    return best, float(body.position.x), t
+
+
+def pymunk_rows(model, states, ref, configs):
+    rows = []
+    part = model.part
+    for dt, iters in configs:
+        pymunk_throw(part, int(states[0][0]), float(states[1][0]), model.w, model.h, model.g,
+                     dt, iters)
+        t0 = time.perf_counter()
+        out = [pymunk_throw(part, int(e), float(r), model.w, model.h, model.g, dt, iters)
+               for e, r in zip(*states)]
+        us = (time.perf_counter() - t0) / len(out) * 1e6
+        res = {'edge': np.array([o[0] for o in out]), 'R': np.array([o[1] for o in out]),
+               'status': np.zeros(len(out), dtype=int)}
+        row = {'group': 'pymunk', 'config': f'dt={dt:g} s, iterations={iters}', 'us': us,
+               'orbit': '-', 'band': '-'}
+        row.update(compare(res, ref))
+        row['sim_s'] = float(np.mean([o[2] for o in out]))
+        rows.append(row)
+    return rows
+
+
+# ----------------------------------------------------------------------------------- main
+def fmt(v, spec):
+    if isinstance(v, str):
+        return v
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return 'inf' if v == math.inf else '-'
+    return format(v, spec)
+
+
+def table(rows, title):
+    print(f'\n### {title}\n')
+    print('| config | time/throw (us) | edge differs | median abs dR (mm) | max abs dR (mm) '
+          '| mean error (mm) | orbit agrees (throws) | band error (mm) |')
+    print('|---|---:|---:|---:|---:|---:|---:|---:|')
+    for r in rows:
+        print(f"| {r['config']} | {fmt(r['us'], '.1f')} | {fmt(r['edge_diff'] * 100, '.1f')} % "
+              f"| {fmt(r['dR_med'], '.2e')} | {fmt(r['dR_max'], '.2e')} | {fmt(r['err'], '.2e')} "
+              f"| {fmt(r['orbit'], 'd')} | {fmt(r['band'], '.2e')} |")
+
+
+def pareto_plot(rows, path):
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(9, 6))
+    markers = {'base: advancement': 'o', 'base: scan': 's', 'backplate_friction': '^',
+               'impact_restitution': 'v', 'pymunk': 'X'}
+    for group, mk in markers.items():
+        sel = [r for r in rows if r['group'] == group and math.isfinite(r['us'])]
+        if not sel:
+            continue
+        # mean error per throw (mm), a wrong edge counting 10 mm; floored so exact rows show
+        err = [max(r['err'], 1e-12) for r in sel]
+        ax.loglog([r['us'] for r in sel], err, mk, label=group, ms=8, alpha=0.8)
+        for r, e in zip(sel, err):
+            label = r['config'].split(' (')[0].replace('advancement, ', '').replace('scan, ', '')
+            ax.annotate(label, (r['us'], e), fontsize=6, alpha=0.7, xytext=(3, 3),
+                        textcoords='offset points')
+    ax.set_xlabel('time per throw (us, one core)')
+    ax.set_ylabel(f'mean error per throw (mm; wrong edge = {WRONG_EDGE_MM:g} mm; floor 1e-12)')
+    ax.set_title('What accuracy costs: throwmap knobs and effects vs pymunk')
+    ax.grid(True, which='both', alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    os.makedirs(os.path.dirname(path) or '.', exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--quick', action='store_true', help='fewer states, knobs and throws')
+    parser.add_argument('--out', default=str(ROOT / 'docs' / 'accuracy_pareto.png'))
+    args = parser.parse_args()
+    quick = args.quick
+    n_states = 100 if quick else 1000
+    orbit_throws = 100 if quick else 300
+    band_throws = 200 if quick else 1000
+    print(f'python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores; '
+          f'{n_states} random states, orbits of {orbit_throws} throws, bands from '
+          f'{band_throws} throws{" (--quick)" if quick else ""}')
+    rows = []
+
+    # --- base model: conservative advancement vs fixed-step scan (triangle)
+    tri = load('triangle')
+    states = random_states(tri.model, n_states)
+    start = tri.default_start()
+    ref_scene = load('triangle', accuracy={'contact_time_tol': 1e-15})
+    ref = reference(ref_scene.model, states, start, orbit_throws, band_throws)
+    base_rows = [floor_row('base: advancement', ref_scene.model, ref, start, orbit_throws,
+                           band_throws)]
+    for tol in ((1e-6, 1e-12) if quick else (1e-4, 1e-6, 1e-9, 1e-12)):
+        s = load('triangle', accuracy={'contact_time_tol': tol})
+        base_rows.append(evaluate(f'advancement, contact_time_tol={tol:g}', 'base: advancement',
+                                  s.model, ref, states, start, orbit_throws, band_throws))
+    steps = (1e-2, 1e-3, 1e-4) if quick else (2e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4)
+    for step in steps:
+        s = load('triangle', accuracy={'contact_method': 'scan', 'contact_scan_step': step,
+                                       'contact_root_tol': 1e-12})
+        base_rows.append(evaluate(f'scan, step={step:g} s', 'base: scan', s.model, ref, states,
+                                  start, orbit_throws, band_throws))
+    table(base_rows, 'Base model (triangle): contact finder (reference: advancement, '
+          'tol 1e-15 s)')
+    rows += base_rows
+
+    # --- effects: what each one costs at the default knobs (triangle; no effect = base)
+    eff_rows = []
+    effect_sets = [
+        ('none (base ThrowModel)', {}),
+        ('sensor_noise', {'effects': ['sensor_noise'], 'sensor': {'false_positive': 0.01}}),
+        ('finite_arm', {'effects': ['finite_arm'], 'arm': {'length_cm': 40}}),
+        ('release_noise', {'effects': ['release_noise'],
+                           'noise': {'release_speed_sd_deg': 2}}),
+        ('finite_carry', {'effects': ['finite_carry'], 'contact': {'mu': 0.8},
+                          'throw': {'carry': {'release_angle_deg': 3}}}),
+        ('impact_restitution (e=0, mu=inf)', {'effects': ['impact_restitution'],
+                                              'contact': {'restitution': 0.0}}),
+        ('backplate_friction', {'effects': ['backplate_friction'], 'gravity': None,
+                                'plate': {'inclination_deg': 80, 'g0': 9.81, 'mu': 0.1}}),
+        ('all six', {'effects': ['backplate_friction', 'impact_restitution', 'finite_carry',
+                                 'finite_arm', 'release_noise', 'sensor_noise'],
+                     'gravity': None, 'plate': {'inclination_deg': 80, 'g0': 9.81, 'mu': 0.1},
+                     'contact': {'mu': 0.8, 'restitution': 0.2},
+                     'throw': {'carry': {'release_angle_deg': 3}}, 'arm': {'length_cm': 40},
+                     'noise': {'release_speed_sd_deg': 2},
+                     'sensor': {'false_positive': 0.01}}),
+    ]
+    print('\n### Effects: time per throw at the default knobs (triangle)\n')
+    print('| effects | model | time/throw (us) | f(i, R) one call (us) |')
+    print('|---|---|---:|---:|')
+    for label, changes in effect_sets:
+        s = load('triangle', **copy.deepcopy(changes))
+        m = s.model
+        st = random_states(m, n_states if not m.__class__.__name__ == 'EffectModel'
+                           or not getattr(m.effects, 'general', False) else n_states // 2)
+        ok = np.array([m.domain_error(int(e), float(r)) is None for e, r in zip(*st)])
+        st = (st[0][ok], st[1][ok])
+        _, us = timed_batch(m, *st)
+        m.f(int(st[0][0]), float(st[1][0]))
+        t0 = time.perf_counter()
+        for e, r in zip(st[0][:200], st[1][:200]):
+            try:
+                m.f(int(e), float(r))
+            except ValueError:
+                pass
+        one = (time.perf_counter() - t0) / min(200, len(st[0])) * 1e6
+        print(f'| {label} | {type(m).__name__} | {us:.1f} | {one:.1f} |')
+        eff_rows.append((label, us))
+
+    # --- backplate_friction knobs (experiment scene)
+    exp_ref_knobs = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'plate_quadrature': 8,
+                     'contact_root_tol': 1e-13}
+    exp_states = random_states(tri.model, n_states // 4, seed=1, r_hi=0.28)
+    exp_start = (1, 0.12)
+    ref_e = reference(load('experiment', accuracy=exp_ref_knobs).model, exp_states, exp_start,
+                      orbit_throws, band_throws)
+    fr_rows = [floor_row('backplate_friction', load('experiment', accuracy=exp_ref_knobs).model,
+                         ref_e, exp_start, orbit_throws, band_throws)]
+    s = load('experiment')
+    fr_rows.append(evaluate('defaults (' + ', '.join(
+        f'{k}={getattr(s.model.knobs, k):g}' for k in exp_ref_knobs) + ')',
+        'backplate_friction', s.model, ref_e, exp_states, exp_start, orbit_throws, band_throws))
+    # All knobs together, coarse to fine: the operating points a user would pick (the plot).
+    presets = [('coarse', {'integrator_step': 5e-3, 'roll_step': 5e-3, 'plate_quadrature': 2}),
+               ('fast', {'integrator_step': 2e-3, 'roll_step': 2e-3, 'plate_quadrature': 3}),
+               ('fine', {'integrator_step': 2e-4, 'roll_step': 2e-4, 'plate_quadrature': 6}),
+               ('finest', {'integrator_step': 1e-4, 'roll_step': 1e-4, 'plate_quadrature': 8})]
+    for label, knobs in (presets[1:3] if quick else presets):
+        s = load('experiment', accuracy=knobs)
+        fr_rows.append(evaluate(f'{label} (' + ', '.join(f'{k}={v:g}' for k, v in knobs.items())
+                                + ')', 'backplate_friction', s.model, ref_e, exp_states,
+                                exp_start, orbit_throws, band_throws))
+    sweeps = [] if quick else [
+              ('integrator_step', (5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4), 's'),
+              ('roll_step', (5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4), 's'),
+              ('plate_quadrature', (1, 2, 3, 4, 6), ''),
+              ('contact_root_tol', (1e-5, 1e-7, 1e-9, 1e-12), 's')]
+    for knob, values, unit in sweeps:
+        for v in values:
+            knobs = dict(exp_ref_knobs)
+            knobs[knob] = v
+            s = load('experiment', accuracy=knobs)
+            fr_rows.append(evaluate(f'{knob}={v:g} {unit}'.strip(), 'isolated knob',
+                                    s.model, ref_e, exp_states, exp_start, orbit_throws,
+                                    band_throws))
+    table(fr_rows, 'backplate_friction (experiment scene): presets (all knobs together), then '
+          'each knob alone from the reference (steps 5e-5 s, quadrature 8, root 1e-13 s)')
+    rows += fr_rows
+
+    # --- impact_restitution knobs (rectangle scene)
+    rect = load('rectangle')
+    rect_states = random_states(rect.model, n_states // 4, seed=2, r_hi=0.25)
+    rect_start = rect.default_start()
+    rect_ref_knobs = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'contact_root_tol': 1e-13,
+                      'settle_energy': 1e-10}
+    ref_r = reference(load('rectangle', accuracy=rect_ref_knobs).model,
+                      rect_states, rect_start, orbit_throws, band_throws)
+    re_rows = [floor_row('impact_restitution', load('rectangle', accuracy=rect_ref_knobs).model,
+                         ref_r, rect_start, orbit_throws, band_throws)]
+    s = load('rectangle')
+    re_rows.append(evaluate('defaults', 'impact_restitution', s.model, ref_r, rect_states,
+                            rect_start, orbit_throws, band_throws))
+    for label, knobs in ((('fast', {'integrator_step': 2e-3, 'roll_step': 2e-3}),
+                          ('fine', {'integrator_step': 2e-4, 'roll_step': 2e-4}))
+                         if quick else
+                         (('coarse', {'integrator_step': 5e-3, 'roll_step': 5e-3}),
+                          ('fast', {'integrator_step': 2e-3, 'roll_step': 2e-3}),
+                          ('fine', {'integrator_step': 2e-4, 'roll_step': 2e-4}),
+                          ('finest', {'integrator_step': 1e-4, 'roll_step': 1e-4}))):
+        s = load('rectangle', accuracy=knobs)
+        re_rows.append(evaluate(f'{label} (' + ', '.join(f'{k}={v:g}' for k, v in knobs.items())
+                                + ')', 'impact_restitution', s.model, ref_r, rect_states,
+                                rect_start, orbit_throws, band_throws))
+    sweeps = [] if quick else [('integrator_step', (5e-3, 2e-3, 1e-3, 5e-4, 2e-4), 's'),
+                               ('roll_step', (5e-3, 2e-3, 1e-3, 5e-4, 2e-4), 's'),
+                               ('settle_energy', (1e-4, 1e-6, 1e-8), 'J/kg')]
+    for knob, values, unit in sweeps:
+        for v in values:
+            knobs = dict(rect_ref_knobs)
+            knobs[knob] = v
+            s = load('rectangle', accuracy=knobs)
+            re_rows.append(evaluate(f'{knob}={v:g} {unit}', 'isolated knob', s.model,
+                                    ref_r, rect_states, rect_start, orbit_throws, band_throws))
+    table(re_rows, 'impact_restitution (rectangle scene, e = 0.3, mu = 0.6, unilateral): '
+          'presets, then each knob alone from the reference (steps 5e-5 s, root 1e-13 s, '
+          'settle_energy 1e-10 J/kg)')
+    rows += re_rows
+
+    # --- pymunk against the base model (triangle)
+    n_py = 20 if quick else 100
+    py_states = (states[0][:n_py], states[1][:n_py])
+    ref_py = ref_scene.model.f_batch(*py_states)
+    configs = ([(1e-3, 10), (1e-4, 10)] if quick else
+               [(2e-3, 10), (1e-3, 10), (5e-4, 10), (2e-4, 10), (1e-4, 10), (1e-4, 30),
+                (5e-5, 30)])
+    py_rows = pymunk_rows(ref_scene.model, py_states, ref_py, configs)
+    print(f'\n### pymunk {__import__("pymunk").version} (triangle, {n_py} throws per config; '
+          'reference: the base model)\n')
+    print('| config | time/throw (us) | simulated s/throw | edge differs | median abs dR (mm) '
+          '| max abs dR (mm) | mean error (mm) |')
+    print('|---|---:|---:|---:|---:|---:|---:|')
+    for r in py_rows:
+        print(f"| {r['config']} | {r['us']:.0f} | {r['sim_s']:.2f} | "
+              f"{r['edge_diff'] * 100:.1f} % | {fmt(r['dR_med'], '.2e')} | "
+              f"{fmt(r['dR_max'], '.2e')} | {fmt(r['err'], '.2e')} |")
+    rows += py_rows
+    pareto_plot(rows, args.out)
+    print(f'\nwrote {args.out}')
+
+
+if __name__ == '__main__':
+    main()
