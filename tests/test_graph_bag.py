@@ -71,12 +71,12 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     wait_for_monitor(ros, ready)
     rec = graph.start('feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
                       '__ns:=/feeder', name='recorder')
-    # Two more: selected topics until 10 messages; everything but /diagnostics for 3 s.
+    # Two more: selected topics until 10 messages; everything but /diagnostics for 6 s.
     few = graph.start('feeder_monitor', 'bag_recorder', tmp_path / 'few', '--topics',
                       'proximity', '/feeder/cycle_status', '--max-messages', '10',
                       '--ros-args', '-r', '__ns:=/feeder', '-r', '__node:=few_recorder',
                       name='few')
-    timed = graph.start('feeder_monitor', 'bag_recorder', tmp_path / 'timed', '--duration', '3',
+    timed = graph.start('feeder_monitor', 'bag_recorder', tmp_path / 'timed', '--duration', '6',
                         '--exclude', '^/diagnostics$', '--ros-args', '-r', '__ns:=/feeder',
                         '-r', '__node:=timed_recorder', name='timed')
     ros.spin_until(lambda: all(recorder_subscribed(ros, t) for t in EXPECTED), STARTUP_TIMEOUT,
@@ -95,7 +95,7 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     assert rec.wait(timeout=10) == 0
     assert f'in {bag}' in graph.log(rec) and 'stopped (SIGTERM)' in graph.log(rec)
     assert few.wait(timeout=10) == 0 and '(10 messages)' in graph.log(few)
-    assert timed.wait(timeout=10) == 0 and '(3.0 s)' in graph.log(timed)
+    assert timed.wait(timeout=20) == 0 and '(6.0 s)' in graph.log(timed)
     with Reader(tmp_path / 'few') as reader:
         assert {c.topic: c.msgcount for c in reader.connections} == {
             '/feeder/proximity': 5, '/feeder/cycle_status': 5}
