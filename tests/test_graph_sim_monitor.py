@@ -71,7 +71,7 @@ def test_ready_exactly_when_the_part_is_seen_on_the_goal_edge(graph, ros):
     assert [status_values(s)['sensor'] == '1' for s in statuses.msgs] == truth
     for p in prox.msgs:
         assert p.radiation_type == Range.INFRARED and p.header.frame_id == 'feeder_sensor'
-        assert p.min_range == p.max_range == pytest.approx(radius, rel=1e-6)   # float32
+        assert p.min_range == p.max_range == pytest.approx(0.02, rel=1e-6)     # float32
 
     # One edge1_ready per cycle after the initial latched one; align them at the end (the
     # monitor may have missed the very first cycles while discovery finished).

@@ -257,3 +257,19 @@ def test_statuses_without_stamp_pair_in_order():
     out = p.add_status(1, True, None, None, 'completed', now=0.0)
     out += p.add_status(2, True, None, None, 'completed', now=0.0)
     assert [(c.seq, c.detected) for c in out] == [(1, False), (2, True)]
+
+
+def test_config_yaml_and_docs_match_the_table():
+    import pathlib
+    import yaml
+    from feeder_monitor.params import MONITOR_PARAMS
+    here = pathlib.Path(__file__).resolve()
+    data = yaml.safe_load((here.parents[1] / 'config' / 'monitor.yaml').read_text())
+    params = data['/**/feeder_monitor']['ros__parameters']
+    specs = {s.name: s for s in MONITOR_PARAMS}
+    assert set(params) == set(specs) - {'scene'}
+    for name, value in params.items():
+        assert value == specs[name].default and type(value) is type(specs[name].default), name
+    docs = (here.parents[3] / 'docs' / 'nodes.md').read_text()
+    for name in specs:
+        assert f'`{name}`' in docs, f'{name} missing from docs/nodes.md'

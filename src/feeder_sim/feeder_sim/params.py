@@ -66,6 +66,9 @@ SIM_PARAMS = (
               constraints='(start_edge, start_radius) in the domain of f'),
     ParamSpec('sensor_radius', 0.0, 'arm coordinate x of the proximity sensor, m; 0: the '
               "analysis's choice (throwmap sensor design)", minimum=0.0, maximum=10.0),
+    ParamSpec('sensor_range_m', 0.02, 'hardware mode: fixed distance of the proximity ranger, '
+              "m (Range.min_range = max_range), as the driver's parameter", minimum=0.001,
+              maximum=10.0),
     ParamSpec('cycle_period', 1.0, 'hardware mode: seconds between cycles while enabled',
               minimum=0.005, maximum=60.0),
     ParamSpec('markers_period', 0.1, 'at most one markers message per this many seconds (the '

@@ -81,6 +81,7 @@ class SimNode(LifecycleNode):
         declare(self, self._specs['start_edge'], edge0)
         declare(self, self._specs['start_radius'], r0)
         declare(self, self._specs['sensor_radius'])
+        declare(self, self._specs['sensor_range_m'])
         declare(self, self._specs['cycle_period'])
         declare(self, self._specs['markers_period'])
         period = declare(self, self._specs['diagnostics_period'])
@@ -284,7 +285,7 @@ class SimNode(LifecycleNode):
         rng.header.frame_id = SENSOR_FRAME
         rng.radiation_type = Range.INFRARED
         rng.field_of_view = 0.0
-        rng.min_range = rng.max_range = float(self._analysis.sensor.radius)
+        rng.min_range = rng.max_range = float(self._param('sensor_range_m'))
         rng.range = float('-inf') if throw.detected else float('inf')
         status = self._cycle_status(stamp, True, 'completed', '1' if throw.detected else '0')
         self._pubs['proximity'].publish(rng)        # back to back: the monitor needs both

@@ -58,3 +58,20 @@ def test_check_range():
     assert spec.check_range(1.0) is None
     assert 'below' in spec.check_range(-0.1)
     assert 'above' in spec.check_range(2.5)
+
+
+def test_config_yaml_matches_the_table():
+    import yaml
+    path = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'sim.yaml'
+    data = yaml.safe_load(path.read_text())
+    specs = {s.name: s for s in SIM_PARAMS}
+    assert set(data) == {'/**/feeder_sim', '/**/feeder_driver'}
+    for node, section in data.items():
+        params = section['ros__parameters']
+        assert set(params) <= set(specs), set(params) - set(specs)
+        for name, value in params.items():
+            if name == 'hardware_mode':
+                assert value == (node == '/**/feeder_driver')
+            else:
+                assert value == specs[name].default, (node, name)
+            assert type(value) is type(specs[name].default), (node, name)
