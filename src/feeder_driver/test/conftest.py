@@ -14,6 +14,7 @@
 
 """Fixtures of the feeder_driver tests: source on sys.path, DDS on loopback, own domain."""
 
+import gc
 import os
 import pathlib
 import sys
@@ -48,3 +49,16 @@ def sensor_radius(scene_path):
 @pytest.fixture
 def link_path(tmp_path):
     return str(tmp_path / 'feeder-tty')
+
+
+@pytest.fixture(autouse=True)
+def collect_ros_garbage():
+    """
+    Collect the garbage of each test before the next one starts.
+
+    rclpy nodes are reference cycles, freed only by the garbage collector. Left alone, that may
+    happen in a forked child (flake8's worker pool in the linter tests), where destroying DDS
+    handles crashes the child and hangs the pool.
+    """
+    yield
+    gc.collect()

@@ -108,6 +108,7 @@ class Harness:
         self.probe.destroy_node()
         self.executor.shutdown()
         rclpy.shutdown(context=self.ctx)
+        self.ctx.destroy()
 
 
 @pytest.fixture
