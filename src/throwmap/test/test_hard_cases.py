@@ -932,3 +932,29 @@ def test_regression_a_1024_gon_settles_within_the_default_impact_cap():
         capped.f(0, model.r_grasp[0])
     assert str(err.value) == ('catch after (0, 16.2974 m) did not settle within '
                               'accuracy.max_impacts = 100000 impacts; raise it')
+
+
+def test_regression_rolling_ends_are_exact_with_the_cm_next_to_a_vertex():
+    """
+    Regression: with the CM 2e-13 m from a vertex the rolling ends were off by 3e-8 rad.
+
+    The two ends of the rolling range about V^p (E^p flat, E^{p-1} flat) must differ by exactly
+    the exterior angle at V^p, or the net rotation no longer maps resting poses onto each other.
+    alpha_ccw_end used d^{p-1}, which is computed from V^{p-1}: its rounding (1e-16 of a 1 mm
+    edge) is a large angle when |CM - V^p| is 1e-13 m. Found by the fuzzer (a pose error of
+    1.3e-7 rad); both ends now come from V^p's own offset.
+    """
+    c, s = math.cos(0.3), math.sin(0.3)
+    tri = np.array([[0.0, 0.0], [1e-3, 0.0], [0.2e-3, 0.9e-3]]) @ np.array([[c, s], [-s, c]])
+    inward = (tri[1] - tri[0]) / np.linalg.norm(tri[1] - tri[0]) + tri[2] / np.linalg.norm(tri[2])
+    part = Part(tri, cm=tri[0] + 2e-13 * inward / np.linalg.norm(inward),
+                radius_of_gyration=3e-4)
+    for p in range(part.n):
+        exterior = part.rest_angle[p - 1] - part.rest_angle[p]
+        ends = part.alpha_ccw_end[p] - part.alpha_cw_end[p]
+        assert math.remainder(exterior - ends, 2 * math.pi) == pytest.approx(0, abs=1e-14)
+    model = ThrowModel(part, -0.5 * part.d_min, 20.0, G)
+    for edge in part.stable_edges:
+        lo = max(model.r_grasp[edge], -part.u_l[edge])
+        for R in lo * (1 + np.logspace(-6, 1, 15)):
+            assert_valid(model, model.throw(edge, R))

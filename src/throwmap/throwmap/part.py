@@ -183,9 +183,12 @@ class Part:
         self.stable_edges = [int(i) for i in np.flatnonzero(self.stable)]
         # Angle of (CM - V^p) from the arm when E^p (p is its left vertex) or E^{p-1}
         # (p is its right vertex) lies flat: the two ends of the rolling range about V^p.
+        # Both from V^p's own offset (d^{p-1} comes from V^{p-1}'s; the same number in exact
+        # arithmetic, but with a CM very close to V^p its rounding, ~1e-16 of the edge, would
+        # be a large angle, and the ends would not differ by exactly the exterior angle).
         idx = np.arange(n)
-        self.alpha_cw_end = np.arctan2(d, -self.u_l)
-        self.alpha_ccw_end = np.arctan2(d[idx - 1], -self.u_r[idx - 1])
+        self.alpha_cw_end = np.arctan2(-self.V[idx, idx], -self.U[idx, idx])
+        self.alpha_ccw_end = np.arctan2(-self.V[idx - 1, idx], -self.U[idx - 1, idx])
         # Impulse ratio omega+/omega- for a sticking impact at the next vertex while rolling
         # about V^p (from conservation of angular momentum about the new contact).
         dots = rel @ rel.T
