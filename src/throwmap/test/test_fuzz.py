@@ -38,7 +38,7 @@ import math
 import os
 import warnings
 
-from hypothesis import assume, example, HealthCheck, note, settings, strategies as st
+from hypothesis import assume, event, example, HealthCheck, note, settings, strategies as st
 from hypothesis import given
 import numpy as np
 import pytest
@@ -60,7 +60,9 @@ PROFILE = settings.get_profile('throwmap-long' if LONG else 'throwmap-ci')
 
 KINDS = ('random', 'regular', 'spiky', 'thin', 'collinear', 'cm_near_edge', 'cm_near_vertex',
          'cm_anywhere')
-unit = st.floats(0.0, 1.0)
+# Draws on a 1e-12 grid: a raw float can be subnormal (1e-323), which a rescaling flushes
+# to zero, turning two distinct corners into one (found by the long run).
+unit = st.floats(0.0, 1.0).map(lambda u: round(u, 12))
 
 
 @st.composite
@@ -185,9 +187,9 @@ SHORT_HOP = dict(HOURS, w=1e-8, g=-2.2, h_frac=0.18, edge_pick=0.3,   # the brac
                                                        [0.008, 0.021], [0.008, 0.044],
                                                        [0.0, 0.044], [0.0, 0.0]])
 # Found by the long run: a 1 mm part whose CM is 1e-13 of its size from the vertical of a
-# vertex has R_grasp = 6e7 m; thrown from there at 50 rad/s it flies for 28 years (7e9 turns),
-# so rounding moves its landing phase by ~1e-5 rad and a x10 rescaling may land elsewhere.
-# Not a library bug: the test must look for the nearby discontinuity at R (1 +- 1e-13).
+# vertex has R_grasp = 6e7 m; thrown from there at 50 rad/s it flies for 28 years (7e9 turns).
+# Its landing is below double precision (heights near the arm round to +-270 m), so a x10
+# rescaling lands elsewhere. Not a library bug: the test must not compare such landings.
 DECADES = {'kind': 'cm_near_vertex', 'cm': None, 'rho': None, 'scale': 0.001,
            'vertices': [[0.6865496962822613, 0.13656322541128976],
                         [0.5842728376307853, 0.31230033814722347],
@@ -202,6 +204,24 @@ DECADES = {'kind': 'cm_near_vertex', 'cm': None, 'rho': None, 'scale': 0.001,
            'h_frac': 0.188125, 'w': 50.11872336272725, 'g': -6.853895838650082, 'mu': None,
            'rule': 'full', 'edge_pick': 0.0, 'log_beyond': -4.6875,
            'extra': (0.0, 1.0, 0.125, False)}
+YEARS = dict(DECADES, scale=0.19809567785503387, h_frac=0.125, w=22.17677741246611,
+             g=-3.019985782090914, log_beyond=0.13671875,
+             extra=(0.25, 0.167577637424, 0.375, False),
+             vertices=[[0.41542523394709674, 0.41542523394709663],
+                       [0.420105586146023, 0.8346064564295596],
+                       [0.15307337294603596, 0.36955181300451473],
+                       [0.17096188876030136, 0.9852776423889412],
+                       [-0.6501155285418235, 0.4343933083512606],
+                       [-0.5387858323250994, 0.11049808543929579],
+                       [-1.0103336092965664e-16, -0.55],
+                       [0.33587572106361, -0.3358757210636102],
+                       [0.8617971835363705, -0.21204212894795077],
+                       [0.775, -1.8982025386783975e-16]])      # 10 years from R = 2e7 m
+# Found by the long run (bug: rolling ends off by 1.3e-7 rad with the CM 1.8e-13 m from V0).
+CM_AT_A_VERTEX = dict(HOURS, kind='cm_near_edge', scale=0.001, h_frac=0.001, w=0.01, g=-0.1,
+                      edge_pick=0.0, log_beyond=-12.0, extra=(0.0, 0.0, 0.0),
+                      vertices=[[1.0, 0.0], [1.0, 6.283185307179586e-09],
+                                [-7.347880794884119e-17, -0.4]])
 
 
 @PROFILE
@@ -209,6 +229,8 @@ DECADES = {'kind': 'cm_near_vertex', 'cm': None, 'rho': None, 'scale': 0.001,
 @example(HOURS)
 @example(SHORT_HOP)
 @example(DECADES)
+@example(YEARS)
+@example(CM_AT_A_VERTEX)
 def test_fuzz_throw_map(case):
     """One random throw: documented errors only, invariants, determinism, continuity, scale."""
     try:
@@ -228,9 +250,16 @@ def test_fuzz_throw_map(case):
     assert (batch['edge'][0], batch['R'][0], batch['status'][0]) == (res.edge, res.R, 0)
     _, radii, _, status, _ = model.orbits([edge], [R], 1)
     assert status[0] == 0 and radii[0, 1] == res.R
+    # Near the landing the height R w t + g t^2 / 2 + ... cancels to the part's size: its
+    # rounding, 1e-16 (R w T + |g| T^2), must be far below the part for the landing to be
+    # determined at all (a flight of 10 years from R = 2e7 m rounds heights to +-13 m).
+    noise = 1.2e-16 * (abs(R) * model.w * res.flight_time + abs(model.g) * res.flight_time ** 2)
+    resolved = noise <= 1e-7 * part.r
+    if not resolved:
+        event('landing below double precision: continuity and x10 scaling not compared')
     # Continuity: with the same discrete outcome R' is locally linear in R.
     near = [model.throw(edge, R * (1 + d)) for d in (1e-9, 1e-11)]
-    if all(signature(r) == signature(res) for r in near):
+    if resolved and all(signature(r) == signature(res) for r in near):
         big, small = (abs(r.R - res.R) for r in near)
         floor = 1e-13 * (abs(R) + abs(res.R) + part.r) * (1 + model.w * res.flight_time)
         assert small <= 0.2 * big + floor, (big, small, floor)
@@ -251,9 +280,12 @@ def test_fuzz_throw_map(case):
         r_min = max(model.r_grasp[edge], -part.u_l[edge])
         assert R / r_min - 1 <= 1e-11 + 1e-14 * part.r / u, (R / r_min - 1, part.r / u)
         return
-    if signature(res10) != signature(res) or abs(res10.R / k10 - res.R) > 1e-9 * (
-            abs(R) + abs(res.R) + part.r) * (1 + model.w * res.flight_time):
-        assert near_a_discontinuity(model, edge, R), (res10.R / k10, res.R)
+    same = signature(res10) == signature(res) and abs(res10.R / k10 - res.R) <= 1e-9 * (
+        abs(R) + abs(res.R) + part.r) * (1 + model.w * res.flight_time)
+    if same or not resolved:
+        return
+    event('rescaled state next to a discontinuity')
+    assert near_a_discontinuity(model, edge, R), (res10.R / k10, res.R)
 
 
 @settings(PROFILE, max_examples=max(25, EXAMPLES // 10))
