@@ -246,7 +246,8 @@ def pareto_plot(rows, path):
         err = [max(r['err'], 1e-12) for r in sel]
         ax.loglog([r['us'] for r in sel], err, mk, label=group, ms=8, alpha=0.8)
         for r, e in zip(sel, err):
-            label = r['config'].split(' (')[0].replace('advancement, ', '').replace('scan, ', '')
+            label = r['config'].split(' (')[0].replace('advancement, ', '').replace(
+                'scan, ', '').replace(' s, iterations=', ' s x')
             ax.annotate(label, (r['us'], e), fontsize=6, alpha=0.7, xytext=(3, 3),
                         textcoords='offset points')
     ax.set_xlabel('time per throw (us, one core)')
