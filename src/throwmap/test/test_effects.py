@@ -369,3 +369,5 @@ def test_cli_reports_lost_states_and_takes_a_seed(tmp_path):
     b = json.loads(run('throw', house, '--edge', '0', '--R', '0.15', '--json', '--seed', '1')[1])
     c = json.loads(run('throw', house, '--edge', '0', '--R', '0.15', '--json', '--seed', '2')[1])
     assert a == b and a['release_speed'] != c['release_speed']
+    code, text = run('grasp', house)
+    assert code == 0 and 'with the finite carry (release at 3 deg' in text

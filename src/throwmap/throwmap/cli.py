@@ -99,7 +99,11 @@ def cmd_grasp(scene, args, out):
                           'd': float(scene.part.d[g.edge]),
                           'u_l': float(scene.part.u_l[g.edge]),
                           'u_r': float(scene.part.u_r[g.edge])} for g in rows],
-               'R_grasp': r_all, 'mu_min': mu_all}, out)
+               'R_grasp': r_all, 'mu_min': mu_all,
+               'carry_R_min': ({str(i): float(scene.model.r_grasp[i])
+                                for i in scene.part.stable_edges}
+                               if getattr(getattr(scene, 'effects', None), 'carry', None)
+                               else None)}, out)
         return 0
     out.write(f'{scene.name}: dynamic grasp (impulse cone, constraints (1)-(4)), h = '
               f'{scene.h * 100:g} cm\n')
@@ -110,6 +114,13 @@ def cmd_grasp(scene, args, out):
               'binding': f'({g.binding})' if g.stable else '-'} for g in rows]
     _table(table, ['edge', 'stable', 'd (cm)', 'R_grasp (cm)', 'mu_min', 'binding'], out)
     out.write(f'all stable edges: R >= {r_all * 100:.3f} cm with mu >= {mu_all:.3f}\n')
+    carry = getattr(getattr(scene, 'effects', None), 'carry', None)
+    if carry is not None:
+        # The impulse cone above is the paper's limit; the scene's carry has its own domain.
+        out.write(f'with the finite carry (release at {math.degrees(carry.release_angle):g} deg, '
+                  f'mu = {scene.model.mu:g}): R >= '
+                  + ', '.join(f'{scene.model.r_grasp[i] * 100:.3f} cm on E{i}'
+                              for i in scene.part.stable_edges) + '\n')
     return 0
 
 
