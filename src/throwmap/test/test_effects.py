@@ -119,7 +119,7 @@ def test_plate_drag_translation_rotation_and_its_torque_about_a_pivot(triangle):
     assert torque_p == pytest.approx(coef * dmean, rel=1e-9)
 
 
-def test_chatterjee_ruina_with_e0_and_wide_cone_is_the_sticking_impact():
+def test_impact_law_with_e0_and_wide_cone_is_the_sticking_impact():
     rng = np.random.default_rng(3)
     checked = 0
     for _ in range(500):

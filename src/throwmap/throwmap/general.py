@@ -409,6 +409,9 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
     exact_rule = e == 0.0 and math.isinf(mu)
     bu = U[edge]
     bv = V[edge]
+    size = 0.0
+    for k in range(n):
+        size = max(size, math.sqrt(bu[k] * bu[k] + bv[k] * bv[k]))
     qu = QU[edge]
     qv = QV[edge]
     qw = QW
@@ -547,7 +550,9 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
                     t += rdt
                     x_lo = min(x_lo, xp)
                     x_hi = max(x_hi, xp)
-                    if turned and coef > 0.0 and not sliding:
+                    # A turning point, or a creep so slow that the drag is in its
+                    # regularised (viscous) zone everywhere on the part.
+                    if (turned or abs(om) * 2.0 * size < vreg) and coef > 0.0 and not sliding:
                         held, dphi = _plate_hold(phi, om, bu[p], bv[p], qu, qv, qw, g, coef)
                         if held:
                             # Near the top the plate's friction can hold the part on a corner
