@@ -32,6 +32,10 @@ if [ "${FEEDER_SKIP_COLCON:-0}" != 1 ] && ls "$ROOT"/src/feeder_*/package.xml >/
   echo "setup: colcon build (ros2_ws)"
   (cd "$ROOT/ros2_ws" && colcon build --event-handlers console_direct- > "$ROOT/ros2_ws/colcon-build.log" 2>&1) \
     || { cat "$ROOT/ros2_ws/colcon-build.log"; echo "setup: colcon build failed"; exit 1; }
+  # colcon's setup scripts read unset variables: source them without `set -u`.
+  case $- in *u*) _feeder_u=1; set +u ;; *) _feeder_u=0 ;; esac
   # shellcheck disable=SC1091
   . "$ROOT/ros2_ws/install/local_setup.bash"
+  [ "$_feeder_u" = 1 ] && set -u
+  unset _feeder_u
 fi
