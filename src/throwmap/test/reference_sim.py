@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Slow, independent reference simulator of one throw and catch (Lynch, Northrop, Pan).
+"""
+Slow, independent reference simulator of one throw and catch (Lynch, Northrop, Pan).
 
 Written from sections II and III of the paper only; nothing is taken from throwmap's kernel or
 model, so that the two can check each other.
@@ -98,7 +99,8 @@ def _wrap(a):
 
 
 def sticking_impact(r, vel, omega, rho2):
-    """Post-impact (xdot, ydot, phidot) of eqs 7-9 for a vertex at r (from the CM) that sticks.
+    """
+    Post-impact (xdot, ydot, phidot) of eqs 7-9 for a vertex at r (from the CM) that sticks.
 
     Unknowns (x+, y+, w+):  x+ - r_y w+ = 0;  y+ + r_x w+ = 0;
     r_x (y+ - y-) - r_y (x+ - x-) - rho^2 (w+ - w-) = 0.
@@ -200,7 +202,8 @@ class ReferenceSimulator:
 
     # ------------------------------------------------------------------ flight (eqs 5-6)
     def _vertex_in_frame(self, i, k):
-        """(c0, u, v) of V^k in F^i, c0 = d^i + v its resting height over the arm.
+        """
+        (c0, u, v) of V^k in F^i, c0 = d^i + v its resting height over the arm.
 
         c0 is exactly 0 for the two vertices of the resting edge (they lie on the arm by
         definition), which keeps their heights right in the first instants of the flight.
@@ -210,7 +213,8 @@ class ReferenceSimulator:
         return c0, u[k], v[k]
 
     def _flight_heights(self, i, R, t, vertex):
-        """Height over the arm at times t of a vertex (c0, u, v) of F^i (eqs 5 and 6).
+        """
+        Height over the arm at times t of a vertex (c0, u, v) of F^i (eqs 5 and 6).
 
         d + R w t + g t^2 / 2 + u sin(w t) + v cos(w t), summed as c0 + (R + u) w t
         + u (sin(w t) - w t) - 2 v sin^2(w t / 2) + g t^2 / 2 so that no term cancels another
@@ -222,7 +226,8 @@ class ReferenceSimulator:
                 + 0.5 * self.g * t * t)
 
     def _flight_time_bound(self, i, R):
-        """Time by which the part has certainly touched the arm.
+        """
+        Time by which the part has certainly touched the arm.
 
         The lowest point of a convex part is at least min_j d^j below its CM in every
         orientation, so a contact has happened once the CM is only that high over the arm.
@@ -232,7 +237,8 @@ class ReferenceSimulator:
         return (vy + math.sqrt(vy * vy + 2.0 * self.g_abs * drop)) / self.g_abs
 
     def _first_root(self, i, R, vertex, ts, hs, bound_dd):
-        """First time the vertex (c0, u, v) reaches the arm, from samples hs at ts.
+        """
+        First time the vertex (c0, u, v) reaches the arm, from samples hs at ts.
 
         Returns (time, whether it was found as a dip between two samples).
         """
@@ -292,7 +298,8 @@ class ReferenceSimulator:
         return best_t, best_k, best_graze
 
     def flight_contact(self, i, R):
-        """(T, k): flight time and first contact vertex, by dense sampling plus bisection.
+        """
+        (T, k): flight time and first contact vertex, by dense sampling plus bisection.
 
         The first pass covers [0, t_up]; when the contact comes much earlier than t_up, a
         second pass samples [0, 1.001 T] again so that dt <= T / samples holds for the flight
@@ -323,7 +330,8 @@ class ReferenceSimulator:
             self.g_abs * self._cm_rel(p, phi)[1]
 
     def _roll_window(self, p, phi):
-        """Body angles [A, B] of rolling about V^p: E^p flat at A, E^{p-1} flat at B.
+        """
+        Body angles [A, B] of rolling about V^p: E^p flat at A, E^{p-1} flat at B.
 
         Rotating about V^p clockwise (phi falling) brings V^{p+1} down onto the arm, which
         happens exactly when E^p is flat; counterclockwise brings V^{p-1} down, E^{p-1} flat.
@@ -335,7 +343,8 @@ class ReferenceSimulator:
         return a, a + ext
 
     def _roll(self, p, phi, omega, start_edge=-1):
-        """Integrate rolling about V^p until a neighbour vertex reaches the arm.
+        """
+        Integrate rolling about V^p until a neighbour vertex reaches the arm.
 
         ``start_edge`` is the edge through V^p lying flat at the start (-1 if none). The state
         is (psi, omega) with psi = phi - phi_start, so that angles near the start keep full
@@ -444,7 +453,8 @@ class ReferenceSimulator:
         return xp + bx
 
     def _settle(self, p, xp, phi, omega, res, start_edge=-1):
-        """Roll and impact from pivot V^p at arm x = xp until settled; fills res.
+        """
+        Roll and impact from pivot V^p at arm x = xp until settled; fills res.
 
         ``start_edge``: the edge through V^p that lies flat at the start, or -1.
         """

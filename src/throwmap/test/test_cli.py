@@ -19,9 +19,9 @@ import json
 import subprocess
 import sys
 
-from throwmap_testing import SCENES
 import pytest
 from throwmap.cli import main
+from throwmap_testing import SCENES
 
 TRIANGLE = str(SCENES / 'triangle.yaml')
 

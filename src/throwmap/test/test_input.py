@@ -16,9 +16,9 @@
 
 import math
 
-from throwmap_testing import TRIANGLE_VERTICES
 import pytest
 from throwmap import DomainError, InputError, Part, Scene, ThrowModel
+from throwmap_testing import TRIANGLE_VERTICES
 
 TRI = {'name': 't', 'part': {'vertices': TRIANGLE_VERTICES}, 'arm': {'offset': -0.005},
        'throw': {'release_speed': 5.5851}, 'gravity': -9.66}

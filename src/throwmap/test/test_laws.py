@@ -16,11 +16,11 @@
 
 import math
 
-from throwmap_testing import PAPER_W, random_convex_vertices, random_state, TRIANGLE_VERTICES
 import numpy as np
 import pytest
 from throwmap import in_dynamic_grasp, Part, ThrowModel
 from throwmap.kernel import sticking_impact
+from throwmap_testing import PAPER_W, random_convex_vertices, random_state, TRIANGLE_VERTICES
 
 
 def _random_models(count, seed):
@@ -86,8 +86,12 @@ def test_resting_pose_after_a_catch_lies_on_the_arm():
 
 @pytest.mark.parametrize('h', [-0.004, -0.002, 0.002, 0.004])
 def test_small_release_speed_jog_shift_matches_first_order_estimate(h):
-    """Prop. IV.4: the left vertex starts with x velocity -h w, so a short hop shifts the part
-    by about -h w T: outward for h < 0, inward for h > 0."""
+    """
+    Check the first-order jog shift -h w T of Prop. IV.4.
+
+    The left vertex starts with x velocity -h w, so a short hop shifts the part by about
+    -h w T: outward for h < 0, inward for h > 0.
+    """
     part = Part(TRIANGLE_VERTICES)
     errors = []
     for w in (0.4, 0.2, 0.1):

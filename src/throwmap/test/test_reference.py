@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The fast throw map (throwmap) against the slow, independent reference (reference_sim.py).
+"""
+The fast throw map (throwmap) against the slow, independent reference (reference_sim.py).
 
 Random convex parts, offsets, release speeds, gravities and start states are thrown by both;
 they must agree on the new edge, jog/flip and R. THROWMAP_LONG=1 runs a much larger sample
@@ -127,7 +128,8 @@ def fast_model(v, cm, rho2, h, w, g):
 
 
 def near_discontinuity(sim, edge, R, fast, r):
-    """Tell whether R is within delta of a jump of the reference, to the fast answer's side.
+    """
+    Tell whether R is within delta of a jump of the reference, to the fast answer's side.
 
     The reference must jump between R - delta and R + delta (other edge or kind, or R' apart
     by more than a continuous f can move: SLOPE_MAX * 2 delta), and the fast answer must be
@@ -284,7 +286,8 @@ def test_reference_part_frames_match_the_library():
 
 
 def _graze_states(count):
-    """States beside a graze, where one vertex dips ~1e-11 m below the arm for ~1e-6 s.
+    """
+    States beside a graze, where one vertex dips ~1e-11 m below the arm for ~1e-6 s.
 
     The flight time T(R) is continuous except at R* where a vertex's lowest point before the
     contact just touches the arm. Bisection on the fast solver's T isolates R*; the states
@@ -323,7 +326,8 @@ def _graze_states(count):
 
 
 def test_grazing_contacts_between_samples_are_found():
-    """Grazing contacts are found and agree with the fast solver on both sides of a graze.
+    """
+    Grazing contacts are found and agree with the fast solver on both sides of a graze.
 
     Between two samples a graze is found by the sampled-minimum refinement; the fast solver
     uses conservative advancement. A root where the vertex approaches the arm at v m/s moves
@@ -381,7 +385,8 @@ def _flat_landing_states(count):
 
 
 def test_flat_landing_and_tip_from_rest_conventions_agree():
-    """Check convention (a) and tipping over from rest.
+    """
+    Check convention (a) and tipping over from rest.
 
     An edge within 1e-9 rad of flat at the end of flight stops flat on it; on an unstable edge
     the part then tips over from rest.
@@ -409,7 +414,8 @@ def test_flat_landing_and_tip_from_rest_conventions_agree():
 
 
 def test_nearly_flat_landings_beyond_the_tolerance_hit_corner_first():
-    """Just outside the 1e-9 rad window (1e-6 r from a flat landing) the flight ends on a corner.
+    """
+    Just outside the 1e-9 rad window (1e-6 r from a flat landing) the flight ends on a corner.
 
     The edge then lands an instant later; both solvers must record the same impacts.
     """

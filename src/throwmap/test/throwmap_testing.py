@@ -12,8 +12,12 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Shared helpers of the throwmap tests (a module of its own: every package's tests have a
-conftest.py, so `from conftest import ...` would be ambiguous when all suites run together)."""
+"""
+Shared helpers of the throwmap tests.
+
+A module of its own: every package's tests have a conftest.py, so `from conftest import ...`
+would be ambiguous when all suites run together.
+"""
 
 import math
 import pathlib
@@ -28,7 +32,7 @@ PAPER_W = math.radians(320.0)
 
 
 def random_convex_vertices(rng, n_max=8, scale=0.05):
-    """A random convex polygon (counterclockwise) of 3..n_max corners around the origin."""
+    """Return a random convex polygon (CCW) of 3..n_max corners around the origin."""
     while True:
         n = int(rng.integers(3, n_max + 1))
         angles = np.sort(rng.uniform(0, 2 * np.pi, n))
@@ -43,7 +47,7 @@ def random_convex_vertices(rng, n_max=8, scale=0.05):
 
 
 def random_state(model, rng, spread=3.0):
-    """A random (edge, R) inside the domain of f."""
+    """Return a random (edge, R) inside the domain of f."""
     part = model.part
     edge = int(rng.choice(part.stable_edges))
     lo = max(model.r_grasp[edge], -part.u_l[edge]) * 1.0001 + 1e-9

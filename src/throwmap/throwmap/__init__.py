@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""throwmap: the throw map of a dynamic parts feeder (Lynch, Northrop, Pan), ROS-free.
+"""
+throwmap: the throw map of a dynamic parts feeder (Lynch, Northrop, Pan), ROS-free.
 
 Quick use::
 
@@ -21,8 +22,8 @@ Quick use::
     scene.model.f(1, 0.12)          # -> (edge', R', 'jog' | 'flip')
 """
 
-from .dynamics import (analyse, Analysis, basin, Basin, default_grid, design_radii, limit_set,
-                       limit_set_from_orbit, LimitSet, orbit, Orbit, sees, sensor_design,
+from .dynamics import (analyse, Analysis, Basin, basin, default_grid, design_radii, limit_set,
+                       limit_set_from_orbit, LimitSet, Orbit, orbit, sees, sensor_design,
                        SensorDesign)
 from .errors import DomainError, InputError, NumericalError, ThrowmapError
 from .grasp import edge_grasp, grasp_table, in_dynamic_grasp, wrench_cone_margins

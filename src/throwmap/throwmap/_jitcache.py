@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Keeps numba's on-disk cache of the effect modules consistent with the code they call.
+"""
+Keeps numba's on-disk cache of the effect modules consistent with the code they call.
 
 numba's cache=True keys a compiled function on its own source file only: when a function it
 calls in another module changes (kernel.settle, say), the stale machine code is loaded as if

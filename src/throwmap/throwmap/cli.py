@@ -24,7 +24,7 @@ import warnings
 
 import numpy as np
 
-from .dynamics import analyse, basin, default_grid, design_radii, limit_set, orbit
+from .dynamics import analyse, basin, default_grid, limit_set, orbit
 from .errors import ThrowmapError
 from .scene import load_scene
 

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Closed-form throws from any ballistic release state (effects that keep flight ballistic).
+"""
+Closed-form throws from any ballistic release state (effects that keep flight ballistic).
 
 kernel.throw_one starts every flight from the impulsive release of eqs 5-6 at theta = 0. The
 effects finite_carry (release at theta_r > 0 along an arm profile), release_noise (per-throw w
@@ -39,7 +40,8 @@ METHOD_SCAN = 1
 
 @njit
 def _height(t, f0, vy, g, phi0, om, u, v):
-    """Return F(t), the vertex height over the arm, as f0 plus terms that vanish at t = 0.
+    """
+    Return F(t), the vertex height over the arm, as f0 plus terms that vanish at t = 0.
 
     As kernel.flight_height: a short hop keeps its relative precision instead of being rounded
     to units of the last place of d.
@@ -59,7 +61,8 @@ def _rate(t, vy, g, phi0, om, u, v):
 
 @njit
 def advance_contact(f0, vy, g, phi0, om, u, v, t_limit, tol_t, max_steps):
-    """Return the first t in (0, t_limit) where F falls through 0 (conservative advancement).
+    """
+    Return the first t in (0, t_limit) where F falls through 0 (conservative advancement).
 
     f0 = F(0) >= 0. Returns inf if there is none, -1 at the step cap.
     """
@@ -95,7 +98,8 @@ def advance_contact(f0, vy, g, phi0, om, u, v, t_limit, tol_t, max_steps):
 
 @njit
 def scan_contact(f0, vy, g, phi0, om, u, v, t_limit, step, root_tol, max_steps):
-    """Return the first sampled downward crossing of F through 0, refined by bisection.
+    """
+    Return the first sampled downward crossing of F through 0, refined by bisection.
 
     Samples every ``step`` seconds, so a dip below the arm shorter than a step goes unseen.
     """
@@ -123,7 +127,8 @@ def scan_contact(f0, vy, g, phi0, om, u, v, t_limit, step, root_tol, max_steps):
 
 @njit
 def release_state(edge, R, w, h, theta_r, d):
-    """Return the release state (x0, y0, phi0, vx, vy, omega) in frame F.
+    """
+    Return the release state (x0, y0, phi0, vx, vy, omega) in frame F.
 
     The part rests on ``edge`` at radius R of an arm at angle theta_r turning at w about the
     pivot (theta_r = 0 is eq 5 at t = 0).
@@ -139,7 +144,8 @@ def release_state(edge, R, w, h, theta_r, d):
 def ballistic_throw(edge, x0, y0, phi0, vx, vy, om, g, h, n, rho2, d, u_l, u_r, stable,
                     edge_len, vrad, acw, accw, kcw, kccw, U, V, first_stable, tol_t, flat_tol,
                     max_steps, max_impacts, method, scan_step, root_tol, rec):
-    """Flight from a release state, first contact, sticking impact and kernel.settle.
+    """
+    Flight from a release state, first contact, sticking impact and kernel.settle.
 
     Returns (status, edge, R, flight time, net rotation, impacts, first contact vertex,
     records written); the records' REC_X columns give every arm coordinate touched.

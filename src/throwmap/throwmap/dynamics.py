@@ -77,7 +77,8 @@ def canonical_cycle(cycle):
 
 @dataclass(frozen=True)
 class LimitSet:
-    """The forward limit set seen from one start, read off a long orbit.
+    """
+    The forward limit set seen from one start, read off a long orbit.
 
     ``pattern``: edges visited by flips around one cycle (canonical rotation), with ``jogs``
     the range of jog counts on each edge before it flips on. ``bands``: per edge (min R,
@@ -116,7 +117,8 @@ class LimitSet:
 
 
 def limit_set_from_orbit(edges, radii, rotations, tail_fraction=0.5, band_tol=None):
-    """Read the limit set off an orbit: its last ``tail_fraction`` is taken as recurrent.
+    """
+    Read the limit set off an orbit: its last ``tail_fraction`` is taken as recurrent.
 
     The transient is the first throw from which every state lies within ``band_tol`` of its
     edge's band (default: 1 % of the limit set's overall R extent, because a quasi-periodic
@@ -156,8 +158,8 @@ def limit_set_from_orbit(edges, radii, rotations, tail_fraction=0.5, band_tol=No
         if p and len(marks) >= 2:
             # With a pattern that visits `key` more than once per cycle, step over whole cycles.
             per_cycle = max(1, sum(1 for e in pattern if e == key))
-            lengths = [marks[k + per_cycle] - marks[k] for k in range(0, len(marks) - per_cycle,
-                                                                         per_cycle)]
+            lengths = [marks[k + per_cycle] - marks[k]
+                       for k in range(0, len(marks) - per_cycle, per_cycle)]
     if not flips:
         # No flip in the tail: a fixed point or a drift on one edge.
         pattern = ()
@@ -196,9 +198,12 @@ class Basin:
 
 
 def default_grid(model, radii_per_edge=50, r_max=None):
-    """Starts: every stable edge x ``radii_per_edge`` radii from just above R_min (R_grasp or the
-    toe-stub bound) to r_max (default: the largest R_max of design_radii, which bounds the
-    invariant set Z of Prop. IV.4)."""
+    """
+    Return the starts of a basin grid: every stable edge x ``radii_per_edge`` radii.
+
+    Radii run from just above R_min (R_grasp or the toe-stub bound) to r_max (default: the
+    largest R_max of design_radii, which bounds the invariant set Z of Prop. IV.4).
+    """
     part = model.part
     if r_max is None:
         r_max = design_radii(model)['R_max_all']
@@ -216,8 +221,12 @@ def default_grid(model, radii_per_edge=50, r_max=None):
 
 def basin(model, start_edges, start_radii, throws=100, reference=None, progress=None,
           chunk=256):
-    """Iterate f from every start. ``reference`` (a LimitSet) sets which bands count as 'in'.
-    ``progress(done, total)`` is called after each chunk of starts."""
+    """
+    Iterate f from every start.
+
+    ``reference`` (a LimitSet) sets which bands count as 'in'. ``progress(done, total)`` is
+    called after each chunk of starts.
+    """
     start_edges = np.asarray(start_edges)
     start_radii = np.asarray(start_radii, dtype=float)
     parts = []
@@ -268,7 +277,8 @@ def _first_flip(model, edge, lo, hi, samples):
 
 
 def design_radii(model, samples=400, max_rounds=50):
-    """R_grasp, R_flip and R_max per stable edge (Proposition IV.4), computed numerically.
+    """
+    R_grasp, R_flip and R_max per stable edge (Proposition IV.4), computed numerically.
 
     R_min^i: lower end of the domain of f on E^i: R_grasp^i, or the toe-stub bound -u_l^i
     (the left vertex must start right of the pivot) when that is larger.
@@ -337,7 +347,8 @@ def design_radii(model, samples=400, max_rounds=50):
 
 @dataclass(frozen=True)
 class SensorDesign:
-    """Where a one-bit sensor proves the part is on the goal edge (paper section V.B).
+    """
+    Where a one-bit sensor proves the part is on the goal edge (paper section V.B).
 
     The sensor at arm coordinate x sees the part when the part's shadow on the arm,
     [R + u_min, R + u_max] of its resting edge, overlaps [x - footprint, x + footprint].
@@ -362,7 +373,7 @@ class SensorDesign:
 
 
 def sees(part, edge, R, x, footprint=0.0):
-    """Does a sensor at arm coordinate x (half-width footprint) see a part resting at (edge, R)?"""
+    """Tell whether a sensor at arm coordinate x (half-width footprint) detects the part."""
     u_min = part.U.min(axis=1)[edge]
     u_max = part.U.max(axis=1)[edge]
     return (R + u_min <= x + footprint) & (R + u_max >= x - footprint)
@@ -400,8 +411,11 @@ def sensor_design(model, ls, goal_edge, footprint=0.0, radius=None, basin_result
 
 @dataclass(frozen=True)
 class Analysis:
-    """Everything the nodes and the CLI derive from a scene: limit set, design radii, basin,
-    sensor placement."""
+    """
+    Everything the nodes and the CLI derive from a scene.
+
+    That is: the limit set, the design radii, a basin and the sensor placement.
+    """
 
     start: tuple
     limit_set: LimitSet
@@ -420,7 +434,8 @@ class Analysis:
 
 
 def analyse(scene, throws=10_000, grid_radii=50, grid_throws=200, progress=None):
-    """Limit set from the scene's start, R_flip/R_max, a basin grid and the sensor design.
+    """
+    Limit set from the scene's start, R_flip/R_max, a basin grid and the sensor design.
 
     The goal edge is the scene's ``sensor.goal_edge``, else the edge that reaches furthest
     out in the limit set (the only one a far sensor can prove).

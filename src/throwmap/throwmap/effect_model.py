@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The throw map with effects: the ThrowModel interface over the effects a scene names.
+"""
+The throw map with effects: the ThrowModel interface over the effects a scene names.
 
 One compiled core, throw_core(), evaluates a throw with every effect as a parameter that is
 neutral when the effect is off (sd = 0, theta_r = 0, L = inf, ...), and routes flight and catch
@@ -48,7 +49,8 @@ _EVENT_NAMES = {kernel.EV_FLIGHT_IMPACT: 'flight', kernel.EV_LANDING: 'landing',
 
 @dataclass(frozen=True)
 class EffectAccuracy:
-    """Accuracy knobs of the effect paths (docs/accuracy.md measures what each one costs).
+    """
+    Accuracy knobs of the effect paths (docs/accuracy.md measures what each one costs).
 
     contact_method : 'advancement' (conservative advancement: exact, never misses a contact)
         or 'scan' (samples every contact_scan_step, bisects to contact_root_tol; misses any
@@ -122,7 +124,8 @@ def impulse_grasp_radius(edge, h, mu, rho2, d, u_l, u_r):
 
 @kernel.njit
 def carry_margin(edge, R, w, h, g, mu, theta_r, samples, rho2, d, u_l, u_r):
-    """Return the largest wrench-cone margin along the carry (<= 0: in a dynamic grasp).
+    """
+    Return the largest wrench-cone margin along the carry (<= 0: in a dynamic grasp).
 
     Returns (margin, sample index, constraint 1..4) of the worst instant.
     """
@@ -165,7 +168,8 @@ def carry_margin(edge, R, w, h, g, mu, theta_r, samples, rho2, d, u_l, u_r):
 @kernel.njit
 def arm_clearance(edge, x0, y0, phi0, vx, vy, om, g, h, theta_r, w, ret_time, samples, arm_len,
                   n, U, V):
-    """Return the smallest clearance of the part's vertices over the returning arm.
+    """
+    Return the smallest clearance of the part's vertices over the returning arm.
 
     The arm follows the Hermite profile from (theta_r, w) to (0, 0) in ret_time; only vertices
     above the arm's extent [0, L] count.
@@ -199,7 +203,8 @@ def throw_core(edge, R, zw, zh, w0, h0, g, sd_w, sd_h, mu, theta_r, ret_time, ca
                use_general, prm, method, scan_step, root_tol, tol_t, flat_tol, max_steps,
                max_impacts, first_stable, n, rho2, d, u_l, u_r, stable, edge_len, vrad, acw,
                accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, nobound, rec):
-    """Evaluate one throw with effects.
+    """
+    Evaluate one throw with effects.
 
     Returns (status, edge, R, first contact time, net rotation, impacts, first contact vertex,
     records written, w used, h used).
@@ -294,7 +299,8 @@ def orbit_batch(edges, radii, steps, z, w0, h0, g, sd_w, sd_h, mu, theta_r, ret_
                 max_steps, max_impacts, first_stable, n, rho2, d, u_l, u_r, stable, edge_len,
                 vrad, acw, accw, kcw, kccw, U, V, rest_angle, QU, QV, QW, nobound, out_edge,
                 out_r, out_rot, out_status, out_done):
-    """Iterate f from many starts; z has shape (starts, steps, 2).
+    """
+    Iterate f from many starts; z has shape (starts, steps, 2).
 
     A lost throw ends its orbit with edge -1 and status LOST.
     """
@@ -351,7 +357,8 @@ class EffectThrowResult(ThrowResult):
 
 
 class EffectModel(ThrowModel):
-    """ThrowModel over the effects of an EffectSet.
+    """
+    ThrowModel over the effects of an EffectSet.
 
     Same interface as ThrowModel: f, throw, f_batch, orbit_arrays, orbits, domain_error,
     error_message.
@@ -424,7 +431,8 @@ class EffectModel(ThrowModel):
             self.r_grasp = self._carry_domain()
 
     def _carry_domain(self, r_top=1.0, step=1e-3):
-        """Return the lower end of the domain per stable edge with a finite carry.
+        """
+        Return the lower end of the domain per stable edge with a finite carry.
 
         Above it the carry keeps the dynamic grasp and the returning arm clears the part (on a
         1 mm grid up to 1 m, then bisection to 1e-7 m). The impulse-cone R_grasp does not
@@ -545,7 +553,8 @@ class EffectModel(ThrowModel):
         return out[1], out[2], _classify(edge, out[1], out[4])
 
     def throw(self, edge, R, trajectory=False, samples=60):
-        """Return the full result of one throw.
+        """
+        Return the full result of one throw.
 
         ``trajectory`` is filled only where the flight and catch are the base model's (effects
         finite_arm, sensor_noise alone), else None: the general simulator keeps no poses.

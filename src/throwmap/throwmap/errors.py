@@ -30,7 +30,8 @@ class InputError(ThrowmapError):
 
 
 class DomainError(ThrowmapError):
-    """The throw map f(i, R) is not defined at this state (paper section III.C).
+    """
+    The throw map f(i, R) is not defined at this state (paper section III.C).
 
     ``condition`` names the failed condition (``stable_edge``, ``grasp_bound_1`` ..
     ``grasp_bound_4``, ``toe_stub``, ``edge_index``), ``margin`` says by how much it fails

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""General event-driven simulator of one throw and catch, for effects that break closed form.
+"""
+General event-driven simulator of one throw and catch, for effects that break closed form.
 
 Used when a scene names ``backplate_friction`` or ``impact_restitution`` (docs/effects.md). With
 neither (plate friction 0, restitution 0, infinite arm friction) it reproduces the closed-form
@@ -69,7 +70,8 @@ MODE_DONE = 3
 
 @njit
 def plate_drag(vx, vy, om, phi, qu, qv, qw, coef, vreg):
-    """Force (fx, fy) and torque about the CM per unit mass of the back plate's Coulomb drag.
+    """
+    Force (fx, fy) and torque about the CM per unit mass of the back plate's Coulomb drag.
 
     coef = mu_p * g_n: the plate pushes with uniform pressure; every area element feels
     -coef * v / sqrt(|v|^2 + vreg^2) at its own velocity v = v_cm + om z x r. qu, qv, qw:
@@ -150,7 +152,8 @@ def _energy(vx, vy, om, y, h, g, rho2):
 
 @njit
 def impact(rx, ry, vx, vy, om, rho2, e, mu):
-    """Frictional impact at a contact point r = (rx, ry) from the CM on the arm (normal +y).
+    """
+    Frictional impact at a contact point r = (rx, ry) from the CM on the arm (normal +y).
 
     Routh's method with Stronge's energetic restitution: the impact is followed in terms of the
     normal impulse p. The contact velocity u = (u_t, u_n) changes by K dP, where the tangential
@@ -256,7 +259,8 @@ def _remove_normal(rx, ry, vx, vy, om, rho2):
 @njit
 def _contact_accel(xp, phi, vxp, om, sliding, sigma, bu_p, bv_p, h, g, rho2, mu, qu, qv, qw,
                    coef, vreg):
-    """Accelerations (axp, alpha) and contact force (Ft, N) with vertex p on the arm.
+    """
+    Accelerations (axp, alpha) and contact force (Ft, N) with vertex p on the arm.
 
     sliding = False: p sticks (axp = 0); True: p slides with friction -mu N sigma. The status
     flag is False when no consistent normal force exists (Painleve).
@@ -326,7 +330,8 @@ def _contact_to_cm(xp, phi, vxp, om, bu_p, bv_p, h):
 @njit
 def _contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, h, g, rho2, mu, qu, qv, qw,
                      coef, vreg, unilateral):
-    """Return the event code at a contact state, and the landing vertex.
+    """
+    Return the event code at a contact state, and the landing vertex.
 
     0 none, 1 landing (vertex index in the second value), 2 liftoff, 3 stick -> slip, 4 slip
     reversal (velocity reached zero), 5 Painleve.
@@ -384,7 +389,8 @@ def _flat_forces(vx, j, e0, u_l, u_r, d, g, mu, rho2, qu, qv, qw, coef, vreg, ph
 @njit
 def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stable, edge_len,
              rest_angle, U, V, QU, QV, QW, acw, accw, rec):
-    """Throw and catch from a free release state.
+    """
+    Throw and catch from a free release state.
 
     The state is given in frame F with phi0 the rotation from the resting pose on ``edge``.
     Returns (status, edge, R, first contact time, net rotation, impacts, first contact vertex,
@@ -768,7 +774,8 @@ def simulate(edge, x0, y0, phi0, vx0, vy0, om0, prm, n, rho2, d, u_l, u_r, stabl
 
 @njit
 def _plate_hold(phi, om, bu_p, bv_p, qu, qv, qw, g, coef):
-    """Return (held, turn): whether plate friction holds the part at rest on pivot p.
+    """
+    Return (held, turn): whether plate friction holds the part at rest on pivot p.
 
     ``turn`` is the rotation about p that brings the CM just past the holding zone on the side
     it leans to.
@@ -796,7 +803,8 @@ def _plate_hold(phi, om, bu_p, bv_p, qu, qv, qw, g, coef):
 @njit
 def _contact_mode(vxp, xp, phi, om, p, bu, bv, h, g, rho2, mu, qu, qv, qw, coef, vreg,
                   unilateral):
-    """Return (sliding, sigma) for a new contact phase at vertex p with slip velocity vxp.
+    """
+    Return (sliding, sigma) for a new contact phase at vertex p with slip velocity vxp.
 
     A hinge pivot (not unilateral) is pinned: it never slides.
     """
@@ -820,7 +828,8 @@ def _contact_mode(vxp, xp, phi, om, p, bu, bv, h, g, rho2, mu, qu, qv, qw, coef,
 
 @njit
 def _flat_impact(vx, vy, om, j, u_l, u_r, d, rho2, mu):
-    """Land flat on edge j: a two-point plastic impact.
+    """
+    Land flat on edge j: a two-point plastic impact.
 
     Vertical velocity and rotation stop; the tangential impulse stops the slide if the friction
     cone allows, else it is clipped. Returns (vx, om, vy, ok).
@@ -878,7 +887,8 @@ def triangulate(outline):
 
 
 def plate_quadrature(part, level):
-    """Return the quadrature of the part's area for the plate drag.
+    """
+    Return the quadrature of the part's area for the plate drag.
 
     Every triangle of the outline is split into level^2 similar ones, each weighted by its area
     at its centroid. Returns QU, QV (per edge frame, shape (n, points)) and weights QW (sum 1).

@@ -22,7 +22,8 @@ import numpy as np
 
 @dataclass(frozen=True)
 class EdgeGrasp:
-    """Impulse-cone result for one stable edge.
+    """
+    Impulse-cone result for one stable edge.
 
     ``bounds`` are the right-hand sides of constraints (1)-(4) (bounds 2 and 4 are -inf/+inf
     free when no friction coefficient is given). ``R_grasp`` is the largest of them;
@@ -77,7 +78,7 @@ def grasp_table(part, h, mu=None):
 
 
 def contact_wrench_cone(part, edge, mu):
-    """The four edge wrenches w_1..w_4 of the contact cone W^i (frame F^i), rows."""
+    """Return the four edge wrenches w_1..w_4 of the contact cone W^i (frame F^i), rows."""
     u_l, u_r, v_l, v_r = part.u_l[edge], part.u_r[edge], part.v_l[edge], part.v_r[edge]
     return np.array([[-mu, 1.0, u_l + mu * v_l],
                      [mu, 1.0, u_l - mu * v_l],
@@ -94,7 +95,8 @@ def required_wrench(part, edge, R, h, g, theta, theta_dot, theta_ddot):
 
 
 def wrench_cone_margins(part, edge, R, h, g, mu, theta, theta_dot, theta_ddot):
-    """Values w^T (w_j x w_k) for (j, k) = (1,2), (2,3), (3,4), (4,1); all <= 0 means grasp.
+    """
+    Values w^T (w_j x w_k) for (j, k) = (1,2), (2,3), (3,4), (4,1); all <= 0 means grasp.
 
     Each value is scaled by |w| so that it reads as a signed distance-like margin.
     """

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Compiled core of the throw map: flight, first contact, sticking impacts, rolling, settling.
+"""
+Compiled core of the throw map: flight, first contact, sticking impacts, rolling, settling.
 
 Written in the subset of Python that numba compiles; with numba absent (or
 NUMBA_DISABLE_JIT=1) the very same functions run as plain Python, only slower.
@@ -81,7 +82,8 @@ TIME_RESOLUTION = 2.0 ** -51
 
 @njit
 def flight_height(t, R, w, g, f0, u, v):
-    """F(t): height over the arm of a vertex at (u, v) in F^i during flight (eqs 5-6).
+    """
+    F(t): height over the arm of a vertex at (u, v) in F^i during flight (eqs 5-6).
 
     f0 = F(0) = d + v, exactly 0 for the two vertices of the resting edge. Written as f0 plus
     terms that vanish at t = 0 (v cos(wt) = v - 2 v sin^2(wt / 2)), so that a short hop keeps
@@ -100,7 +102,8 @@ def _flight_height_rate(t, R, w, g, u, v):
 
 @njit
 def first_vertex_contact(R, w, g, f0, u, v, t_limit, tol_t, max_steps):
-    """First t in (0, t_limit) with F(t) = 0 and F decreasing, or inf; negative on cap.
+    """
+    First t in (0, t_limit) with F(t) = 0 and F decreasing, or inf; negative on cap.
 
     f0 = F(0) >= 0: 0 for the resting edge's vertices, d + v for the others.
     """
@@ -138,15 +141,18 @@ def first_vertex_contact(R, w, g, f0, u, v, t_limit, tol_t, max_steps):
 
 @njit
 def sticking_impact(rx, ry, xdot, ydot, omega, rho2):
-    """Post-impact (xdot, ydot, omega) when the vertex at r = (rx, ry) from the CM sticks
-    (eqs 7-9): the vertex stops and angular momentum about it is conserved."""
+    """
+    Return the post-impact (xdot, ydot, omega) of a sticking impact (eqs 7-9).
+
+    The vertex at r = (rx, ry) from the CM stops and angular momentum about it is conserved.
+    """
     omega_new = (rho2 * omega - (rx * ydot - ry * xdot)) / (rho2 + rx * rx + ry * ry)
     return ry * omega_new, -rx * omega_new, omega_new
 
 
 @njit
-def _settle_ke_barrier(rho2, l, d_edge, g_abs):
-    return g_abs * (l - d_edge)
+def _settle_ke_barrier(rho2, lv, d_edge, g_abs):
+    return g_abs * (lv - d_edge)
 
 
 @njit
@@ -171,7 +177,8 @@ def _record(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1, pivot, a0, om0, a1
 @njit
 def settle(p, alpha, omega, xp, n, rho2, g_abs, d, u_l, u_r, stable, edge_len, vrad,
            acw, accw, kcw, kccw, first_stable, max_impacts, rec, nrec):
-    """Roll about vertex p from angle alpha with rate omega until the part settles.
+    """
+    Roll about vertex p from angle alpha with rate omega until the part settles.
 
     alpha is the angle of (CM - V^p) from the arm, omega its rate (CCW positive); xp the
     arm coordinate of V^p. Returns (status, edge, R, rotation during settling, impacts, nrec).
@@ -275,7 +282,8 @@ def settle(p, alpha, omega, xp, n, rho2, g_abs, d, u_l, u_r, stable, edge_len, v
 def throw_one(edge, R, w, g, h, n, rho2, d, u_l, u_r, stable, edge_len, vrad, acw, accw,
               kcw, kccw, U, V, r_grasp, first_stable, tol_t, flat_tol, max_steps,
               max_impacts, rec):
-    """One evaluation of the throw map f(edge, R).
+    """
+    One evaluation of the throw map f(edge, R).
 
     Returns (status, new edge, new R, flight time, net rotation, impacts, first contact vertex,
     records written).

@@ -29,7 +29,8 @@ SETTLE_RULES = ('full', 'first_stable')
 
 @dataclass(frozen=True)
 class Accuracy:
-    """Accuracy knobs of the base model (docs/accuracy.md says what each one costs).
+    """
+    Accuracy knobs of the base model (docs/accuracy.md says what each one costs).
 
     contact_time_tol : s. Conservative advancement stops once the next guaranteed-safe step is
         shorter than this; the contact time is then exact to about this much (or to the
@@ -110,7 +111,8 @@ def classify(edge0, edge, net_rotation):
 
 
 def _state_arrays(edges, radii):
-    """Edges and radii as contiguous int64 / float64 arrays; InputError for anything else.
+    """
+    Edges and radii as contiguous int64 / float64 arrays; InputError for anything else.
 
     A non-integer edge (1.5, 'a', True) is refused rather than truncated by the conversion.
     """
@@ -129,7 +131,8 @@ def _state_arrays(edges, radii):
 
 
 class ThrowModel:
-    """f(i, R) for a part on an arm with offset h, release speed w and gravity g (< 0).
+    """
+    f(i, R) for a part on an arm with offset h, release speed w and gravity g (< 0).
 
     Units are SI: metres, seconds, radians. ``g`` follows the paper: the acceleration along y,
     negative (e.g. -9.66 for the paper's inclined plate). ``mu``, when given, adds the friction
@@ -149,7 +152,7 @@ class ThrowModel:
                              f'must be > 0 rad/s, got {release_speed!r}',
                              'give the arm speed at release, e.g. 5.5851 (320 deg/s)')
         if self.g >= 0:
-            raise InputError(f'{field_prefix}gravity', f'must be < 0 (the paper\'s sign: y up, '
+            raise InputError(f'{field_prefix}gravity', f"must be < 0 (the paper's sign: y up, "
                              f'gravity down), got {gravity!r}', 'use e.g. -9.81 or -9.66')
         if mu is not None:
             mu = self._number(mu, f'{field_prefix}contact.mu', 'the friction coefficient')
@@ -164,7 +167,7 @@ class ThrowModel:
         self.accuracy = accuracy or Accuracy()
         if not -part.d_min < self.h < 0:
             warnings.warn(f'{field_prefix}arm.offset h = {self.h:g} m is outside Proposition '
-                          f'IV.4\'s range 0 > h > -d_min = {-part.d_min:g} m: the limit-set '
+                          f"IV.4's range 0 > h > -d_min = {-part.d_min:g} m: the limit-set "
                           'guarantee does not apply (f is still computed)', stacklevel=2)
         self.grasp = [edge_grasp(part, i, self.h, mu) for i in range(part.n)]
         self.r_grasp = np.array([gr.R_grasp for gr in self.grasp])
@@ -190,7 +193,7 @@ class ThrowModel:
         return grasp_table(self.part, self.h, self.mu)
 
     def domain_error(self, edge, R):
-        """The DomainError f would raise at (edge, R), or None inside the domain."""
+        """Return the DomainError f would raise at (edge, R), or None inside the domain."""
         part = self.part
         if isinstance(edge, bool) or not isinstance(edge, (int, np.integer)):
             return DomainError('edge_index', f'edge must be an integer, got {edge!r}')
@@ -226,7 +229,8 @@ class ThrowModel:
 
     # ----------------------------------------------------------------------------- the map
     def _state(self, edge, R):
-        """(edge, R) as the kernel's types (int, float), or raise the DomainError.
+        """
+        (edge, R) as the kernel's types (int, float), or raise the DomainError.
 
         The compiled kernel only takes an integer edge and a real R: anything else (a string,
         None, a bool, a float edge, an integer beyond 64 bits) would fail to compile with a
@@ -272,9 +276,13 @@ class ThrowModel:
                            float(t), float(rot), int(k0), impacts, float(e0), traj)
 
     def f_batch(self, edges, radii):
-        """Vectorised f. Returns dict of arrays: edge, R, kind ('jog'/'flip'/''), status,
-        flight_time, net_rotation. States outside the domain get status != 0 and NaN R;
-        ``error_message(status, edge, R)`` gives the text."""
+        """
+        Evaluate f over many states at once.
+
+        Returns a dict of arrays: edge, R, kind ('jog'/'flip'/''), status, flight_time,
+        net_rotation. States outside the domain get status != 0 and NaN R;
+        ``error_message(status, edge, R)`` gives the text.
+        """
         edges, radii = _state_arrays(edges, radii)
         if edges.shape != radii.shape:
             raise InputError('states', f'{edges.size} edges but {radii.size} radii',
@@ -304,7 +312,7 @@ class ThrowModel:
         return out_edge, out_r, out_rot
 
     def orbits(self, edges, radii, throws):
-        """Many orbits (shape (starts, throws + 1)); status per start, throws completed."""
+        """Iterate many orbits at once: arrays (starts, throws + 1), status, throws done."""
         edges, radii = _state_arrays(edges, radii)
         if edges.shape != radii.shape:
             raise InputError('states', f'{edges.size} edges but {radii.size} radii',

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Planar part: convex hull, mass properties and the per-edge frame quantities of section II.
+"""
+Planar part: convex hull, mass properties and the per-edge frame quantities of section II.
 
 Conventions (paper section II): vertices V^0..V^{n-1} counterclockwise; edge E^i runs from V^i to
 V^{i+1}. Resting on E^i, V^i is the left vertex and V^{i+1} the right one. The frame F^i sits at
@@ -45,7 +46,7 @@ def _signed_area_and_centroid(pts):
 
 
 def _hull_indices(pts):
-    """Indices of strict convex-hull vertices (collinear boundary points dropped), CCW."""
+    """Return indices of strict convex-hull vertices (collinear points dropped), CCW."""
     order = sorted(range(len(pts)), key=lambda k: (pts[k, 0], pts[k, 1]))
     scale = float(np.ptp(pts, axis=0).max())
     eps = _COLLINEAR_REL * scale * scale
@@ -67,7 +68,8 @@ def _hull_indices(pts):
 
 
 class Part:
-    """A rigid planar part treated as its convex hull (paper section II).
+    """
+    A rigid planar part treated as its convex hull (paper section II).
 
     Parameters
     ----------
@@ -78,6 +80,7 @@ class Part:
     cm : optional (2,) centre of mass in the same frame (default: centroid of the outline).
     radius_of_gyration : optional rho > 0 about the centre of mass, metres (default: lamina).
     field : name used in error messages (e.g. ``part``).
+
     """
 
     def __init__(self, vertices, cm=None, radius_of_gyration=None, field='part'):
@@ -138,7 +141,8 @@ class Part:
                              'give finite coordinates in metres')
         distinct = {tuple(p) for p in pts.tolist()}
         if len(distinct) < 3:
-            raise InputError(f'{field}.vertices', f'fewer than 3 distinct points ({len(distinct)})',
+            raise InputError(f'{field}.vertices',
+                             f'fewer than 3 distinct points ({len(distinct)})',
                              'give at least 3 distinct points, counterclockwise')
         if len(distinct) != len(pts):
             raise InputError(f'{field}.vertices', 'repeats a point',
@@ -201,7 +205,7 @@ class Part:
         return float(self.U[edge].min()), float(self.U[edge].max())
 
     def pose_vertices(self, edge, R, h):
-        """World coordinates (frame F) of the hull vertices when resting on ``edge`` at radius R."""
+        """Return world coordinates (frame F) of the hull resting on ``edge`` at radius R."""
         return np.stack([R + self.U[edge], h + self.d[edge] + self.V[edge]], axis=1)
 
     def describe(self):

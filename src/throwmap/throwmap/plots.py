@@ -35,7 +35,7 @@ def plot_orbit(scene, orb, path, sensor=None):
     fig, ax = plt.subplots(figsize=(9, 4))
     k = np.arange(len(orb.edges))
     ax.plot(k, orb.radii * 100, color='0.8', lw=0.8, zorder=1)
-    for e in sorted(set(int(x) for x in orb.edges)):
+    for e in sorted({int(x) for x in orb.edges}):
         sel = orb.edges == e
         ax.scatter(k[sel], orb.radii[sel] * 100, s=10, color=edge_color(e), label=f'edge {e}',
                    zorder=2)
@@ -109,11 +109,11 @@ def plot_basin(scene, bas, ls, path):
         e, r = bas.edges[s], bas.radii[s]
         ok = e >= 0
         ax.plot(k[ok], r[ok] * 100, color='0.85', lw=0.4, zorder=1)
-    for e in sorted(set(int(x) for x in np.unique(bas.edges) if x >= 0)):
+    for e in sorted({int(x) for x in np.unique(bas.edges) if x >= 0}):
         sel = bas.edges == e
         ax.scatter(np.broadcast_to(k, bas.edges.shape)[sel], bas.radii[sel] * 100, s=2,
                    color=edge_color(e), zorder=2, label=f'edge {e}')
-    for e in sorted(set(int(x) for x in bas.start_edges)):
+    for e in sorted({int(x) for x in bas.start_edges}):
         sel = bas.start_edges == e
         ax.scatter(np.zeros(sel.sum()), bas.start_radii[sel] * 100, marker='D', s=18,
                    facecolor='none', edgecolor=edge_color(e), zorder=3)

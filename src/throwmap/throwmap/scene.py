@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Scene files: YAML describing a part, an arm, a throw, gravity and effects (docs/scenes.md).
+"""
+Scene files: YAML describing a part, an arm, a throw, gravity and effects (docs/scenes.md).
 
 Lengths are metres; a key ending in ``_cm`` gives the same quantity in centimetres and
 ``release_speed_deg`` gives degrees per second. Unknown keys are errors that list the allowed
@@ -72,8 +73,8 @@ def _check_keys(section, data, where):
     for group in ALTERNATIVES.get(section, ()):
         present = [k for k in group if k in data]
         if len(present) != 1:
-            raise InputError(f'{where}.{group[0]}',
-                             'missing' if not present else f'given twice ({" and ".join(present)})',
+            problem = 'missing' if not present else f'given twice ({" and ".join(present)})'
+            raise InputError(f'{where}.{group[0]}', problem,
                              f'give exactly one of {" / ".join(group)}')
 
 
@@ -112,8 +113,11 @@ def _scaled(points, factor, field):
 
 
 def _plate(data):
-    """Gravity from ``gravity`` (in-plane, < 0) or from ``plate`` (exactly one of them):
-    g = -g0 sin(inclination); the plate's pressure per unit mass is g0 cos(inclination)."""
+    """
+    Read gravity from ``gravity`` (in-plane, < 0) or from ``plate`` (exactly one of them).
+
+    g = -g0 sin(inclination); the plate's pressure per unit mass is g0 cos(inclination).
+    """
     if 'gravity' in data and 'plate' in data:
         raise InputError('gravity', 'given together with plate',
                          'give either gravity (in-plane, < 0) or plate: {inclination_deg, g0}, '
@@ -157,7 +161,8 @@ def _seed(data, seed):
 
 
 def _as_written(exc, section, spelled):
-    """Return the Part's InputError under the key the file used (``vertices_cm``, ...).
+    """
+    Return the Part's InputError under the key the file used (``vertices_cm``, ...).
 
     Part sees metres and names ``part.vertices`` / ``part.cm``; a file that gave centimetres
     gets its own key, a note that the numbers shown are converted, and a fix in its units.
@@ -206,7 +211,8 @@ _StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
 
 
 class Scene:
-    """A validated scene: the part, the throw-map model and the sensor/start settings.
+    """
+    A validated scene: the part, the throw-map model and the sensor/start settings.
 
     ``seed`` overrides ``noise.seed`` (the CLI's --seed). ``model`` is the base ThrowModel when
     the scene names no effects (and keeps the default contact method), else an EffectModel
@@ -228,8 +234,8 @@ class Scene:
         vertices = _scaled(verts, factor, vfield) if isinstance(verts, list) else verts
         cm_raw, cm_factor, cm_field = _points(pd, 'part', 'cm')
         cm = _scaled([cm_raw], cm_factor, cm_field)[0] if cm_raw is not None else None
-        rho = _unit(pd, 'radius_of_gyration', 'part', [('radius_of_gyration', 1.0),
-                                                        ('radius_of_gyration_cm', 0.01)])
+        rho = _unit(pd, 'radius_of_gyration', 'part',
+                    [('radius_of_gyration', 1.0), ('radius_of_gyration_cm', 0.01)])
         if rho is not None and rho <= 0:
             key = 'radius_of_gyration' if 'radius_of_gyration' in pd else 'radius_of_gyration_cm'
             raise InputError(f'part.{key}', f'must be > 0, got {pd[key]!r}',
@@ -311,13 +317,17 @@ class Scene:
 
     @property
     def stochastic(self):
-        """True when the scene names release_noise or sensor_noise (results depend on seeds)."""
+        """Tell whether the scene names release_noise or sensor_noise (seeded results)."""
         return self.effects.stochastic
 
     def sense(self, edge, R, x=None, footprint=None):
-        """The sensor's reading for a part resting at (edge, R): the shadow test of
-        throwmap.sees, with sensor_noise's false positives/negatives if the scene names it.
-        x and footprint default to the scene's sensor; edge -1 (lost) is never seen."""
+        """
+        Return the sensor's reading for a part resting at (edge, R).
+
+        The shadow test of throwmap.sees, with sensor_noise's false positives/negatives if the
+        scene names it. x and footprint default to the scene's sensor; edge -1 (lost) is never
+        seen.
+        """
         from .dynamics import sees
         x = self.sensor_radius if x is None else x
         if x is None:
@@ -336,8 +346,12 @@ class Scene:
         return self.model.g
 
     def default_start(self):
-        """(edge, R) to start orbits from: the scene's ``start``, else the goal edge (or the
-        first stable edge) at 1.5 x its R_grasp."""
+        """
+        Return the (edge, R) to start orbits from.
+
+        The scene's ``start``, else the goal edge (or the first stable edge) at 1.5 x its
+        R_grasp.
+        """
         edge = self.start_edge
         if edge is None:
             edge = self.goal_edge if self.goal_edge is not None else self.part.stable_edges[0]
@@ -348,8 +362,11 @@ class Scene:
 
 
 def load_scene(path, seed=None):
-    """Read and validate a scene file; every error names the file and the field. ``seed``
-    overrides the scene's noise.seed."""
+    """
+    Read and validate a scene file; every error names the file and the field.
+
+    ``seed`` overrides the scene's noise.seed.
+    """
     if not os.path.exists(path):
         raise InputError('scene', f'no such file: {path}',
                          'give the path of a scene YAML (e.g. scenes/triangle.yaml)')

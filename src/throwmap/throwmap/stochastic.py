@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Noisy scenes (effects release_noise, sensor_noise): outcome distributions by Monte Carlo.
+"""
+Noisy scenes (effects release_noise, sensor_noise): outcome distributions by Monte Carlo.
 
 With noise the throw map is a random map, so a start no longer has one limit set but a
 distribution of outcomes, and a sensor detection proves the goal edge only with some
@@ -32,7 +33,8 @@ def _seeds(model, count):
 
 
 def basin_distribution(model, start_edges, start_radii, throws=100, seeds=8, reference=None):
-    """Return, per start, the fraction of seeds whose orbit ends in each limit pattern.
+    """
+    Return, per start, the fraction of seeds whose orbit ends in each limit pattern.
 
     Patterns include 'lost', and 'left the domain' for orbits that a noisy throw took out of
     the domain of f.
@@ -59,7 +61,8 @@ def basin_distribution(model, start_edges, start_radii, throws=100, seeds=8, ref
 
 @dataclass(frozen=True)
 class SensorProbability:
-    """Monte Carlo estimate of what a detection at radius proves.
+    """
+    Monte Carlo estimate of what a detection at radius proves.
 
     p_goal: P(part on the goal edge | detection), with a 95 % Wilson interval (lo, hi), over
     detections detections in throws throws after warm-up. detection_rate: P(detection).
@@ -95,7 +98,8 @@ def _wilson(k, n, z=1.96):
 
 def sensor_probability(model, goal_edge, radius, footprint=0.0, start=None, throws=2000,
                        seeds=8, warmup=20):
-    """Estimate P(goal edge | detection) at ``radius`` by Monte Carlo.
+    """
+    Estimate P(goal edge | detection) at ``radius`` by Monte Carlo.
 
     ``seeds`` noisy orbits of ``throws`` throws each (the first ``warmup`` not counted);
     readings go through the scene's sensor noise when the model has it.
@@ -136,7 +140,8 @@ def sensor_probability(model, goal_edge, radius, footprint=0.0, start=None, thro
 
 def stochastic_summary(model, sensor, start, basin_starts, throws=2000, grid_throws=100,
                        seeds=8, reference=None):
-    """Return the noisy scene's figures for analyse().
+    """
+    Return the noisy scene's figures for analyse().
 
     The basin outcome distribution and the sensor's P(goal | detection) at the designed radius.
     """

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Sampled poses of one throw (for plots and RViz markers): flight, then each rolling segment.
+"""
+Sampled poses of one throw (for plots and RViz markers): flight, then each rolling segment.
 
 The throw map itself never needs rolling *times* (energy decides where rolling ends); only this
 module integrates the pendulum, so that a trajectory has a time axis.
@@ -28,8 +29,12 @@ from . import kernel
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Samples of the part's pose in frame F: time (s), CM x, y (m), and rotation phi (rad)
-    relative to the resting pose on the start edge (vertices: ``vertices_at(k)``)."""
+    """
+    Samples of the part's pose in frame F.
+
+    Time (s), CM x, y (m), and rotation phi (rad) relative to the resting pose on the start
+    edge (vertices: ``vertices_at(k)``).
+    """
 
     t: np.ndarray
     x: np.ndarray
@@ -46,8 +51,11 @@ class Trajectory:
 
 
 def _roll_segment(alpha0, omega0, alpha1, g_abs, lp, inertia, dt_max):
-    """Integrate alpha'' = -|g| l cos(alpha) / I from (alpha0, omega0) until alpha reaches alpha1
-    moving in its final direction; returns arrays (t, alpha)."""
+    """
+    Integrate alpha'' = -|g| l cos(alpha) / I from (alpha0, omega0) to alpha1.
+
+    Stops when alpha reaches alpha1 moving in its final direction; returns arrays (t, alpha).
+    """
     def acc(a):
         return -g_abs * lp * math.cos(a) / inertia
 

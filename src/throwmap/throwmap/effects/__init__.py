@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Effects beyond the paper's base model, each a module of its own (docs/effects.md).
+"""
+Effects beyond the paper's base model, each a module of its own (docs/effects.md).
 
 A scene lists the effects it calls for (``effects: [backplate_friction, finite_arm]``); their
 parameters live in the scene's natural sections (plate, contact, throw.carry, arm, noise,
@@ -54,7 +55,7 @@ class EffectSet:
 
     @property
     def general(self):
-        """True when flight or the catch is no longer closed form (throwmap.general)."""
+        """Tell whether flight or the catch is no longer closed form (throwmap.general)."""
         return self.backplate is not None or self.restitution is not None
 
     @property
@@ -97,7 +98,8 @@ OWNED = {
 
 
 def compose(names, data, plate, arm_length, mu):
-    """Build the EffectSet of the named effects.
+    """
+    Build the EffectSet of the named effects.
 
     data: the raw scene mapping; plate: the parsed plate section (dict with g_normal, mu) or
     None; arm_length in m or None; mu: contact.mu or None.

@@ -21,7 +21,8 @@ from ..errors import InputError
 
 def number(data, key, where, what, lo=None, hi=None, lo_open=False, default=None,
            scale_keys=None):
-    """Return a finite number from ``data`` in SI, from ``key`` or one of its unit spellings.
+    """
+    Return a finite number from ``data`` in SI, from ``key`` or one of its unit spellings.
 
     scale_keys: [(spelled_key, factor), ...]; the first present wins and two present is an
     error. Bounds are checked on the SI value; the error names the key as written.

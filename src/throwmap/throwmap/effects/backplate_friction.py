@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Effect backplate_friction: Coulomb drag of the part on the inclined back plate.
+"""
+Effect backplate_friction: Coulomb drag of the part on the inclined back plate.
 
 Physics (paper section V.B): the back plate is inclined at angle beta from horizontal, so the
 in-plane gravity is g = -g0 sin(beta) and the part presses on the plate with m g0 cos(beta),

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Effect finite_arm: the arm occupies 0 <= x <= L; a part that leaves it is lost.
+"""
+Effect finite_arm: the arm occupies 0 <= x <= L; a part that leaves it is lost.
 
 Physics: the arm surface is the segment from the pivot (x = 0) to the arm's end (x = L, the
 experiment's arm is 40 cm). The throw is computed as on an unbounded arm, and the part is

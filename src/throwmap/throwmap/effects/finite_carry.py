@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Effect finite_carry: a non-impulsive throw along an arm profile theta(t).
+"""
+Effect finite_carry: a non-impulsive throw along an arm profile theta(t).
 
 Physics: the arm starts horizontal and at rest and turns counterclockwise with constant angular
 acceleration a = w^2 / (2 theta_r) until it reaches the release angle theta_r at speed w (the

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Effect impact_restitution: restitution e and finite friction mu at impacts.
+"""
+Effect impact_restitution: restitution e and finite friction mu at impacts.
 
 Physics: at an impact of vertex r (from the CM) with the arm (normal +y), K is the 2x2 matrix
 mapping an impulse per unit mass to the change of the contact point's velocity u. The impact is

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Effect release_noise: seeded random release speed and offset per throw.
+"""
+Effect release_noise: seeded random release speed and offset per throw.
 
 Physics: every throw draws w_k = w + sd_w z1 and h_k = h + sd_h z2 with z1, z2 standard
 normal from a numpy Generator seeded by noise.seed (or the CLI's --seed): the spring's

@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Effect sensor_noise: false positives and negatives of the one-bit sensor.
+"""
+Effect sensor_noise: false positives and negatives of the one-bit sensor.
 
 Physics: the sensor at arm coordinate x with half-width footprint sees the part when its shadow
 [R + u_min, R + u_max] overlaps [x - footprint, x + footprint] (as without noise); a reading is
