@@ -12,7 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""ament_flake8 and ament_pep257 over the package, as `colcon test` would run them.
+"""
+Run ament_flake8 and ament_pep257 over the package, as `colcon test` would.
 
 They run in a child process: flake8 forks a worker pool, and a fork of a test process that
 holds DDS handles (other packages' in-process node tests) can crash or hang in the child.
