@@ -20,7 +20,7 @@ effects finite_carry (release at theta_r > 0 along an arm profile), release_nois
 and h) and finite_arm (a range check) keep the flight ballistic and the catch unchanged, so they
 reuse the same machinery from a general release state (x0, y0, phi0, vx, vy, omega):
 F_k(t) = y0 - h + vy t + g t^2 / 2 + u_k sin(phi0 + omega t) + v_k cos(phi0 + omega t), with the
-same bound |F_k''| <= |g| + omega^2 s_k. The catch is kernel.settle, unchanged.
+same bound |F_k''| <= |g| + omega^2 s_k. The catch is kernel.catch_at_contact, unchanged.
 
 ``method`` picks the contact finder: 0 = conservative advancement (exact, never misses), 1 = a
 fixed-step scan at ``scan_step`` with bisection to ``root_tol`` (misses any graze shorter than a
@@ -31,8 +31,7 @@ import math
 
 from . import _jitcache  # noqa: F401  (drops stale compiled code first)
 
-from .kernel import (_record, ERR_FLIGHT_CAP, ERR_NONFINITE, EV_FLAT_LANDING, EV_FLIGHT_IMPACT,
-                     EV_TIP_FROM_REST, njit, OK, settle, sticking_impact, TIME_RESOLUTION)
+from .kernel import catch_at_contact, ERR_FLIGHT_CAP, ERR_NONFINITE, njit, TIME_RESOLUTION
 
 METHOD_ADVANCEMENT = 0
 METHOD_SCAN = 1
@@ -145,7 +144,7 @@ def ballistic_throw(edge, x0, y0, phi0, vx, vy, om, g, h, n, rho2, d, u_l, u_r, 
                     edge_len, vrad, acw, accw, kcw, kccw, U, V, first_stable, tol_t, flat_tol,
                     max_steps, max_impacts, method, scan_step, root_tol, rec):
     """
-    Flight from a release state, first contact, sticking impact and kernel.settle.
+    Flight from a release state, first contact, then kernel.catch_at_contact.
 
     Returns (status, edge, R, flight time, net rotation, impacts, first contact vertex,
     records written); the records' REC_X columns give every arm coordinate touched.
@@ -188,50 +187,7 @@ def ballistic_throw(edge, x0, y0, phi0, vx, vy, om, g, h, n, rho2, d, u_l, u_r, 
     ydot = vy + g * T
     y_rel = yr + vy * T + 0.5 * g * T * T
     e_flight = 0.5 * (xdot * xdot + ydot * ydot + rho2 * om * om) + g_abs * y_rel
-    lk = vrad[k_best]
-    omega = sticking_impact(rx, ry, xdot, ydot, om, rho2)[2]
-    alpha = math.atan2(-ry, -rx)
-    a_lo = acw[k_best]
-    a_hi = accw[k_best]
-    xk = x_cm + rx
-    nrec = 0
-    rot0 = phi
-    if alpha - a_lo <= flat_tol or a_hi - alpha <= flat_tol:
-        if alpha - a_lo <= flat_tol:
-            j = k_best
-            left_x = xk
-            rot = a_lo - alpha
-        else:
-            j = (k_best - 1) % n
-            left_x = xk - edge_len[j]
-            rot = a_hi - alpha
-        e_rest = g_abs * d[j]
-        nrec = _record(rec, nrec, EV_FLAT_LANDING, k_best, j, xk, om, 0.0, e_flight, e_rest,
-                       -1, 0.0, 0.0, 0.0, xk)
-        if stable[j]:
-            return OK, j, left_x - u_l[j], T, rot0 + rot, 1, k_best, nrec
-        if u_r[j] <= 0.0:
-            p = (j + 1) % n
-            xp = left_x + edge_len[j]
-            alpha = accw[p]
-        else:
-            p = j
-            xp = left_x
-            alpha = acw[p]
-        nrec = _record(rec, nrec, EV_TIP_FROM_REST, p, j, xp, 0.0, 0.0, e_rest, e_rest, p,
-                       alpha, 0.0, alpha, xp)
-        status, j1, r1, rot2, imp, nrec = settle(
-            p, alpha, 0.0, xp, n, rho2, g_abs, d, u_l, u_r, stable, edge_len, vrad, acw, accw,
-            kcw, kccw, first_stable, max_impacts, rec, nrec)
-        return status, j1, r1, T, rot0 + rot + rot2, imp + 1, k_best, nrec
-    if alpha < a_lo:
-        alpha = a_lo
-    elif alpha > a_hi:
-        alpha = a_hi
-    e_after = 0.5 * (rho2 + lk * lk) * omega * omega + g_abs * lk * math.sin(alpha)
-    nrec = _record(rec, nrec, EV_FLIGHT_IMPACT, k_best, -1, xk, om, omega, e_flight, e_after,
-                   -1, 0.0, 0.0, 0.0, xk)
-    status, j1, r1, rot, imp, nrec = settle(
-        k_best, alpha, omega, xk, n, rho2, g_abs, d, u_l, u_r, stable, edge_len, vrad, acw,
-        accw, kcw, kccw, first_stable, max_impacts, rec, nrec)
-    return status, j1, r1, T, rot0 + rot, imp + 1, k_best, nrec
+    status, j1, r1, rot, imp, nrec = catch_at_contact(
+        k_best, phi, rx, ry, x_cm, xdot, ydot, om, e_flight, n, rho2, g_abs, d, u_l, u_r,
+        stable, edge_len, vrad, acw, accw, kcw, kccw, first_stable, flat_tol, max_impacts, rec)
+    return status, j1, r1, T, rot, imp, k_best, nrec

@@ -279,6 +279,67 @@ def settle(p, alpha, omega, xp, n, rho2, g_abs, d, u_l, u_r, stable, edge_len, v
 
 
 @njit
+def catch_at_contact(k_best, rot0, rx, ry, x_cm, xdot, ydot, om, e_flight, n, rho2, g_abs, d,
+                     u_l, u_r, stable, edge_len, vrad, acw, accw, kcw, kccw, first_stable,
+                     flat_tol, max_impacts, rec):
+    """
+    Catch the part whose vertex k_best has just reached the arm at the end of a flight.
+
+    (rx, ry): that vertex from the CM; (xdot, ydot, om): the CM velocity and spin; x_cm the CM's
+    arm coordinate; e_flight the energy per unit mass; rot0 the rotation so far. Sticking
+    impact (or a flat two-point landing), then rolling until the part settles. Returns
+    (status, edge, R, net rotation, impacts, records written).
+    """
+    lk = vrad[k_best]
+    omega = sticking_impact(rx, ry, xdot, ydot, om, rho2)[2]
+    alpha = math.atan2(-ry, -rx)
+    a_lo = acw[k_best]
+    a_hi = accw[k_best]
+    xk = x_cm + rx
+    nrec = 0
+    if alpha - a_lo <= flat_tol or a_hi - alpha <= flat_tol:
+        # The edge on one side of V^k is flat at impact: both of its vertices stick at once.
+        if alpha - a_lo <= flat_tol:
+            j = k_best
+            left_x = xk
+            rot = a_lo - alpha
+        else:
+            j = (k_best - 1) % n
+            left_x = xk - edge_len[j]
+            rot = a_hi - alpha
+        e_rest = g_abs * d[j]
+        nrec = _record(rec, nrec, EV_FLAT_LANDING, k_best, j, xk, om, 0.0, e_flight, e_rest,
+                       -1, 0.0, 0.0, 0.0, xk)
+        if stable[j]:
+            return OK, j, left_x - u_l[j], rot0 + rot, 1, nrec
+        if u_r[j] <= 0.0:
+            p = (j + 1) % n
+            xp = left_x + edge_len[j]
+            alpha = accw[p]
+        else:
+            p = j
+            xp = left_x
+            alpha = acw[p]
+        nrec = _record(rec, nrec, EV_TIP_FROM_REST, p, j, xp, 0.0, 0.0, e_rest, e_rest, p,
+                       alpha, 0.0, alpha, xp)
+        status, j1, r1, rot2, imp, nrec = settle(
+            p, alpha, 0.0, xp, n, rho2, g_abs, d, u_l, u_r, stable, edge_len, vrad, acw, accw,
+            kcw, kccw, first_stable, max_impacts, rec, nrec)
+        return status, j1, r1, rot0 + rot + rot2, imp + 1, nrec
+    if alpha < a_lo:
+        alpha = a_lo
+    elif alpha > a_hi:
+        alpha = a_hi
+    e_after = 0.5 * (rho2 + lk * lk) * omega * omega + g_abs * lk * math.sin(alpha)
+    nrec = _record(rec, nrec, EV_FLIGHT_IMPACT, k_best, -1, xk, om, omega, e_flight, e_after,
+                   -1, 0.0, 0.0, 0.0, xk)
+    status, j1, r1, rot, imp, nrec = settle(
+        k_best, alpha, omega, xk, n, rho2, g_abs, d, u_l, u_r, stable, edge_len, vrad, acw,
+        accw, kcw, kccw, first_stable, max_impacts, rec, nrec)
+    return status, j1, r1, rot0 + rot, imp + 1, nrec
+
+
+@njit
 def throw_one(edge, R, w, g, h, n, rho2, d, u_l, u_r, stable, edge_len, vrad, acw, accw,
               kcw, kccw, U, V, r_grasp, first_stable, tol_t, flat_tol, max_steps,
               max_impacts, rec):
@@ -326,53 +387,10 @@ def throw_one(edge, R, w, g, h, n, rho2, d, u_l, u_r, stable, edge_len, vrad, ac
     ydot = R * w + g * T
     y_rel = di + R * w * T + 0.5 * g * T * T           # CM height over the arm
     e_flight = 0.5 * (xdot * xdot + ydot * ydot + rho2 * w * w) + g_abs * y_rel
-    lk = vrad[k_best]
-    omega = sticking_impact(rx, ry, xdot, ydot, w, rho2)[2]
-    alpha = math.atan2(-ry, -rx)
-    a_lo = acw[k_best]
-    a_hi = accw[k_best]
-    xk = x_cm + rx
-    nrec = 0
-    if alpha - a_lo <= flat_tol or a_hi - alpha <= flat_tol:
-        # The edge on one side of V^k is flat at impact: both of its vertices stick at once.
-        if alpha - a_lo <= flat_tol:
-            j = k_best
-            left_x = xk
-            rot = a_lo - alpha
-        else:
-            j = (k_best - 1) % n
-            left_x = xk - edge_len[j]
-            rot = a_hi - alpha
-        e_rest = g_abs * d[j]
-        nrec = _record(rec, nrec, EV_FLAT_LANDING, k_best, j, xk, w, 0.0, e_flight, e_rest,
-                       -1, 0.0, 0.0, 0.0, xk)
-        if stable[j]:
-            return OK, j, left_x - u_l[j], T, phi + rot, 1, k_best, nrec
-        if u_r[j] <= 0.0:
-            p = (j + 1) % n
-            xp = left_x + edge_len[j]
-            alpha = accw[p]
-        else:
-            p = j
-            xp = left_x
-            alpha = acw[p]
-        nrec = _record(rec, nrec, EV_TIP_FROM_REST, p, j, xp, 0.0, 0.0, e_rest, e_rest, p,
-                       alpha, 0.0, alpha, xp)
-        status, j1, r1, rot2, imp, nrec = settle(
-            p, alpha, 0.0, xp, n, rho2, g_abs, d, u_l, u_r, stable, edge_len, vrad, acw, accw,
-            kcw, kccw, first_stable, max_impacts, rec, nrec)
-        return status, j1, r1, T, phi + rot + rot2, imp + 1, k_best, nrec
-    if alpha < a_lo:
-        alpha = a_lo
-    elif alpha > a_hi:
-        alpha = a_hi
-    e_after = 0.5 * (rho2 + lk * lk) * omega * omega + g_abs * lk * math.sin(alpha)
-    nrec = _record(rec, nrec, EV_FLIGHT_IMPACT, k_best, -1, xk, w, omega, e_flight, e_after,
-                   -1, 0.0, 0.0, 0.0, xk)
-    status, j1, r1, rot, imp, nrec = settle(
-        k_best, alpha, omega, xk, n, rho2, g_abs, d, u_l, u_r, stable, edge_len, vrad, acw,
-        accw, kcw, kccw, first_stable, max_impacts, rec, nrec)
-    return status, j1, r1, T, phi + rot, imp + 1, k_best, nrec
+    status, j1, r1, rot, imp, nrec = catch_at_contact(
+        k_best, phi, rx, ry, x_cm, xdot, ydot, w, e_flight, n, rho2, g_abs, d, u_l, u_r, stable,
+        edge_len, vrad, acw, accw, kcw, kccw, first_stable, flat_tol, max_impacts, rec)
+    return status, j1, r1, T, rot, imp, k_best, nrec
 
 
 @njit
