@@ -30,7 +30,7 @@ import numpy as np
 from . import closed, general, kernel
 from .effects import EffectSet
 from .errors import DomainError, InputError, NumericalError, ThrowmapError
-from .model import Impact, ThrowModel, ThrowResult
+from .model import batch_buffers, batch_result, Impact, orbit_buffers, ThrowModel, ThrowResult
 
 LOST = 20                   # the part left the finite arm (an outcome, not an error)
 ERR_CARRY_GRASP = 21        # the part is not in a dynamic grasp somewhere along the carry
@@ -599,39 +599,16 @@ class EffectModel(ThrowModel):
         return f'the part rolled or slid off the arm [0, {L * 100:g} cm]'
 
     def f_batch(self, edges, radii):
-        edges = np.ascontiguousarray(np.asarray(edges, dtype=np.int64).ravel())
-        radii = np.ascontiguousarray(np.asarray(radii, dtype=float).ravel())
-        if edges.shape != radii.shape:
-            raise InputError('states', f'{edges.size} edges but {radii.size} radii',
-                             'give one edge per radius')
-        m = edges.size
-        out_edge = np.empty(m, dtype=np.int64)
-        out_r = np.empty(m)
-        out_status = np.empty(m, dtype=np.int64)
-        out_t = np.empty(m)
-        out_rot = np.empty(m)
-        z = np.ascontiguousarray(self._draw((m,)))
-        throw_batch(edges, radii, z, *self._cargs, out_edge, out_r, out_status, out_t, out_rot)
-        ok = out_status == kernel.OK
-        jog = (out_edge == edges) & (np.abs(out_rot) < math.pi) & ok
-        kind = np.where(out_status == LOST, 'lost',
-                        np.where(~ok, '', np.where(jog, 'jog', 'flip')))
-        return {'edge': out_edge, 'R': out_r, 'status': out_status, 'kind': kind,
-                'flight_time': out_t, 'net_rotation': out_rot}
+        edges, radii, out = batch_buffers(edges, radii)
+        z = np.ascontiguousarray(self._draw((edges.size,)))
+        throw_batch(edges, radii, z, *self._cargs, *out)
+        return batch_result(edges, out, lost_status=LOST)
 
     def orbits(self, edges, radii, throws):
-        edges = np.ascontiguousarray(np.asarray(edges, dtype=np.int64).ravel())
-        radii = np.ascontiguousarray(np.asarray(radii, dtype=float).ravel())
-        m = edges.size
-        out_edge = np.full((m, throws + 1), -1, dtype=np.int64)
-        out_r = np.full((m, throws + 1), np.nan)
-        out_rot = np.zeros((m, throws + 1))
-        out_status = np.empty(m, dtype=np.int64)
-        out_done = np.empty(m, dtype=np.int64)
-        z = np.ascontiguousarray(self._draw((m, throws)))
-        orbit_batch(edges, radii, throws, z, *self._cargs, out_edge, out_r, out_rot,
-                    out_status, out_done)
-        return out_edge, out_r, out_rot, out_status, out_done
+        edges, radii, out = orbit_buffers(edges, radii, throws)
+        z = np.ascontiguousarray(self._draw((edges.size, throws)))
+        orbit_batch(edges, radii, throws, z, *self._cargs, *out)
+        return out
 
     def orbit_arrays(self, edge, R, throws):
         """Like ThrowModel.orbit_arrays; a lost throw ends the arrays with edge -1, R nan."""

@@ -130,6 +130,50 @@ def _state_arrays(edges, radii):
     return (np.ascontiguousarray(e.astype(np.int64).ravel()), np.ascontiguousarray(r))
 
 
+def batch_buffers(edges, radii):
+    """
+    Validate a batch of states and allocate f_batch's outputs.
+
+    Returns (edges, radii, (edge', R', status, flight time, net rotation) output arrays).
+    """
+    edges, radii = _state_arrays(edges, radii)
+    if edges.shape != radii.shape:
+        raise InputError('states', f'{edges.size} edges but {radii.size} radii',
+                         'give one edge per radius')
+    m = edges.size
+    return edges, radii, (np.empty(m, dtype=np.int64), np.empty(m),
+                          np.empty(m, dtype=np.int64), np.empty(m), np.empty(m))
+
+
+def batch_result(edges, outputs, lost_status=None):
+    """Return f_batch's dict from the filled outputs; ``lost_status`` marks 'lost' states."""
+    out_edge, out_r, out_status, out_t, out_rot = outputs
+    ok = out_status == kernel.OK
+    jog = (out_edge == edges) & (np.abs(out_rot) < math.pi) & ok
+    kind = np.where(~ok, '', np.where(jog, 'jog', 'flip'))
+    if lost_status is not None:
+        kind = np.where(out_status == lost_status, 'lost', kind)
+    return {'edge': out_edge, 'R': out_r, 'status': out_status, 'kind': kind,
+            'flight_time': out_t, 'net_rotation': out_rot}
+
+
+def orbit_buffers(edges, radii, throws):
+    """
+    Validate the starts of many orbits and allocate their outputs.
+
+    Returns (edges, radii, (edges, radii, rotations) of shape (starts, throws + 1), status,
+    throws done).
+    """
+    edges, radii = _state_arrays(edges, radii)
+    if edges.shape != radii.shape:
+        raise InputError('states', f'{edges.size} edges but {radii.size} radii',
+                         'give one edge per radius')
+    m = edges.size
+    return edges, radii, (np.full((m, throws + 1), -1, dtype=np.int64),
+                          np.full((m, throws + 1), np.nan), np.zeros((m, throws + 1)),
+                          np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64))
+
+
 class ThrowModel:
     """
     f(i, R) for a part on an arm with offset h, release speed w and gravity g (< 0).
@@ -283,21 +327,9 @@ class ThrowModel:
         net_rotation. States outside the domain get status != 0 and NaN R;
         ``error_message(status, edge, R)`` gives the text.
         """
-        edges, radii = _state_arrays(edges, radii)
-        if edges.shape != radii.shape:
-            raise InputError('states', f'{edges.size} edges but {radii.size} radii',
-                             'give one edge per radius')
-        m = edges.size
-        out_edge = np.empty(m, dtype=np.int64)
-        out_r = np.empty(m)
-        out_status = np.empty(m, dtype=np.int64)
-        out_t = np.empty(m)
-        out_rot = np.empty(m)
-        kernel.throw_many(edges, radii, *self._args, out_edge, out_r, out_status, out_t, out_rot)
-        jog = (out_edge == edges) & (np.abs(out_rot) < math.pi) & (out_status == kernel.OK)
-        kind = np.where(out_status != kernel.OK, '', np.where(jog, 'jog', 'flip'))
-        return {'edge': out_edge, 'R': out_r, 'status': out_status, 'kind': kind,
-                'flight_time': out_t, 'net_rotation': out_rot}
+        edges, radii, out = batch_buffers(edges, radii)
+        kernel.throw_many(edges, radii, *self._args, *out)
+        return batch_result(edges, out)
 
     def orbit_arrays(self, edge, R, throws):
         """Iterate f: arrays of edges, radii and net rotations (index 0 is the start)."""
@@ -313,19 +345,9 @@ class ThrowModel:
 
     def orbits(self, edges, radii, throws):
         """Iterate many orbits at once: arrays (starts, throws + 1), status, throws done."""
-        edges, radii = _state_arrays(edges, radii)
-        if edges.shape != radii.shape:
-            raise InputError('states', f'{edges.size} edges but {radii.size} radii',
-                             'give one edge per radius')
-        m = edges.size
-        out_edge = np.full((m, throws + 1), -1, dtype=np.int64)
-        out_r = np.full((m, throws + 1), np.nan)
-        out_rot = np.zeros((m, throws + 1))
-        out_status = np.empty(m, dtype=np.int64)
-        out_done = np.empty(m, dtype=np.int64)
-        kernel.orbit_many(edges, radii, throws, *self._args, out_edge, out_r, out_rot,
-                          out_status, out_done)
-        return out_edge, out_r, out_rot, out_status, out_done
+        edges, radii, out = orbit_buffers(edges, radii, throws)
+        kernel.orbit_many(edges, radii, throws, *self._args, *out)
+        return out
 
     def check(self, edge, R):
         err = self.domain_error(edge, R)
