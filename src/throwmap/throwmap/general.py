@@ -46,6 +46,7 @@ import math
 import numpy as np
 
 from . import _jitcache  # noqa: F401  (drops stale compiled code first)
+from .kernel import _record as kernel_record
 from .kernel import (ERR_NONFINITE, ERR_SETTLE_CAP, EV_FLAT_LANDING,
                      EV_FLIGHT_IMPACT, EV_LANDING, EV_TIP_FROM_REST, njit, OK, REC_COLS,
                      sticking_impact)
@@ -356,18 +357,10 @@ def _contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, h, g, rho2, mu
 
 @njit
 def _record(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1):
-    if nrec < rec.shape[0]:
-        rec[nrec, 0] = kind
-        rec[nrec, 1] = vertex
-        rec[nrec, 2] = edge
-        rec[nrec, 3] = x
-        rec[nrec, 4] = w0
-        rec[nrec, 5] = w1
-        rec[nrec, 6] = e0
-        rec[nrec, 7] = e1
-        for col in range(8, rec.shape[1]):
-            rec[nrec, col] = math.nan
-    return nrec + 1
+    """Record an event; the rolling-segment columns of kernel records do not apply here."""
+    nan = math.nan
+    return kernel_record(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1, nan, nan, nan, nan,
+                         nan)
 
 
 @njit
