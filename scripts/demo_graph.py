@@ -27,22 +27,25 @@ OUT_DIR/ready.png. Exit status 0 when every verdict agreed with the predicted st
 
 import argparse
 import csv
-import errno
-import fcntl
 import os
 import pathlib
-import random
 import shutil
 import signal
-import socket
 import subprocess
 import sys
-import tempfile
 import time
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 INSTALL = REPO / 'ros2_ws' / 'install'
 STARTUP_TIMEOUT = 90.0
+# The domain picker and the node environment come from the installed feeder_driver.
+sys.path.insert(0, str(INSTALL / 'feeder_driver' / 'lib' / f'python{sys.version_info.major}.'
+                       f'{sys.version_info.minor}' / 'site-packages'))
+try:
+    from feeder_driver.testing import claim_domain_id as free_domain, install_env
+except ImportError:
+    raise SystemExit(f'demo_graph: feeder_driver is not installed in {INSTALL}: run '
+                     '. scripts/setup.sh first') from None
 
 
 def parse_args():
@@ -61,43 +64,8 @@ def parse_args():
     return a
 
 
-def free_domain():
-    """Return (domain id, held lock file): Fast DDS discovery ports free, no other holder."""
-    ids = list(range(1, 102))
-    random.shuffle(ids)
-    for d in ids:
-        lock = open(pathlib.Path(tempfile.gettempdir()) / f'feeder-ros-domain-{d}.lock', 'w')
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            lock.close()
-            continue
-        ports = [7400 + 250 * d + off + 2 * p for p in range(6) for off in (10, 11)]
-        busy = False
-        for port in ports:
-            with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-                try:
-                    s.bind(('127.0.0.1', port))
-                except OSError as exc:
-                    busy = exc.errno == errno.EADDRINUSE
-                    if busy:
-                        break
-                    raise
-        if not busy:
-            return d, lock
-        lock.close()
-    raise RuntimeError('no free ROS_DOMAIN_ID in 1..101')
-
-
 def node_env():
-    env = os.environ.copy()
-    site = f'lib/python{sys.version_info.major}.{sys.version_info.minor}/site-packages'
-    pkgs = sorted(p for p in INSTALL.iterdir() if p.is_dir())
-    env['PYTHONPATH'] = os.pathsep.join([str(p / site) for p in pkgs if (p / site).is_dir()]
-                                        + [env.get('PYTHONPATH', '')]).strip(os.pathsep)
-    env['AMENT_PREFIX_PATH'] = os.pathsep.join([str(p) for p in pkgs] + [sys.prefix])
-    env['RCUTILS_COLORIZED_OUTPUT'] = '0'
-    return env
+    return install_env(INSTALL)
 
 
 class Processes:
@@ -242,18 +210,30 @@ def run(args, scene_path, out, procs, t0):
     base = len(got['ready'])            # the latched initial false
     printed = [0]
 
+    def states():
+        """(edge, R) per cycle; a lost part (edge -1) has no predicted/radius (R None)."""
+        out, radii = [], iter(got['radius'])
+        for m in got['edge']:
+            r = None if m.data < 0 else next(radii, None)
+            if m.data >= 0 and r is None:
+                break
+            out.append((m.data, None if r is None else r.data))
+        return out
+
     def report():
         verdicts = got['ready'][base:]
         offset = len(got['status']) - len(verdicts)    # cycles before the monitor listened
+        known = states()
         while printed[0] < len(verdicts):
             j = printed[0]
             k = j + max(offset, 0)
-            if k >= min(len(got['edge']), len(got['radius'])):
+            if k >= len(known):
                 break
             if verdicts[j].data:
                 seq = int({kv.key: kv.value for kv in got['status'][k].values}['seq'])
-                print(f'  cycle {seq:4d}: edge1_ready  R = {100 * got["radius"][k].data:6.2f} '
-                      f'cm, edge {got["edge"][k].data}', flush=True)
+                edge, R = known[k]
+                where = 'no part on the arm' if R is None else f'R = {100 * R:6.2f} cm'
+                print(f'  cycle {seq:4d}: edge1_ready  {where}, edge {edge}', flush=True)
             printed[0] += 1
 
     t_run = time.monotonic()
@@ -279,9 +259,8 @@ def run(args, scene_path, out, procs, t0):
     verdicts = [m.data for m in got['ready'][base:]]
     offset = n - len(verdicts)
     rows, false_ready, missed, goal_seen = [], 0, 0, 0
-    for k in range(min(n, len(got['edge']), len(got['radius']))):
-        edge, R = got['edge'][k].data, got['radius'][k].data
-        seen = bool(sees(scene.part, edge, R, radius, an.sensor.footprint))
+    for k, (edge, R) in enumerate(states()[:n]):
+        seen = edge >= 0 and bool(sees(scene.part, edge, R, radius, an.sensor.footprint))
         j = k - offset
         verdict = verdicts[j] if 0 <= j < len(verdicts) else None
         if verdict and not (seen and edge == goal):
@@ -291,7 +270,8 @@ def run(args, scene_path, out, procs, t0):
             missed += verdict is False
         seq = int({kv.key: kv.value for kv in got['status'][k].values}['seq'])
         kind = got['kind'][k].data if k < len(got['kind']) else ''
-        rows.append((seq, edge, R, kind, int(seen), '' if verdict is None else int(verdict)))
+        rows.append((seq, edge, '' if R is None else R, kind, int(seen),
+                     '' if verdict is None else int(verdict)))
     with open(out / 'cycles.csv', 'w', newline='') as fh:
         w = csv.writer(fh)
         w.writerow(['seq', 'edge', 'R_m', 'kind', 'sensor', 'edge1_ready'])
@@ -325,6 +305,7 @@ def plot(rows, an, part, path, name):
 
     fig, ax = plt.subplots(figsize=(10, 5))
     u_min, u_max = part.U.min(axis=1), part.U.max(axis=1)
+    rows = [r for r in rows if r[1] >= 0]       # a lost part has no R
     for e in sorted({r[1] for r in rows}):
         sel = [r for r in rows if r[1] == e]
         seq = [r[0] for r in sel]

@@ -27,16 +27,11 @@ machine never share a graph. Fixtures for the tests:
   ``call(srv_type, name, request)`` and ``set_parameters(node_name, {name: value})``.
 """
 
-import errno
-import fcntl
 import os
 import pathlib
-import random
 import signal
-import socket
 import subprocess
 import sys
-import tempfile
 import time
 
 import pytest
@@ -47,47 +42,16 @@ INSTALL = REPO / 'ros2_ws' / 'install'
 # Before anything in this process calls rclpy.init: discovery stays on this machine.
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
-# Fast DDS default ports (RTPS well-known ports): PB 7400, DG 250, PG 2, d1 10, d3 11.
-_PB, _DG, _PG = 7400, 250, 2
-
-
-def _ports_free(domain, participants=6):
-    for p in range(participants):
-        for offset in (10, 11):
-            port = _PB + _DG * domain + offset + _PG * p
-            with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-                try:
-                    s.bind(('127.0.0.1', port))
-                except OSError as exc:
-                    if exc.errno == errno.EADDRINUSE:
-                        return False
-                    raise
-    return True
-
-
-def _claim_domain():
-    """(domain id, open lock file): a domain no other test holds and no participant uses."""
-    lock_dir = pathlib.Path(tempfile.gettempdir())
-    own = os.environ.get('ROS_DOMAIN_ID')
-    candidates = [d for d in range(1, 102) if str(d) != own]
-    random.shuffle(candidates)
-    for d in candidates:
-        fh = open(lock_dir / f'feeder-ros-domain-{d}.lock', 'w')
-        try:
-            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            fh.close()
-            continue
-        if _ports_free(d):
-            return d, fh
-        fh.close()
-    raise RuntimeError('no free ROS_DOMAIN_ID in 1..101')
+# The domain picker and the process environment are feeder_driver.testing's (one
+# implementation for the tests, the demo and the benchmarks); taken from the source tree.
+sys.path.insert(0, str(REPO / 'src' / 'feeder_driver'))
+from feeder_driver.testing import claim_domain_id, install_env  # noqa: E402, I100
 
 
 @pytest.fixture(autouse=True)
 def ros_domain(monkeypatch):
     """Export a free ROS_DOMAIN_ID for this test (node processes inherit it)."""
-    domain, lock = _claim_domain()
+    domain, lock = claim_domain_id()
     monkeypatch.setenv('ROS_DOMAIN_ID', str(domain))
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     try:
@@ -98,17 +62,7 @@ def ros_domain(monkeypatch):
 
 def _process_env():
     """Return this environment plus the colcon install (PYTHONPATH, AMENT_PREFIX_PATH)."""
-    env = os.environ.copy()
-    site = f'lib/python{sys.version_info.major}.{sys.version_info.minor}/site-packages'
-    pkgs = sorted(p for p in INSTALL.iterdir() if p.is_dir()) if INSTALL.is_dir() else []
-    paths = [str(p / site) for p in pkgs if (p / site).is_dir()]
-    env['PYTHONPATH'] = os.pathsep.join(paths + [env.get('PYTHONPATH', '')]).strip(os.pathsep)
-    prefixes = [str(p) for p in pkgs] + [sys.prefix]
-    env['AMENT_PREFIX_PATH'] = os.pathsep.join(
-        prefixes + [env.get('AMENT_PREFIX_PATH', '')]).strip(os.pathsep)
-    env['PYTHONUNBUFFERED'] = '1'
-    env['RCUTILS_COLORIZED_OUTPUT'] = '0'
-    return env
+    return install_env(INSTALL)
 
 
 @pytest.fixture(scope='session', autouse=True)

@@ -16,8 +16,13 @@
 
 import pathlib
 
-from diagnostic_msgs.msg import DiagnosticArray
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Range
+from std_msgs.msg import Bool, Float64, Int32
+from std_srvs.srv import SetBool
+from throwmap import analyse, load_scene, sees
 
 # The test's own QoS (written out here, not taken from the code under test).
 RELIABLE = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
@@ -27,6 +32,8 @@ LATCHED = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
 STARTUP_TIMEOUT = 60.0
 REPO = pathlib.Path(__file__).resolve().parents[1]
 TRIANGLE = str(REPO / 'scenes' / 'triangle.yaml')
+EXPERIMENT = str(REPO / 'scenes' / 'experiment.yaml')
+SHORT_ARM = str(REPO / 'tests' / 'scenes' / 'short_arm.yaml')
 
 
 def sim_as_hardware(graph, *params, scene=TRIANGLE, ns='/feeder'):
@@ -88,3 +95,88 @@ def wait_for_monitor(ros, ready):
 def wait_for_readers(ros, topic, count):
     ros.spin_until(lambda: ros.node.count_subscribers(topic) >= count, STARTUP_TIMEOUT,
                    f'{count} readers of {topic}')
+
+
+def run_cycles(ros, cycles, statuses, period):
+    """Enable cycling until ``statuses`` holds ``cycles`` messages, then disable it."""
+    res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True))
+    assert res.success, res.message
+    ros.spin_until(lambda: len(statuses) >= cycles, 20 + 3 * cycles * period,
+                   f'{cycles} cycles')
+    res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=False))
+    assert res.success, res.message
+
+
+def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
+    """
+    Run the sim as hardware and the monitor on ``scene``; check every edge1_ready verdict.
+
+    Every cycle completes once, with one proximity and one prediction; the sensor bit is the
+    sensor geometry of the predicted state; edge1_ready is true exactly for the cycles whose
+    part is seen on the goal edge after the warm-up (at least ``min_ready`` of them); the
+    monitor reports no anomaly and counts the same.
+    """
+    sim = sim_as_hardware(graph, f'cycle_period:={period}', scene=scene)
+    mon = monitor(graph, scene=scene)
+    sc = load_scene(scene)
+    an = analyse(sc)
+    goal, radius = an.sensor.goal_edge, an.sensor.radius
+    warmup, footprint = an.sensor.warmup_throws, an.sensor.footprint
+
+    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    prox = Collector(ros, Range, '/feeder/proximity')
+    edges = Collector(ros, Int32, '/feeder/predicted/edge')
+    radii = Collector(ros, Float64, '/feeder/predicted/radius')
+    diags = Diagnostics(ros)
+    wait_for_monitor(ros, ready)
+    for topic in ('/feeder/cycle_status', '/feeder/proximity'):
+        wait_for_readers(ros, topic, 2)         # the monitor's and ours
+    ros.spin_for(0.5)
+
+    run_cycles(ros, cycles, statuses, period)
+    ros.spin_for(1.5)                           # let the monitor finish the last cycles
+    n = len(statuses)
+    assert n >= cycles
+    assert len(prox) == len(edges) == len(radii) == n
+    seqs = [int(status_values(s)['seq']) for s in statuses.msgs]
+    assert seqs == list(range(seqs[0], seqs[0] + n))
+    assert all(s.level == DiagnosticStatus.OK for s in statuses.msgs)
+
+    # The sim's sensor bit is the sensor geometry applied to its predicted state.
+    truth = [bool(sees(sc.part, e.data, r.data, radius, footprint))
+             for e, r in zip(edges.msgs, radii.msgs)]
+    assert [p.range == float('-inf') for p in prox.msgs] == truth
+    assert [status_values(s)['sensor'] == '1' for s in statuses.msgs] == truth
+    for p in prox.msgs:
+        assert p.radiation_type == Range.INFRARED and p.header.frame_id == 'feeder_sensor'
+        assert p.min_range == p.max_range == pytest.approx(0.02, rel=1e-6)     # float32
+
+    # One edge1_ready per cycle after the initial latched one; align them at the end (the
+    # monitor may have missed the very first cycles while discovery finished).
+    verdicts = [m.data for m in ready.msgs[1:]]
+    missed = n - len(verdicts)
+    assert 0 <= missed <= 3, f'{len(verdicts)} verdicts for {n} cycles'
+    on_goal = 0
+    for j, verdict in enumerate(verdicts):
+        k = j + missed
+        edge, R = edges.msgs[k].data, radii.msgs[k].data
+        seen_on_goal = truth[k] and edge == goal
+        if verdict:
+            assert seen_on_goal, f'edge1_ready at cycle {seqs[k]} but the part is on edge ' \
+                f'{edge} at R {R:.4f} m (sensor sees it: {truth[k]})'
+        if seen_on_goal and j + 1 >= warmup:
+            on_goal += 1
+            assert verdict, f'cycle {seqs[k]}: part seen on the goal edge, not reported'
+    assert on_goal >= min_ready and sum(verdicts) == on_goal
+
+    # The monitor saw nothing the limit set cannot produce, and counted the same.
+    ros.spin_for(1.2)
+    name = 'feeder_monitor: readiness'
+    assert diags.levels(name), 'no monitor diagnostics'
+    assert DiagnosticStatus.ERROR not in diags.levels(name), \
+        [s.message for s in diags.by_name[name] if s.level == DiagnosticStatus.ERROR]
+    last = diags.values(diags.by_name[name][-1])
+    assert int(last['ready']) == on_goal and int(last['anomalies']) == 0
+    assert int(last['completed']) == len(verdicts)
+    assert sim.poll() is None and mon.poll() is None

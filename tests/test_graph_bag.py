@@ -88,7 +88,7 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     for k in range(N):
         res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
         assert res.success, res.message
-        assert res.message.startswith(f'fired cycle seq={k + 1}')
+        assert res.message.startswith(f'fired cycle seq {k + 1}')
     ros.spin_until(lambda: len(statuses) == N and len(ready) == N + 1, 20.0, 'all cycles')
     ros.spin_for(1.2)       # and /diagnostics once more
     rec.send_signal(signal.SIGTERM)     # (the demo stops its recorder with SIGINT)

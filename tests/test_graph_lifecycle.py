@@ -50,7 +50,7 @@ def test_services_follow_the_lifecycle(graph, ros):
     assert state(ros) == 'active'
     ros.spin_until(lambda: len(limit_set) == 1, STARTUP_TIMEOUT, 'the latched limit set')
     res = ros.call(Trigger, f'{NODE}/trigger_cycle', Trigger.Request())
-    assert res.success and res.message == 'fired cycle seq=1'
+    assert res.success and res.message == 'fired cycle seq 1'
     ros.spin_until(lambda: len(edges) == 1, 10.0, 'the prediction')
     res = ros.call(SetBool, f'{NODE}/enable', SetBool.Request(data=True))
     assert res.success

@@ -16,11 +16,16 @@
 Feeder controller emulator: speaks the controller side of the protocol on a pty (ROS-free).
 
 The part's state comes from the throw-map library: each accepted FIRE throws the part once
-(``model.f``) and the sensor bit is ``sees(part, edge, R, radius, footprint)`` of the state it
-settles in. A stable symlink (``--link``) points at the pty's slave, so a driver can reopen
-the same path after an emulated unplug. Fault switches drop replies, inject garbage, delay
-replies, reset the controller or unplug the port; ``--truth-log`` writes one JSON line per
-FIRE received so tests can account for every cycle. CLI table: docs/driver.md.
+(``model.f``) and the sensor bit is the scene's reading of the state it settles in
+(``scene.sense``: the geometric ``sees(part, edge, R, radius, footprint)``, with the seeded false
+positives and negatives of ``sensor_noise`` if the scene names it). A throw that loses the part
+off a finite arm leaves the arm empty: later throws move nothing and the sensor sees nothing
+(but its false positives) until the part is put back (:meth:`Controller.request_place`,
+SIGUSR1). A throw that leaves the domain of f ends its cycle with ``ERR,<seq>,FAULT``. A
+stable symlink (``--link``) points at the pty's slave, so a driver can reopen the same path
+after an emulated unplug. Fault switches drop replies, inject garbage, delay replies, reset
+the controller or unplug the port; ``--truth-log`` writes one JSON line per FIRE received so
+tests can account for every cycle. CLI table: docs/driver.md.
 """
 
 import argparse
@@ -44,6 +49,14 @@ FIRMWARE = 'feeder-emu-1.0'
 
 class EmulatorError(Exception):
     """Bad emulator option or set-up failure; the text names the problem and the fix."""
+
+
+class ThrowFailed(Exception):
+    """The throw map has no answer for a throw; ``code_text`` fits an ERR frame's text."""
+
+    def __init__(self, code_text, detail):
+        self.code_text = code_text
+        super().__init__(detail)
 
 
 def _positive_int(name, value):
@@ -219,22 +232,29 @@ class _Cycle:
         self.fired_at = now
         self.thrown = False
         self.sent = {'ack': False, 'rel': False, 'sens': False}
-        self.edge = self.R = self.kind = self.bit = None
+        self.edge = self.R = self.kind = self.bit = self.seen = self.edge0 = None
+        self.error = None
 
 
 class Controller:
     """
     The emulated controller: protocol, cycle timing, part state and faults.
 
-    ``throw()`` returns ``(edge, R, kind)`` of the next resting state and ``sense(edge, R)``
-    its sensor bit; both come from the throw-map library in :func:`from_scene`.
+    ``throw()`` returns ``(edge, R, kind)`` of the next resting state (edge -1 and R None: no
+    part on the arm) or raises :class:`ThrowFailed`; ``sense(edge, R)`` gives its sensor bit,
+    ``sees(edge, R)`` (optional, for the truth log) whether the part is in the sensor's view,
+    ``place()`` (optional) puts a part back at the start; all come from the throw-map library
+    in :func:`from_scene`.
     """
 
     def __init__(self, link, throw, sense, release_speed, state=None, cycle_time=0.1,
                  heartbeat=1.0, faults=None, truth_log=None, firmware=FIRMWARE, header=None,
-                 log=None, clock=time.monotonic):
+                 log=None, clock=time.monotonic, sees=None, place=None):
         self._throw = throw
         self._sense = sense
+        self._sees = sees
+        self._place = place
+        self._place_requested = threading.Event()
         self.release_speed_mrad_s = int(round(release_speed * 1000.0))
         self.state = state
         self.cycle_time = _nonneg('--cycle-time', cycle_time)
@@ -292,10 +312,26 @@ class Controller:
     def stop(self):
         """Ask :meth:`run` to return (thread- and signal-safe)."""
         self._stop.set()
+        self._wake()
+
+    def request_place(self):
+        """Ask :meth:`run` to put a part back at the start state (thread- and signal-safe)."""
+        self._place_requested.set()
+        self._wake()
+
+    def _wake(self):
         try:
             os.write(self._wake_w, b'x')
         except OSError:
             pass
+
+    def _place_part(self):
+        self._place_requested.clear()
+        if self._place is None:
+            return
+        edge, R = self._place()
+        self._log(f'part placed on edge {edge} at R {R:.4f} m')
+        self._write_truth({'type': 'place', 'edge': edge, 'R': R, 't': self._clock()})
 
     def _power_up(self):
         self._boot += 1
@@ -324,6 +360,8 @@ class Controller:
                 continue
             if self._wake_r in ready:
                 os.read(self._wake_r, 64)
+            if self._place_requested.is_set():
+                self._place_part()
             if self.pty.plugged and self.pty.master in ready:
                 data = self.pty.read()
                 for event in self.parser.feed(data):
@@ -401,9 +439,19 @@ class Controller:
     def _release(self, cyc):
         if self.cycle is not cyc:
             return
-        cyc.edge, cyc.R, cyc.kind = self._throw()
-        cyc.thrown = True
-        cyc.bit = int(bool(self._sense(cyc.edge, cyc.R)))
+        if self.state is not None:
+            cyc.edge0 = self.state()[0]
+        try:
+            cyc.edge, cyc.R, cyc.kind = self._throw()
+        except ThrowFailed as exc:
+            # The arm moved, the throw map has no answer: the cycle ends with ERR FAULT.
+            cyc.error = exc
+            self._log(f'cycle {cyc.k}: {exc}')
+        else:
+            cyc.thrown = True
+            cyc.bit = int(bool(self._sense(cyc.edge, cyc.R)))
+            if self._sees is not None:
+                cyc.seen = bool(self._sees(cyc.edge, cyc.R))
         self._send(p.Rel(cyc.seq, self.release_speed_mrad_s))
         cyc.sent['rel'] = True
         if 'unplug' in cyc.faults:
@@ -427,6 +475,10 @@ class Controller:
         if 'drop_sens' in cyc.faults:
             self._finish(cyc, 'sens_dropped')
             return
+        if cyc.error is not None:
+            self._finish(cyc, 'fault')
+            self._send(p.Err(cyc.seq, 'FAULT', cyc.error.code_text))
+            return
         # Log before sending, so a reader of the log never sees a SENS it cannot account for.
         cyc.sent['sens'] = True
         self._finish(cyc, 'completed')
@@ -443,7 +495,10 @@ class Controller:
         self.cycle = None
         rec = {'type': 'fire', 'seq': cyc.seq, 'cycle': cyc.k, 'outcome': outcome,
                'faults': cyc.faults, 'throw': cyc.thrown, 'edge': cyc.edge, 'R': cyc.R,
-               'kind': cyc.kind, 'bit': cyc.bit, 'sent': dict(cyc.sent), 't': cyc.fired_at}
+               'kind': cyc.kind, 'bit': cyc.bit, 'seen': cyc.seen, 'edge0': cyc.edge0,
+               'sent': dict(cyc.sent), 't': cyc.fired_at}
+        if cyc.error is not None:
+            rec['error'] = str(cyc.error)
         if not cyc.thrown and self.state is not None:
             rec['edge'], rec['R'] = self.state()
         self._write_truth(rec)
@@ -455,10 +510,25 @@ class Controller:
             self._truth.flush()
 
 
-def from_scene(scene_path, sensor_radius=None, **kwargs):
-    """Build a Controller whose part follows the scene's throw map from its start state."""
+def _err_text(exc):
+    """Text of the ERR frame for a throw the map cannot compute (<= 48 chars, no , $ *)."""
+    what = getattr(exc, 'condition', None) or type(exc).__name__
+    text = f'throw outside the throw map: {what}'
+    return ''.join(c for c in text if c not in ',$*')[:48]
+
+
+def from_scene(scene_path, sensor_radius=None, seed=None, **kwargs):
+    """
+    Build a Controller whose part follows the scene's throw map from its start state.
+
+    ``seed`` seeds the scene's random effects (release_noise, sensor_noise); None: the scene's
+    ``noise.seed``. Without ``sensor_radius`` the sensor is throwmap's design, which needs the
+    scene's analysis: a scene whose analysis fails (the part is lost from its start, the
+    orbit leaves the domain of f, no finite sensor radius) is an EmulatorError.
+    """
+    import math
     import numpy as np
-    from throwmap import analyse, InputError, load_scene, sees
+    from throwmap import analyse, InputError, load_scene, sees, ThrowmapError
     try:
         scene = load_scene(scene_path)
     except InputError as exc:
@@ -468,29 +538,64 @@ def from_scene(scene_path, sensor_radius=None, **kwargs):
     header = {'scene': os.path.abspath(scene_path), 'goal_edge': scene.goal_edge,
               'release_speed': scene.release_speed}
     if sensor_radius is None:
-        an = analyse(scene)
+        try:
+            an = analyse(scene)
+        except ThrowmapError as exc:
+            raise EmulatorError(f'--scene: {scene_path}: analysis failed: {exc}') from None
         sensor_radius = an.sensor.radius
         footprint = an.sensor.footprint
+        if not math.isfinite(sensor_radius):
+            raise EmulatorError(f'--scene: {scene_path}: the sensor design gives no finite '
+                                'radius for this scene; give --sensor-radius')
         header.update(goal_edge=an.sensor.goal_edge, warmup_throws=an.sensor.warmup_throws,
                       bands={str(k): list(v) for k, v in an.limit_set.bands.items()},
                       sensor_feasible=an.sensor.feasible)
     elif not (isinstance(sensor_radius, (int, float)) and np.isfinite(sensor_radius)
               and sensor_radius > 0):
         raise EmulatorError(f'--sensor-radius: must be a number > 0 (m), got {sensor_radius!r}')
-    state = list(scene.default_start())
+    start = scene.default_start()
+    try:
+        model.f(*start)     # compile the throw map now (numba), not during the first cycle
+    except ThrowmapError:
+        pass
+    seed = scene.seed if seed is None else int(seed)
+    if hasattr(model, 'reseed'):
+        model.reseed(seed)      # after the analysis and the warm-up, which draw from it
+    state = list(start)
+    arm = scene.arm_length
     header.update(sensor_radius=float(sensor_radius), footprint=float(footprint),
-                  start=list(state))
+                  start=list(state), seed=seed,
+                  noisy_sensor=getattr(scene.effects, 'sensor_noise', None) is not None,
+                  arm_length=arm if arm is not None and math.isfinite(arm) else None)
 
     def throw():
-        edge, R, kind = model.f(state[0], state[1])
-        state[0], state[1] = int(edge), float(R)
+        if state[0] < 0:
+            return -1, None, 'lost'         # no part on the arm (lost off its end before)
+        try:
+            edge, R, kind = model.f(state[0], state[1])
+        except ThrowmapError as exc:
+            raise ThrowFailed(_err_text(exc), str(exc)) from None
+        if kind == 'lost':
+            state[0], state[1] = -1, None
+        else:
+            state[0], state[1] = int(edge), float(R)
         return state[0], state[1], kind
 
+    def seen(edge, R):
+        return edge >= 0 and bool(sees(scene.part, edge, R, sensor_radius, footprint))
+
     def sense(edge, R):
-        return bool(sees(scene.part, edge, R, sensor_radius, footprint))
+        if edge < 0 and not header['noisy_sensor']:
+            return False
+        return bool(scene.sense(edge, math.nan if R is None else R, sensor_radius, footprint))
+
+    def place():
+        state[0], state[1] = start
+        return start
 
     return Controller(throw=throw, sense=sense, release_speed=scene.release_speed,
-                      state=lambda: (state[0], state[1]), header=header, **kwargs)
+                      state=lambda: (state[0], state[1]), header=header, sees=seen,
+                      place=place, **kwargs)
 
 
 def build_arg_parser():
@@ -526,7 +631,9 @@ def build_arg_parser():
                     help='after N cycles, unplug during the next one (after its REL)')
     ap.add_argument('--unplug-for', type=float, default=1.0, metavar='S',
                     help='seconds unplugged (default %(default)s)')
-    ap.add_argument('--seed', type=int, default=0, help='seed of the garbage generator')
+    ap.add_argument('--seed', type=int, default=None,
+                    help="seed of the garbage (default 0) and of the scene's random effects, "
+                         "release_noise and sensor_noise (default: the scene's noise.seed)")
     ap.add_argument('--truth-log', metavar='FILE',
                     help='one JSON line per FIRE received (and a header line)')
     ap.add_argument('--firmware', default=FIRMWARE, help='firmware name in HELLO')
@@ -546,8 +653,8 @@ def main(argv=None):
     try:
         faults = Faults(args.drop_ack_every, args.drop_sens_every, args.garbage_every,
                         args.delay, args.delay_every, args.reset_after, args.unplug_after,
-                        args.unplug_for, args.seed)
-        ctl = from_scene(args.scene, args.sensor_radius, link=args.link,
+                        args.unplug_for, 0 if args.seed is None else args.seed)
+        ctl = from_scene(args.scene, args.sensor_radius, args.seed, link=args.link,
                          cycle_time=args.cycle_time, heartbeat=args.heartbeat, faults=faults,
                          truth_log=args.truth_log, firmware=args.firmware, log=log)
     except (EmulatorError, OSError) as exc:
@@ -559,6 +666,7 @@ def main(argv=None):
 
     signal.signal(signal.SIGTERM, on_signal)
     signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGUSR1, lambda signum, frame: ctl.request_place())
     try:
         ctl.start()
         h = ctl.header

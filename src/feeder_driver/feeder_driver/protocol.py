@@ -36,6 +36,9 @@ MAX_SPEED_MRAD_S = 10 ** 7
 _TOKEN_RE = re.compile(r'[A-Za-z0-9_-]{1,16}\Z')
 _BOOT_RE = re.compile(r'[A-Za-z0-9]{1,16}\Z')
 _WORD_RE = re.compile(r'[A-Z][A-Z0-9_]{0,11}\Z')
+# What each pattern allows, for the error messages.
+_RULES = {_TOKEN_RE: '1-16 of [A-Za-z0-9_-]', _BOOT_RE: '1-16 of [A-Za-z0-9]',
+          _WORD_RE: '1-12 of [A-Z0-9_], starting A-Z'}
 _UINT_RE = re.compile(r'[0-9]{1,10}\Z')
 _INT_RE = re.compile(r'-?[0-9]{1,10}\Z')
 _HEX = b'0123456789ABCDEFabcdef'
@@ -72,6 +75,13 @@ def _check_text(name, value, max_len, allow_empty=False):
         if not ' ' <= ch <= '~' or ch in '$*,':
             raise ProtocolError(f'{name}: character {ch!r} not allowed (printable ASCII '
                                 'except $ * and comma)')
+    return value
+
+
+def _check_match(name, value, pattern):
+    """Return ``value`` if it is a str that ``pattern`` matches; else raise ProtocolError."""
+    if not isinstance(value, str) or not pattern.match(value):
+        raise ProtocolError(f'{name}: {value!r} must be {_RULES[pattern]}')
     return value
 
 
@@ -113,22 +123,38 @@ def _expect(fields, count, usage):
         raise ProtocolError(f'expected {count} field(s) ({usage}), got {len(fields)}')
 
 
-# ---- host -> controller ------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Fire:
-    """``FIRE,<seq>``: run one throw-catch cycle tagged ``seq``."""
-
-    seq: int
-    NAME = 'FIRE'
+class _SeqOnly:
+    """Codec of the messages whose one field is a seq (``FIRE``, ``ACK``)."""
 
     def fields(self):
         return [self.NAME, str(_check_seq('seq', self.seq))]
 
     @classmethod
     def from_fields(cls, fields):
-        _expect(fields, 1, 'FIRE,<seq>')
+        _expect(fields, 1, f'{cls.NAME},<seq>')
         return cls(_parse_seq(fields[0]))
+
+
+class _TokenOnly:
+    """Codec of the messages whose one field is a token (``PING``, ``PONG``)."""
+
+    def fields(self):
+        return [self.NAME, _check_match('token', self.token, _TOKEN_RE)]
+
+    @classmethod
+    def from_fields(cls, fields):
+        _expect(fields, 1, f'{cls.NAME},<token>')
+        return cls(_check_match('token', fields[0], _TOKEN_RE))
+
+
+# ---- host -> controller ------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Fire(_SeqOnly):
+    """``FIRE,<seq>``: run one throw-catch cycle tagged ``seq``."""
+
+    seq: int
+    NAME = 'FIRE'
 
 
 @dataclass(frozen=True)
@@ -147,23 +173,11 @@ class Stop:
 
 
 @dataclass(frozen=True)
-class Ping:
+class Ping(_TokenOnly):
     """``PING,<token>``: the controller answers ``PONG,<token>``."""
 
     token: str
     NAME = 'PING'
-
-    def fields(self):
-        if not isinstance(self.token, str) or not _TOKEN_RE.match(self.token):
-            raise ProtocolError(f'token: {self.token!r} must be 1-16 of [A-Za-z0-9_-]')
-        return [self.NAME, self.token]
-
-    @classmethod
-    def from_fields(cls, fields):
-        _expect(fields, 1, 'PING,<token>')
-        if not _TOKEN_RE.match(fields[0]):
-            raise ProtocolError(f'token: {fields[0]!r} must be 1-16 of [A-Za-z0-9_-]')
-        return cls(fields[0])
 
 
 # ---- controller -> host ------------------------------------------------------------------
@@ -178,33 +192,21 @@ class Hello:
 
     def fields(self):
         _check_text('firmware', self.firmware, 32)
-        if not isinstance(self.boot_id, str) or not _BOOT_RE.match(self.boot_id):
-            raise ProtocolError(f'boot_id: {self.boot_id!r} must be 1-16 of [A-Za-z0-9]')
-        return [self.NAME, self.firmware, self.boot_id]
+        return [self.NAME, self.firmware, _check_match('boot_id', self.boot_id, _BOOT_RE)]
 
     @classmethod
     def from_fields(cls, fields):
         _expect(fields, 2, 'HELLO,<firmware>,<boot_id>')
         _check_text('firmware', fields[0], 32)
-        if not _BOOT_RE.match(fields[1]):
-            raise ProtocolError(f'boot_id: {fields[1]!r} must be 1-16 of [A-Za-z0-9]')
-        return cls(fields[0], fields[1])
+        return cls(fields[0], _check_match('boot_id', fields[1], _BOOT_RE))
 
 
 @dataclass(frozen=True)
-class Ack:
+class Ack(_SeqOnly):
     """``ACK,<seq>``: FIRE accepted, the cycle has started."""
 
     seq: int
     NAME = 'ACK'
-
-    def fields(self):
-        return [self.NAME, str(_check_seq('seq', self.seq))]
-
-    @classmethod
-    def from_fields(cls, fields):
-        _expect(fields, 1, 'ACK,<seq>')
-        return cls(_parse_seq(fields[0]))
 
 
 @dataclass(frozen=True)
@@ -267,8 +269,7 @@ class Err:
 
     def fields(self):
         seq = '-' if self.seq is None else str(_check_seq('seq', self.seq))
-        if not isinstance(self.code, str) or not _WORD_RE.match(self.code):
-            raise ProtocolError(f'code: {self.code!r} must be 1-12 of [A-Z0-9_], starting A-Z')
+        _check_match('code', self.code, _WORD_RE)
         _check_text('text', self.text, 48, allow_empty=True)
         return [self.NAME, seq, self.code, self.text]
 
@@ -276,29 +277,15 @@ class Err:
     def from_fields(cls, fields):
         _expect(fields, 3, 'ERR,<seq|->,<CODE>,<text>')
         seq = None if fields[0] == '-' else _parse_seq(fields[0])
-        if not _WORD_RE.match(fields[1]):
-            raise ProtocolError(f'code: {fields[1]!r} must be 1-12 of [A-Z0-9_], starting A-Z')
-        return cls(seq, fields[1], fields[2])
+        return cls(seq, _check_match('code', fields[1], _WORD_RE), fields[2])
 
 
 @dataclass(frozen=True)
-class Pong:
+class Pong(_TokenOnly):
     """``PONG,<token>``: answer to PING."""
 
     token: str
     NAME = 'PONG'
-
-    def fields(self):
-        if not isinstance(self.token, str) or not _TOKEN_RE.match(self.token):
-            raise ProtocolError(f'token: {self.token!r} must be 1-16 of [A-Za-z0-9_-]')
-        return [self.NAME, self.token]
-
-    @classmethod
-    def from_fields(cls, fields):
-        _expect(fields, 1, 'PONG,<token>')
-        if not _TOKEN_RE.match(fields[0]):
-            raise ProtocolError(f'token: {fields[0]!r} must be 1-16 of [A-Za-z0-9_-]')
-        return cls(fields[0])
 
 
 @dataclass(frozen=True)
@@ -313,17 +300,13 @@ class Hb:
         u = self.uptime_ms
         if isinstance(u, bool) or not isinstance(u, int) or not 0 <= u <= UINT32_MAX:
             raise ProtocolError(f'uptime_ms: must be an integer 0..{UINT32_MAX}, got {u!r}')
-        if not isinstance(self.state, str) or not _WORD_RE.match(self.state):
-            raise ProtocolError(f'state: {self.state!r} must be 1-12 of [A-Z0-9_]')
-        return [self.NAME, str(u), self.state]
+        return [self.NAME, str(u), _check_match('state', self.state, _WORD_RE)]
 
     @classmethod
     def from_fields(cls, fields):
         _expect(fields, 2, 'HB,<uptime_ms>,<STATE>')
         uptime = _parse_uint('uptime_ms', fields[0], UINT32_MAX)
-        if not _WORD_RE.match(fields[1]):
-            raise ProtocolError(f'state: {fields[1]!r} must be 1-12 of [A-Z0-9_]')
-        return cls(uptime, fields[1])
+        return cls(uptime, _check_match('state', fields[1], _WORD_RE))
 
 
 @dataclass(frozen=True)

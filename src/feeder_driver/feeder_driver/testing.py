@@ -13,18 +13,28 @@
 # limitations under the License.
 
 """
-Helpers for tests of the driver (ROS-free): DDS domain reservation, emulator in a thread.
+Helpers for tests and demos of the feeder graph (ROS-free): DDS domains, processes, emulator.
 
-:func:`reserve_domain_id` picks a ROS_DOMAIN_ID that no other test process of this machine
-holds (an exclusive ``flock`` on ``<tmp>/feeder-ros-domain-<id>.lock``, the same lock files as
-tests/conftest.py, kept until the process exits) and whose Fast DDS discovery ports on loopback
-are free, so parallel test runs never share a DDS domain.
+One implementation serves the package tests, tests/conftest.py, scripts/demo_graph.py and the
+benchmarks:
+
+* :func:`claim_domain_id` picks a ROS_DOMAIN_ID that no other test or demo process of this
+  machine holds (an exclusive ``flock`` on ``<tmp>/feeder-ros-domain-<id>.lock``, released when
+  the returned file is closed) and whose Fast DDS discovery ports on loopback are free, so
+  parallel runs never share a DDS domain; :func:`reserve_domain_id` holds one for the whole
+  process.
+* :func:`dds_env` and :func:`install_env`: environments for child processes (DDS on loopback
+  in a given domain; the executables of a colcon install).
+* :class:`EmulatorThread`: the controller emulator served from a thread.
 """
 
 import errno
 import fcntl
 import os
+import pathlib
+import random
 import socket
+import sys
 import tempfile
 import threading
 
@@ -49,13 +59,19 @@ def _ports_free(domain, participants=6):
     return True
 
 
-def reserve_domain_id(lo=1, hi=101):
-    """Reserve a domain id in [lo, hi] for this process (the same id on repeated calls)."""
-    if 'id' in _HELD:
-        return _HELD['id']
-    span = hi - lo + 1
-    for offset in range(span):
-        domain = lo + (os.getpid() + offset) % span
+def claim_domain_id(lo=1, hi=101, exclude=None):
+    """
+    Claim a free domain id in [lo, hi]: return (id, open lock file); close the file to free it.
+
+    Ids are tried in random order. ``exclude`` (default: this environment's ROS_DOMAIN_ID, the
+    interactive shell's own domain) is never returned.
+    """
+    if exclude is None:
+        exclude = {int(os.environ['ROS_DOMAIN_ID'])} \
+            if os.environ.get('ROS_DOMAIN_ID', '').isdigit() else set()
+    ids = [d for d in range(lo, hi + 1) if d not in exclude]
+    random.shuffle(ids)
+    for domain in ids:
         path = os.path.join(tempfile.gettempdir(), f'feeder-ros-domain-{domain}.lock')
         fh = open(path, 'w')
         try:
@@ -63,13 +79,19 @@ def reserve_domain_id(lo=1, hi=101):
         except OSError:
             fh.close()
             continue
-        if not _ports_free(domain):
-            fh.close()
-            continue
-        _HELD['id'], _HELD['file'] = domain, fh
-        return domain
+        if _ports_free(domain):
+            return domain, fh
+        fh.close()
     raise RuntimeError(f'no free ROS_DOMAIN_ID in [{lo}, {hi}]: every lock file '
-                       f'{tempfile.gettempdir()}/feeder-ros-domain-*.lock is held')
+                       f'{tempfile.gettempdir()}/feeder-ros-domain-*.lock is held or its '
+                       'ports are in use')
+
+
+def reserve_domain_id(lo=1, hi=101):
+    """Reserve a domain id in [lo, hi] for this process (the same id on repeated calls)."""
+    if 'id' not in _HELD:
+        _HELD['id'], _HELD['file'] = claim_domain_id(lo, hi)
+    return _HELD['id']
 
 
 def dds_env(domain_id, base=None):
@@ -79,6 +101,27 @@ def dds_env(domain_id, base=None):
     env['ROS_DOMAIN_ID'] = str(domain_id)
     env.pop('ROS_LOCALHOST_ONLY', None)
     env.pop('ROS_STATIC_PEERS', None)
+    return env
+
+
+def install_env(install, base=None):
+    """
+    Environment for the executables of the colcon install ``install`` (e.g. ros2_ws/install).
+
+    Its packages' site-packages go first on PYTHONPATH and their prefixes, then this Python's
+    (the venv with the ROS wheels), on AMENT_PREFIX_PATH; output unbuffered and uncoloured.
+    """
+    env = dict(os.environ if base is None else base)
+    install = pathlib.Path(install)
+    site = f'lib/python{sys.version_info.major}.{sys.version_info.minor}/site-packages'
+    pkgs = sorted(p for p in install.iterdir() if p.is_dir()) if install.is_dir() else []
+    paths = [str(p / site) for p in pkgs if (p / site).is_dir()]
+    env['PYTHONPATH'] = os.pathsep.join(paths + [env.get('PYTHONPATH', '')]).strip(os.pathsep)
+    prefixes = [str(p) for p in pkgs] + [sys.prefix]
+    env['AMENT_PREFIX_PATH'] = os.pathsep.join(
+        prefixes + [env.get('AMENT_PREFIX_PATH', '')]).strip(os.pathsep)
+    env['PYTHONUNBUFFERED'] = '1'
+    env['RCUTILS_COLORIZED_OUTPUT'] = '0'
     return env
 
 

@@ -16,6 +16,7 @@
 
 import json
 import os
+import pathlib
 import subprocess
 import sys
 import time
@@ -26,6 +27,8 @@ from feeder_driver.testing import EmulatorThread
 import pytest
 import serial
 from throwmap import load_scene, sees
+
+REPO = pathlib.Path(__file__).resolve().parents[3]
 
 
 class Client:
@@ -259,3 +262,116 @@ def test_cli_runs_and_cleans_up(tmp_path, scene_path, sensor_radius):
                    str(sensor_radius), '--max-time', '0.5')
     assert res.returncode == 0, res.stderr
     assert 'ready on' in res.stdout and not os.path.lexists(link)
+
+
+# ------------------------------------------------------------------ scene effects
+SHORT_ARM = REPO / 'tests' / 'scenes' / 'short_arm.yaml'
+HOUSE = REPO / 'scenes' / 'house.yaml'
+
+
+def fire(cl, seq):
+    """Fire one cycle; return its last reply (SENS or ERR)."""
+    cl.send(p.Fire(seq))
+    return cl.wait(lambda e: isinstance(e, (p.Sens, p.Err)) and e.seq == seq)[0]
+
+
+def strict_json(line):
+    def refuse(name):
+        raise ValueError(f'{name} in the truth log')
+    return json.loads(line, parse_constant=refuse)
+
+
+def test_a_part_lost_off_the_arm_end(tmp_path, link_path):
+    # The short arm with the part placed near its end: the first throw loses it.
+    scene = tmp_path / 'near_end.yaml'
+    scene.write_text(SHORT_ARM.read_text().replace('start: {edge: 1, R: 0.12}',
+                                                   'start: {edge: 1, R: 0.32}'))
+    log = tmp_path / 'truth.jsonl'
+    with EmulatorThread(str(scene), link_path, sensor_radius=0.2672, cycle_time=0.01,
+                        heartbeat=0.2, truth_log=str(log)) as emu:
+        cl = Client(link_path)
+        bits = [fire(cl, seq).bit for seq in range(1, 5)]
+        emu.controller.request_place()          # a part is put back at the start
+        time.sleep(0.1)
+        bits.append(fire(cl, 5).bit)
+        cl.close()
+    assert bits == [0] * 5
+    lines = [strict_json(x) for x in log.read_text().splitlines()]
+    assert lines[0]['arm_length'] == pytest.approx(0.33) and not lines[0]['noisy_sensor']
+    fires = [x for x in lines if x['type'] == 'fire']
+    # Lost at the first throw; empty throws (no part before them: edge0 -1) until the part is
+    # put back, then lost again.
+    assert [(x['edge0'], x['kind'], x['edge'], x['R'], x['seen']) for x in fires] == \
+        [(1, 'lost', -1, None, False)] + [(-1, 'lost', -1, None, False)] * 3 + \
+        [(1, 'lost', -1, None, False)]
+    assert all(x['outcome'] == 'completed' and x['throw'] for x in fires)
+    placed = [x for x in lines if x['type'] == 'place']
+    assert len(placed) == 1 and (placed[0]['edge'], placed[0]['R']) == (1, 0.32)
+    assert lines.index(placed[0]) == lines.index(fires[4]) - 1
+
+
+@pytest.mark.parametrize('seed', [7, 11])
+def test_noisy_scene_bits_follow_the_seed(link_path, seed):
+    from throwmap import ThrowmapError
+    radius, footprint = 0.2129, 0.005
+    with EmulatorThread(str(HOUSE), link_path, sensor_radius=radius, seed=seed,
+                        cycle_time=0.002, heartbeat=0.2) as emu:
+        cl = Client(link_path)
+        replies = [fire(cl, seq) for seq in range(1, 81)]
+        cl.close()
+        records = emu.records
+    # Independently: the scene seeded alike, each throw (release_noise) then its reading
+    # (sensor_noise) drawn from the scene's generator, in that order.
+    scene = load_scene(str(HOUSE))
+    scene.model.reseed(seed)
+    state = scene.default_start()
+    for reply, rec in zip(replies, records):
+        try:
+            edge, R, kind = scene.model.f(*state)
+        except ThrowmapError as exc:        # the cycle ends with ERR FAULT, the part stays
+            assert isinstance(reply, p.Err) and reply.code == 'FAULT', reply
+            assert rec['outcome'] == 'fault' and rec['error'] == str(exc)
+            continue
+        state = (edge, R)
+        bit = int(bool(scene.sense(edge, R, radius, footprint)))
+        assert isinstance(reply, p.Sens) and reply.bit == bit
+        assert (rec['edge'], rec['kind'], rec['bit']) == (edge, kind, bit)
+        assert rec['seen'] == bool(sees(scene.part, edge, R, radius, footprint))
+    # Both seeds give sensor errors (a bit that is not the geometry's) within 80 throws.
+    assert any(r['bit'] != r['seen'] for r in records if r['outcome'] == 'completed')
+
+
+def test_a_throw_the_map_cannot_compute_ends_with_err_fault(link_path):
+    from feeder_driver.emulator import Controller, ThrowFailed
+    import threading
+
+    def throw():
+        raise ThrowFailed('throw outside the throw map: grasp_noise', 'no dynamic grasp ...')
+
+    ctl = Controller(link_path, throw=throw, sense=lambda e, r: True, release_speed=5.0,
+                     state=lambda: (1, 0.12), cycle_time=0.01, heartbeat=0.2)
+    ctl.start()
+    thread = threading.Thread(target=ctl.run, daemon=True)
+    thread.start()
+    try:
+        cl = Client(link_path)
+        err = fire(cl, 1)
+        assert (err.code, err.text) == ('FAULT', 'throw outside the throw map: grasp_noise')
+        assert [type(e).__name__ for e in cl.events if not isinstance(e, p.Hb)] == \
+            ['Ack', 'Rel', 'Err']
+        cl.close()
+    finally:
+        ctl.stop()
+        thread.join(timeout=5)
+        ctl.close()
+    rec = ctl.records[-1]
+    assert (rec['outcome'], rec['throw'], rec['edge'], rec['R'], rec['bit']) == \
+        ('fault', False, 1, 0.12, None)
+    assert rec['error'] == 'no dynamic grasp ...'
+
+
+def test_a_scene_whose_analysis_fails_is_refused(tmp_path):
+    res = _run_cli('--scene', str(REPO / 'scenes' / 'hard' / 'fast_spin.yaml'), '--link',
+                   str(tmp_path / 'l'))
+    assert res.returncode == 2
+    assert 'analysis failed' in res.stderr and 'left the domain of f' in res.stderr

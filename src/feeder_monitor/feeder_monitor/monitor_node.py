@@ -19,24 +19,22 @@ ROS glue only: the rules and the state machine are feeder_monitor.readiness's, t
 throwmap's (through feeder_sim.analysis, the same numbers the sim uses).
 """
 
-import gc
+import functools
 import math
 import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from feeder_sim.analysis import load, scene_analysis
-from feeder_sim.params import check_scene
+from feeder_sim.params import check_changes
 from feeder_sim.ros_glue import (CYCLE_STATUS_QOS, declare, diagnostic_array, diagnostic_status,
-                                 DIAGNOSTICS_QOS, LATCHED_QOS, ParameterGate, stamp_seconds)
-import rclpy
-from rclpy.exceptions import InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException
+                                 DIAGNOSTICS_QOS, LATCHED_QOS, ParameterGate, run_node,
+                                 stamp_seconds, StartupError)
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Range
 from std_msgs.msg import Bool
-from throwmap import analyse
+from throwmap import analyse, ThrowmapError
 
 from .params import MONITOR_PARAMS
 from .readiness import (ANOMALY, CyclePairer, limit_set_orbit, ReadinessMonitor,
@@ -52,20 +50,27 @@ class MonitorNode(Node):
     def __init__(self, **kwargs):
         super().__init__('feeder_monitor', **kwargs)
         self._specs = {s.name: s for s in MONITOR_PARAMS}
-        self._scenes = {}
+        # Scenes by path, loaded once (the parameter checks load them too).
+        self._load_scene = functools.lru_cache(maxsize=None)(load)
         self._scene = None
         self._base = None
         self._orbit = None
         self._monitor = None
         self._pairer = None
         ParameterGate(self, self._validate, self._apply)
-        self._scene = self._scenes[declare(self, self._specs['scene'])]
+        self._scene = self._load_scene(declare(self, self._specs['scene']))
         orbit_throws = declare(self, self._specs['orbit_throws'])
-        self._base = analyse(self._scene)
-        self._orbit = limit_set_orbit(self._scene, self._base, orbit_throws)
-        for name in RULE_PARAMS + ('stamp_tolerance', 'pair_timeout', 'diagnostics_period'):
-            declare(self, self._specs[name])
-        rules = self._rules({})
+        try:
+            self._base = analyse(self._scene)
+            self._orbit = limit_set_orbit(self._scene, self._base, orbit_throws)
+            for name in RULE_PARAMS + ('stamp_tolerance', 'pair_timeout',
+                                       'diagnostics_period'):
+                declare(self, self._specs[name])
+            rules = self._rules({})
+        except ThrowmapError as exc:
+            raise StartupError(f'scene {self._scene.source}: {exc}') from None
+        except ValueError as exc:       # a rule parameter the analysis rejects
+            raise StartupError(str(exc)) from None
         self._monitor = ReadinessMonitor(rules)
         self._pairer = CyclePairer(self._param('stamp_tolerance'), self._param('pair_timeout'))
         self._anomaly_in_period = None
@@ -89,11 +94,6 @@ class MonitorNode(Node):
     def _param(self, name):
         return self.get_parameter(name).value
 
-    def _load_scene(self, path):
-        if path not in self._scenes:
-            self._scenes[path] = load(path)
-        return self._scenes[path]
-
     def _rules(self, changes):
         """Rules from the current parameters overridden by ``changes``; ValueError if invalid."""
         def value(name):
@@ -105,20 +105,11 @@ class MonitorNode(Node):
                                    value('early_margin_cycles'), value('run_margin_cycles'))
 
     def _validate(self, changes):
-        for name, value in changes.items():
-            spec = self._specs.get(name)
-            if spec is None:
-                continue
-            if not isinstance(value, (bool, str)):
-                reason = spec.check_range(value)
-                if reason:
-                    return reason
-            if name == 'scene':
-                reason = check_scene(value, self._load_scene)
-                if reason:
-                    return reason
-        if self._base is not None and any(n in changes for n in RULE_PARAMS) and all(
-                n in changes or self.has_parameter(n) for n in RULE_PARAMS):
+        reason = check_changes(self._specs, changes, self._load_scene)
+        if reason:
+            return reason
+        # At start-up (no monitor yet) the rules are checked once all are declared.
+        if self._monitor is not None and any(n in changes for n in RULE_PARAMS):
             try:
                 self._rules(changes)
             except ValueError as exc:
@@ -145,6 +136,13 @@ class MonitorNode(Node):
             self.get_logger().warning('the sensor is not beyond the guarantee radius: no '
                                       'detection can prove the goal edge; edge1_ready stays '
                                       'false')
+        elif r.noisy_sensor:
+            self.get_logger().warning(f'noisy sensor (sensor_noise): {self._noise_note(r)}')
+
+    @staticmethod
+    def _noise_note(r):
+        p = 'not computed at this radius' if r.p_goal is None else f'{r.p_goal:.4f}'
+        return f'a detection is on the goal edge with probability {p}, not proven'
 
     # ------------------------------------------------------------------ inputs
     def _on_proximity(self, msg):
@@ -213,6 +211,8 @@ class MonitorNode(Node):
             level, message = 'ok', f'warming up ({m.since_restart}/{r.warmup_cycles} throws)'
         else:
             level, message = 'ok', m.state
+        if level != 'error' and r.provable and r.noisy_sensor:
+            message = f'{message} (noisy sensor: {self._noise_note(r)})'
         values = {'state': m.state, 'last_seq': m.last_seq, **m.counts,
                   'since_restart': m.since_restart, 'cycles_since_detection': m.gap,
                   'last_anomaly': m.last_anomaly, **r.as_dict()}
@@ -233,20 +233,7 @@ class MonitorNode(Node):
 
 
 def main(args=None):
-    try:
-        with rclpy.init(args=args):
-            try:
-                node = MonitorNode()
-            except InvalidParameterValueException as exc:
-                print(f'monitor_node: {exc}', file=sys.stderr)
-                return 2
-            # Start-up objects (numba, throwmap's analysis) never die: keep them out of the
-            # garbage collector's way, so that a collection cannot stall a cycle.
-            gc.freeze()
-            rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    return 0
+    return run_node(MonitorNode, 'monitor_node', args)
 
 
 if __name__ == '__main__':

@@ -23,6 +23,12 @@ a long orbit in the limit set fixes which detection patterns can occur (longest 
 detections, shortest and longest stretch without one); anything else, a failed cycle or a gap in
 the cycle numbers is an anomaly, after which the warm-up starts again.
 
+With scene effects: a part lost off a finite arm (``finite_arm``) is never seen again, which
+shows as a silence longer than the limit set allows. A noisy sensor (``sensor_noise``) makes a
+detection likely, not certain, to be on the goal edge (``Rules.p_goal``); its false positives
+and negatives are in the detection patterns, because the rules read the orbit through the
+scene's own (seeded) sensor model.
+
 :class:`CyclePairer` joins the two inputs of a cycle (``proximity`` and ``cycle_status``, matched
 by their sample stamps) into one :class:`Cycle`; :class:`ReadinessMonitor` turns cycles into
 verdicts.
@@ -31,7 +37,7 @@ verdicts.
 from collections import deque
 from dataclasses import dataclass
 import math
-from typing import Optional
+from typing import NamedTuple, Optional
 
 import numpy as np
 from throwmap import sees
@@ -73,6 +79,20 @@ def detection_pattern(bits):
                             int(gaps.max()) if gaps.size else None)
 
 
+def combine_patterns(patterns):
+    """Combine the DetectionPatterns of separate bit sequences (no run or gap spans two)."""
+    def pick(fn, values):
+        values = [v for v in values if v is not None]
+        return fn(values) if values else None
+
+    patterns = list(patterns)
+    return DetectionPattern(sum(p.throws for p in patterns),
+                            sum(p.detections for p in patterns),
+                            max((p.max_run for p in patterns), default=0),
+                            pick(min, [p.min_gap for p in patterns]),
+                            pick(max, [p.max_gap for p in patterns]))
+
+
 @dataclass(frozen=True)
 class Rules:
     """What the limit set allows, at one sensor placement (see :func:`rules_from_analysis`)."""
@@ -88,6 +108,9 @@ class Rules:
     max_run: Optional[int]      # allowed consecutive detections (None: no check)
     min_gap: Optional[int]      # allowed fewest non-detections between detections
     max_silence: Optional[int]  # allowed non-detections in a row (None: no check)
+    noisy_sensor: bool = False  # sensor_noise: a detection is evidence, not proof
+    p_goal: Optional[float] = None  # P(goal edge | detection) of a noisy sensor (analysis)
+    arm_length: Optional[float] = None  # finite_arm: the part can be lost off the end
 
     def as_dict(self):
         return {'goal_edge': self.goal_edge, 'sensor_radius': self.sensor_radius,
@@ -95,15 +118,61 @@ class Rules:
                 'warmup_cycles': self.warmup_cycles, 'settle_cycles': self.settle_cycles,
                 'max_run': self.max_run, 'min_gap': self.min_gap,
                 'max_silence': self.max_silence, 'orbit_throws': self.pattern.throws,
-                'orbit_detection_rate': round(self.pattern.rate, 6)}
+                'orbit_detection_rate': round(self.pattern.rate, 6),
+                'noisy_sensor': self.noisy_sensor, 'p_goal_given_detection': self.p_goal,
+                'arm_length': self.arm_length}
 
 
-def limit_set_orbit(scene, analysis, throws):
-    """Continue the analysis's limit-set orbit by ``throws`` throws: (edges, radii)."""
+class LimitSetOrbit(NamedTuple):
+    """States of a long orbit in the limit set; ``segments``: (start, stop) index ranges."""
+
+    edges: np.ndarray
+    radii: np.ndarray
+    segments: tuple
+
+
+def limit_set_orbit(scene, analysis, throws, attempts=20):
+    """
+    Continue the analysis's limit-set orbit by ``throws`` throws.
+
+    With scene effects an orbit may end early: the part is lost off a finite arm, or a noisy
+    throw leaves the domain of f. The states before that are kept as one segment and, when the
+    map is random (release_noise), the orbit starts again from the limit set's last state, up
+    to ``attempts`` times. Random maps draw from the scene's seed, so the result is the same on
+    every call.
+    """
     ls = analysis.limit_set
-    edges, radii, _ = scene.model.orbit_arrays(int(ls.tail_edges[-1]), float(ls.tail_radii[-1]),
-                                               int(throws))
-    return edges[1:], radii[1:]
+    model = scene.model
+    start = (int(ls.tail_edges[-1]), float(ls.tail_radii[-1]))
+    if scene.stochastic:
+        model.reseed(scene.seed)
+    edges, radii, segments, total = [], [], [], 0
+    for _ in range(attempts):
+        e, r, _, _, done = model.orbits([start[0]], [start[1]], int(throws) - total)
+        n = int(done[0])
+        if n > 0:
+            edges.append(e[0, 1:n + 1])
+            radii.append(r[0, 1:n + 1])
+            segments.append((total, total + n))
+            total += n
+        if total >= throws or not scene.stochastic:
+            break
+    if not edges:
+        return LimitSetOrbit(np.zeros(0, dtype=np.int64), np.zeros(0), ())
+    return LimitSetOrbit(np.concatenate(edges), np.concatenate(radii), tuple(segments))
+
+
+def orbit_readings(scene, orbit, radius, footprint):
+    """
+    Sensor bits along ``orbit`` at ``radius``: the scene's sensor model, noise included.
+
+    A noisy sensor (sensor_noise) draws from the scene's seed, so the bits are the same on
+    every call; otherwise the bits are the geometric ``throwmap.sees``.
+    """
+    if getattr(scene.effects, 'sensor_noise', None) is None:
+        return np.asarray(sees(scene.part, orbit[0], orbit[1], radius, footprint), dtype=bool)
+    scene.model.reseed(scene.seed)
+    return np.asarray(scene.sense(orbit[0], orbit[1], radius, footprint), dtype=bool)
 
 
 def settle_throws(analysis):
@@ -119,14 +188,15 @@ def rules_from_analysis(scene, analysis, orbit, warmup_cycles=-1, settle_cycles=
     """
     Derive the rules at the analysis's sensor (``analysis.sensor``; feeder_sim.analysis).
 
-    ``orbit``: (edges, radii) in the limit set (:func:`limit_set_orbit`). ``warmup_cycles`` and
+    ``orbit``: the limit set's states (:func:`limit_set_orbit`). ``warmup_cycles`` and
     ``settle_cycles`` < 0 take the analysis's values. Margins: a silence may last
     ``silence_margin`` x the longest one in the orbit; a detection may come ``early_margin``
     cycles sooner than the orbit's shortest gap; a run may be ``run_margin`` longer.
     """
     sensor = analysis.sensor
-    bits = sees(scene.part, orbit[0], orbit[1], sensor.radius, sensor.footprint)
-    pattern = detection_pattern(bits)
+    bits = orbit_readings(scene, orbit, sensor.radius, sensor.footprint)
+    segments = getattr(orbit, 'segments', None) or ((0, len(bits)),)
+    pattern = combine_patterns(detection_pattern(bits[a:b]) for a, b in segments)
     proven = int(sensor.warmup_throws)
     warmup = proven if warmup_cycles < 0 else int(warmup_cycles)
     if warmup < proven:
@@ -138,9 +208,16 @@ def rules_from_analysis(scene, analysis, orbit, warmup_cycles=-1, settle_cycles=
         else None
     max_silence = int(math.ceil(pattern.max_gap * float(silence_margin))) \
         if pattern.max_gap is not None else None
+    noisy = getattr(scene.effects, 'sensor_noise', None) is not None
+    p_goal = None
+    stoch = (analysis.stochastic or {}).get('sensor') if noisy else None
+    if stoch and math.isclose(stoch['radius'], sensor.radius, rel_tol=0, abs_tol=1e-9):
+        p_goal = float(stoch['p_goal'])
+    arm = scene.arm_length if scene.arm_length is not None and \
+        math.isfinite(scene.arm_length) else None
     return Rules(int(sensor.goal_edge), float(sensor.radius), float(sensor.guarantee_radius),
                  bool(sensor.feasible and sensor.radius > sensor.guarantee_radius), warmup,
-                 proven, settle, pattern, max_run, min_gap, max_silence)
+                 proven, settle, pattern, max_run, min_gap, max_silence, noisy, p_goal, arm)
 
 
 @dataclass(frozen=True)
@@ -276,8 +353,9 @@ class ReadinessMonitor:
         self.gap += 1
         if r.max_silence is not None and self.gap > r.max_silence and not self.silent:
             self.silent = True
+            hint = "; the part may have fallen off the arm's end" if r.arm_length else ''
             return (f'no detection for {self.gap} cycles; the limit set allows at most '
-                    f'{r.max_silence}')
+                    f'{r.max_silence}{hint}')
         return None
 
     def _verdict(self, seq, ready, anomaly):

@@ -14,9 +14,9 @@
 
 import random
 
-from feeder_monitor.readiness import (ANOMALY, CyclePairer, detection_pattern, limit_set_orbit,
-                                      ReadinessMonitor, READY, Rules, rules_from_analysis,
-                                      TRACKING, WARMING_UP)
+from feeder_monitor.readiness import (ANOMALY, combine_patterns, CyclePairer, detection_pattern,
+                                      limit_set_orbit, ReadinessMonitor, READY, Rules,
+                                      rules_from_analysis, TRACKING, WARMING_UP)
 from feeder_sim.analysis import scene_analysis
 import numpy as np
 import pytest
@@ -45,6 +45,14 @@ def test_detection_pattern():
     one = detection_pattern([0, 1, 0])
     assert (one.max_run, one.min_gap, one.max_gap) == (1, None, None)
     assert detection_pattern([1, 1]).rate == 1.0
+
+
+def test_patterns_of_separate_segments_combine_without_joining_them():
+    p = combine_patterns([detection_pattern([1, 0, 1]), detection_pattern([0, 0, 0, 1, 1]),
+                          detection_pattern([0, 0])])
+    # Joined, the first two would give a gap of 3 (1 .. 1); separate, no gap spans two.
+    assert (p.throws, p.detections, p.max_run, p.min_gap, p.max_gap) == (10, 4, 2, 1, 1)
+    assert combine_patterns([detection_pattern([0])]) == detection_pattern([0])
 
 
 @pytest.fixture(scope='module')
@@ -273,3 +281,42 @@ def test_config_yaml_and_docs_match_the_table():
     docs = (here.parents[3] / 'docs' / 'nodes.md').read_text()
     for name in specs:
         assert f'`{name}`' in docs, f'{name} missing from docs/nodes.md'
+
+
+# ------------------------------------------------------------------ scene effects
+def test_a_part_lost_off_the_arm_shows_as_a_silence(short_arm):
+    from throwmap import analyse
+    an = analyse(short_arm)
+    rules = rules_from_analysis(short_arm, an, limit_set_orbit(short_arm, an, 5000),
+                                settle_cycles=0)
+    assert rules.arm_length == pytest.approx(0.33) and not rules.noisy_sensor
+    m = ReadinessMonitor(rules)
+    edges, radii, _ = short_arm.model.orbit_arrays(*short_arm.default_start(), 300)
+    bits = sees(short_arm.part, edges[1:], radii[1:], rules.sensor_radius, 0.0)
+    feed(m, bits)
+    assert m.counts['anomalies'] == 0
+    # The part falls off: the sensor never fires again.
+    verdicts = feed(m, [False] * (rules.max_silence + 1), seq0=len(bits) + 1)
+    anomalies = [v for v in verdicts if v.anomaly]
+    assert len(anomalies) == 1 and verdicts[-1].state == ANOMALY
+    assert f'no detection for {rules.max_silence + 1} cycles' in anomalies[0].anomaly
+    assert "the part may have fallen off the arm's end" in anomalies[0].anomaly
+    assert not any(v.ready for v in verdicts)
+
+
+def test_noisy_scene_rules_read_the_noisy_sensor(house, house_analysis):
+    orbit = limit_set_orbit(house, house_analysis, 20000)
+    assert len(orbit.edges) == 20000 and orbit.segments[0][0] == 0
+    assert orbit.segments[-1][1] == 20000 and -1 not in set(orbit.edges.tolist())
+    again = limit_set_orbit(house, house_analysis, 20000)     # seeded: the same every time
+    assert np.array_equal(again.edges, orbit.edges) and again.segments == orbit.segments
+    rules = rules_from_analysis(house, house_analysis, orbit)
+    assert rules.noisy_sensor and rules.provable
+    assert rules.p_goal == pytest.approx(house_analysis.stochastic['sensor']['p_goal'])
+    assert rules_from_analysis(house, house_analysis, orbit) == rules
+    # False positives and negatives are in the patterns: the noisy sensor allows more.
+    exact = detection_pattern(sees(house.part, orbit.edges, orbit.radii, rules.sensor_radius,
+                                   house_analysis.sensor.footprint))
+    assert rules.pattern.detections != exact.detections
+    assert rules.pattern.min_gap <= exact.min_gap
+    assert rules.pattern.max_gap >= exact.max_gap

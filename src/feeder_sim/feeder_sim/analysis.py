@@ -19,6 +19,11 @@ The scene analysis the sim and the monitor share, so that both derive the same n
 parameter may move it. :func:`scene_analysis` then redoes the sensor design at that radius (the
 guarantee radius does not move, the warm-up and the detection rate do), so that everything
 published and checked refers to the sensor actually used.
+
+A scene the nodes cannot run raises a ``throwmap.ThrowmapError`` here, with throwmap's message:
+``analyse`` fails (the part is lost from the scene's start: ``PartLost``; the orbit leaves the
+domain of f: ``DomainError``), or the sensor design gives no finite radius and none was given
+(:class:`SensorDesignError`). The nodes stop at start-up with that message (exit status 2).
 """
 
 import dataclasses
@@ -26,10 +31,14 @@ import json
 import math
 
 import numpy as np
-from throwmap import analyse, load_scene, sensor_design
+from throwmap import analyse, load_scene, sensor_design, ThrowmapError
 
 # Fields of one predicted/limit_set row, in order.
 LIMIT_SET_FIELDS = ('edge', 'R_min', 'R_max', 'jogs_min', 'jogs_max')
+
+
+class SensorDesignError(ThrowmapError):
+    """The sensor design of a scene gives no usable sensor radius; the message says the fix."""
 
 
 def load(path):
@@ -48,6 +57,12 @@ def scene_analysis(scene, sensor_radius=0.0, analysis=None):
         sensor = sensor_design(scene.model, an.limit_set, an.sensor.goal_edge,
                                an.sensor.footprint, float(sensor_radius), an.basin)
         an = dataclasses.replace(an, sensor=sensor)
+    if not math.isfinite(an.sensor.radius):
+        s = an.sensor
+        raise SensorDesignError(
+            f"sensor: throwmap's sensor design gives no finite radius for this scene "
+            f'(guarantee radius {s.guarantee_radius:.6g} m, reach {s.reach_radius:.6g} m); '
+            'give the sensor position (parameter sensor_radius, or sensor.radius in the scene)')
     return an
 
 

@@ -31,6 +31,7 @@ labels      edge    text of each band; ``guarantee`` 0: the guarantee radius
 """
 
 from dataclasses import dataclass, field
+import math
 
 ARM_THICKNESS = 0.004       # m, drawn under the surface y = h
 LINE_WIDTH = 0.002          # m
@@ -64,18 +65,25 @@ class MarkerSpec:
     color: tuple = GREY
     points: tuple = field(default_factory=tuple)
     text: str = ''
+    delete: bool = False        # remove the marker (ns, id) instead of drawing it
 
 
 def arm_length(scene, analysis, sensor_radius):
-    """Compute the arm's drawn length: past the sensor and the bands by a margin."""
+    """Compute the arm's drawn length: a finite arm's own, else past the sensor and the bands."""
+    if scene.arm_length is not None and math.isfinite(scene.arm_length):
+        return float(scene.arm_length)
     part = scene.part
     far = max(hi for _, hi in analysis.limit_set.bands.values()) if analysis.limit_set.bands \
         else 0.0
-    return 1.15 * max(far + part.r, sensor_radius, analysis.sensor.guarantee_radius)
+    guarantee = analysis.sensor.guarantee_radius
+    return 1.15 * max(far + part.r, sensor_radius, guarantee if math.isfinite(guarantee) else 0.0)
 
 
 def part_markers(part, edge, R, h, on_goal):
-    """Outline and fill of the part resting on ``edge`` at radius R."""
+    """Outline and fill of the part resting on ``edge`` at radius R; deleted for edge -1."""
+    if edge < 0:        # no part on the arm (lost off its end)
+        return [MarkerSpec('part', 0, 'line_strip', delete=True),
+                MarkerSpec('part', 1, 'triangle_list', delete=True)]
     verts = [tuple(float(c) for c in v) for v in part.pose_vertices(edge, R, h)]
     colour = GOAL_GREEN if on_goal else PART_ORANGE
     outline = MarkerSpec('part', 0, 'line_strip', scale=(LINE_WIDTH, 0.0, 0.0), color=colour,
@@ -118,8 +126,9 @@ def static_markers(scene, analysis, sensor_radius):
         out.append(MarkerSpec('labels', int(edge), 'text', position=(float(hi) + 0.03, y),
                               scale=(0.0, 0.0, TEXT_HEIGHT), color=colour, text=label))
     g = float(analysis.sensor.guarantee_radius)
-    out.append(MarkerSpec('guarantee', 0, 'line_list', scale=(LINE_WIDTH / 2, 0.0, 0.0),
-                          color=GUARANTEE_YELLOW, points=((g, h - 0.03), (g, h + 0.03))))
+    if math.isfinite(g):        # -inf: every detection is on the goal edge; nothing to draw
+        out.append(MarkerSpec('guarantee', 0, 'line_list', scale=(LINE_WIDTH / 2, 0.0, 0.0),
+                              color=GUARANTEE_YELLOW, points=((g, h - 0.03), (g, h + 0.03))))
     return out
 
 

@@ -66,6 +66,9 @@ SIM_PARAMS = (
               constraints='(start_edge, start_radius) in the domain of f'),
     ParamSpec('sensor_radius', 0.0, 'arm coordinate x of the proximity sensor, m; 0: the '
               "analysis's choice (throwmap sensor design)", minimum=0.0, maximum=10.0),
+    ParamSpec('seed', -1, "seed of the scene's random effects (release_noise, sensor_noise) for "
+              "the throws and readings of hardware mode; -1: the scene's noise.seed",
+              minimum=-1, maximum=2 ** 31 - 1, read_only=True),
     ParamSpec('sensor_range_m', 0.02, 'hardware mode: fixed distance of the proximity ranger, '
               "m (Range.min_range = max_range), as the driver's parameter", minimum=0.001,
               maximum=10.0),
@@ -93,10 +96,36 @@ def check_scene(path, loader):
     return None
 
 
+def check_changes(specs, changes, loader):
+    """
+    Reason to reject a parameter set, or None: ranges of the table and a scene that must load.
+
+    ``specs`` maps names to ParamSpecs (names not in it are not checked); ``changes`` maps
+    names to new values; ``loader`` loads a scene (see :func:`check_scene`).
+    """
+    for name, value in changes.items():
+        spec = specs.get(name)
+        if spec is None:
+            continue
+        if not isinstance(value, (bool, str)):
+            reason = spec.check_range(value)
+            if reason:
+                return reason
+        if name == 'scene':
+            reason = check_scene(value, loader)
+            if reason:
+                return reason
+    return None
+
+
 def check_start(model, edge, R):
     """Reason why (edge, R) cannot be the start state, or None."""
     if not (isinstance(R, (int, float)) and math.isfinite(R)):
         return f'start_radius must be a finite number, got {R!r}'
+    arm = getattr(model, 'arm_length', math.inf)
+    if R > arm:
+        return (f"start state (edge {edge}, R {R} m) rejected: R is beyond the arm's end "
+                f'({arm:g} m; scene arm.length)')
     err = model.domain_error(int(edge), float(R))
     if err is not None:
         return (f'start state (edge {edge}, R {R} m) rejected: {err} (to change edge and '

@@ -14,13 +14,18 @@
 
 """Thin ROS glue shared by the feeder nodes: descriptors, QoS, diagnostics and marker messages."""
 
+import gc
 import math
+import sys
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
+import rclpy
+from rclpy.exceptions import InvalidParameterValueException
+from rclpy.executors import ExternalShutdownException
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker, MarkerArray
@@ -122,7 +127,7 @@ def marker_array(specs, frame_id, stamp):
         m.ns = s.ns
         m.id = int(s.marker_id)
         m.type = _MARKER_TYPES[s.kind]
-        m.action = Marker.ADD
+        m.action = Marker.DELETE if s.delete else Marker.ADD
         m.pose.position.x = float(s.position[0])
         m.pose.position.y = float(s.position[1])
         qx, qy, qz, qw = yaw_quaternion(s.yaw)
@@ -157,3 +162,30 @@ def stamp_from_text(text):
 def stamp_seconds(stamp):
     """Convert a builtin_interfaces/Time to float seconds."""
     return stamp.sec + 1e-9 * stamp.nanosec
+
+
+class StartupError(Exception):
+    """The node cannot run (e.g. the scene's analysis fails); the text says why and the fix."""
+
+
+def run_node(make_node, prog, args=None):
+    """
+    Run ``make_node()`` until SIGINT or shutdown; the exit status of the node's executable.
+
+    A bad start-up parameter or a :class:`StartupError` prints ``<prog>: error: <reason>`` to
+    stderr and returns 2; otherwise 0.
+    """
+    try:
+        with rclpy.init(args=args):
+            try:
+                node = make_node()
+            except (InvalidParameterValueException, StartupError) as exc:
+                print(f'{prog}: error: {exc}', file=sys.stderr)
+                return 2
+            # Start-up objects (numba, throwmap's analysis) never die: keep them out of the
+            # garbage collector's way, so that a collection cannot stall a cycle.
+            gc.freeze()
+            rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    return 0

@@ -19,14 +19,12 @@ ROS glue only: the throw map is throwmap's, the state is feeder_sim.predictor's,
 geometry feeder_sim.markers'. Interfaces: docs/interfaces.md; parameters: docs/nodes.md.
 """
 
-import gc
+import functools
+import math
 import sys
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import PoseStamped
-import rclpy
-from rclpy.exceptions import InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException
 from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
 from sensor_msgs.msg import JointState, Range
 from std_msgs.msg import Float64, Float64MultiArray, Int32, MultiArrayDimension, String
@@ -36,11 +34,12 @@ from visualization_msgs.msg import MarkerArray
 
 from . import analysis as scene_analysis_mod
 from .markers import state_markers, static_markers
-from .params import check_scene, check_start, SIM_PARAMS
-from .predictor import Predictor, yaw_quaternion
+from .params import check_changes, check_start, SIM_PARAMS
+from .predictor import (has_noisy_sensor, LOST, prediction_model, Predictor,
+                        yaw_quaternion)
 from .ros_glue import (CYCLE_STATUS_QOS, declare, DEFAULT_DEPTH, diagnostic_array,
                        diagnostic_status, DIAGNOSTICS_QOS, LATCHED_QOS, marker_array,
-                       ParameterGate, stamp_from_text, stamp_text)
+                       ParameterGate, run_node, stamp_from_text, stamp_text, StartupError)
 
 FRAME = 'feeder_base'
 SENSOR_FRAME = 'feeder_sensor'
@@ -54,7 +53,8 @@ class SimNode(LifecycleNode):
     def __init__(self, **kwargs):
         super().__init__('feeder_sim', **kwargs)
         self._specs = {s.name: s for s in SIM_PARAMS}
-        self._scenes = {}
+        # Scenes by path, loaded once (the parameter checks load them too).
+        self._load_scene = functools.lru_cache(maxsize=None)(scene_analysis_mod.load)
         self._scene = None
         self._active = False
         self._lifecycle = 'unconfigured'
@@ -65,6 +65,8 @@ class SimNode(LifecycleNode):
         self._sub = None
         self._cycle_timer = None
         self._last_throw = None
+        self._lost_seq = None           # cycle that lost the part off the arm's end
+        self._configure_error = None
         self._seq = 0
         self._counts = {'completed': 0, 'failed': 0, 'missed': 0, 'agree': 0, 'disagree': 0,
                         'bad_status': 0}
@@ -76,11 +78,12 @@ class SimNode(LifecycleNode):
         ParameterGate(self, self._validate, self._apply)
         autostart = declare(self, self._specs['autostart'])
         self._hardware = declare(self, self._specs['hardware_mode'])
-        self._scene = self._scenes[declare(self, self._specs['scene'])]
+        self._scene = self._load_scene(declare(self, self._specs['scene']))
         edge0, r0 = self._scene.default_start()
         declare(self, self._specs['start_edge'], edge0)
         declare(self, self._specs['start_radius'], r0)
         declare(self, self._specs['sensor_radius'])
+        declare(self, self._specs['seed'])
         declare(self, self._specs['sensor_range_m'])
         declare(self, self._specs['cycle_period'])
         declare(self, self._specs['markers_period'])
@@ -91,16 +94,13 @@ class SimNode(LifecycleNode):
         if self._hardware:
             self.create_service(Trigger, '~/trigger_cycle', self._on_trigger)
             self.create_service(SetBool, '~/enable', self._on_enable)
+        self.create_service(Trigger, '~/place_part', self._on_place_part)
         if autostart:
-            if self.trigger_configure() == TransitionCallbackReturn.SUCCESS:
-                self.trigger_activate()
+            if self.trigger_configure() != TransitionCallbackReturn.SUCCESS:
+                raise StartupError(self._configure_error or 'configure failed')
+            self.trigger_activate()
 
     # ------------------------------------------------------------------ parameters
-    def _load_scene(self, path):
-        if path not in self._scenes:
-            self._scenes[path] = scene_analysis_mod.load(path)
-        return self._scenes[path]
-
     def _value(self, changes, name):
         if name in changes:
             return changes[name]
@@ -108,18 +108,9 @@ class SimNode(LifecycleNode):
 
     def _validate(self, changes):
         """On-set: reasons for rejecting ``changes``; never changes the node's state."""
-        for name, value in changes.items():
-            spec = self._specs.get(name)
-            if spec is None:
-                continue
-            if not isinstance(value, (bool, str)):
-                reason = spec.check_range(value)
-                if reason:
-                    return reason
-            if name == 'scene':
-                reason = check_scene(value, self._load_scene)
-                if reason:
-                    return reason
+        reason = check_changes(self._specs, changes, self._load_scene)
+        if reason:
+            return reason
         if ('start_edge' in changes or 'start_radius' in changes) and self._scene is not None:
             edge = self._value(changes, 'start_edge')
             R = self._value(changes, 'start_radius')
@@ -132,12 +123,7 @@ class SimNode(LifecycleNode):
         if self._predictor is None:
             return
         if 'start_edge' in changes or 'start_radius' in changes:
-            edge = self.get_parameter('start_edge').value
-            R = self.get_parameter('start_radius').value
-            self._predictor.reset(edge, R)
-            self._last_throw = None
-            self.get_logger().info(f'prediction restarted at edge {edge}, R {R:.4f} m')
-            self._publish_markers()
+            self._place_part()
         if 'sensor_radius' in changes:
             self._analysis = scene_analysis_mod.scene_analysis(
                 self._scene, changes['sensor_radius'], self._base_analysis)
@@ -152,18 +138,46 @@ class SimNode(LifecycleNode):
     def _param(self, name):
         return self.get_parameter(name).value
 
+    def _place_part(self):
+        """Restart the prediction with a part at (start_edge, start_radius)."""
+        edge, R = self._param('start_edge'), self._param('start_radius')
+        self._predictor.reset(edge, R)
+        self._last_throw = None
+        self._lost_seq = None
+        self.get_logger().info(f'prediction restarted at edge {edge}, R {R:.4f} m')
+        self._publish_markers()
+        return edge, R
+
+    def _on_place_part(self, request, response):
+        if self._predictor is None:
+            response.success = False
+            response.message = f'refused: node is {self._lifecycle}, not configured'
+            return response
+        edge, R = self._place_part()
+        response.success = True
+        response.message = f'part placed on edge {edge} at R {R:.4f} m'
+        return response
+
     # ------------------------------------------------------------------ lifecycle
     def on_configure(self, state):
+        scene = self._scene
         try:
-            self._base_analysis = analyse(self._scene)
+            self._base_analysis = analyse(scene)
             self._analysis = scene_analysis_mod.scene_analysis(
-                self._scene, self._param('sensor_radius'), self._base_analysis)
-            self._predictor = Predictor(self._scene, self._param('start_edge'),
-                                        self._param('start_radius'),
-                                        self._analysis.sensor.radius,
-                                        self._analysis.sensor.footprint)
+                scene, self._param('sensor_radius'), self._base_analysis)
+            seed = self._param('seed')
+            sensor = self._analysis.sensor
+            # Hardware mode samples the scene's random effects (seeded); predictor mode
+            # predicts with the noise-free map and the geometric sensor bit.
+            self._predictor = Predictor(
+                scene, self._param('start_edge'), self._param('start_radius'), sensor.radius,
+                sensor.footprint,
+                model=None if self._hardware else prediction_model(scene),
+                noisy_sensor=self._hardware and has_noisy_sensor(scene),
+                seed=(seed if seed >= 0 else scene.seed) if self._hardware else None)
         except ThrowmapError as exc:
-            self.get_logger().error(f'configure failed: {exc}')
+            self._configure_error = f'scene {scene.source}: {exc}'
+            self.get_logger().error(f'configure failed: {self._configure_error}')
             return TransitionCallbackReturn.FAILURE
         pub = self.create_lifecycle_publisher
         self._pubs = {
@@ -237,7 +251,7 @@ class SimNode(LifecycleNode):
         else:
             seq, error = self._fire()
             response.success = True
-            response.message = f'fired cycle seq={seq}' + (f' (failed: {error})' if error else '')
+            response.message = f'fired cycle seq {seq}' + (f' (failed: {error})' if error else '')
         return response
 
     def _on_enable(self, request, response):
@@ -253,7 +267,7 @@ class SimNode(LifecycleNode):
         else:
             self._stop_cycling()
             response.success = True
-            response.message = f'disabled after seq={self._seq}'
+            response.message = f'disabled after seq {self._seq}'
         return response
 
     def _start_cycling(self):
@@ -278,6 +292,8 @@ class SimNode(LifecycleNode):
             self.get_logger().error(f'cycle {self._seq} failed: {exc}',
                                     throttle_duration_sec=5.0)
             return self._seq, str(exc)
+        if throw.kind == LOST and throw.count == self._predictor.lost_at:
+            self._report_lost(self._seq, throw)
         self._counts['completed'] += 1
         self._publish_joint(stamp, 0.0)
         rng = Range()
@@ -333,8 +349,10 @@ class SimNode(LifecycleNode):
         missed = seq - last - 1 if last is not None and seq > last + 1 else 0
         self._counts['missed'] += missed
         try:
-            for _ in range(missed + 1):
+            for k in range(missed + 1):
                 throw = self._predictor.step()
+                if throw.kind == LOST and throw.count == self._predictor.lost_at:
+                    self._report_lost(seq - missed + k, throw)
         except ThrowmapError as exc:
             self.get_logger().error(f'prediction stopped at cycle {seq}: {exc}',
                                     throttle_duration_sec=5.0)
@@ -349,20 +367,30 @@ class SimNode(LifecycleNode):
             stamp = self.get_clock().now().to_msg()
         self._publish_prediction(stamp, throw)
 
+    def _report_lost(self, seq, throw):
+        self._lost_seq = seq
+        self.get_logger().error(
+            f"part lost off the arm's end at cycle {seq} (thrown from edge {throw.edge0} at R "
+            f'{throw.R0:.4f} m; arm length {self._scene.arm_length:g} m); set start_edge / '
+            'start_radius or call ~/place_part when a part is back on the arm')
+
     # ------------------------------------------------------------------ outputs
     def _publish_prediction(self, stamp, throw):
+        """Publish the state after ``throw``; without a part on the arm only edge -1 and kind."""
         self._last_throw = throw
-        x, y, yaw = self._predictor.pose()
-        pose = PoseStamped()
-        pose.header.stamp = stamp
-        pose.header.frame_id = FRAME
-        pose.pose.position.x, pose.pose.position.y = x, y
-        q = pose.pose.orientation
-        q.x, q.y, q.z, q.w = yaw_quaternion(yaw)
-        self._pubs['pose'].publish(pose)
+        if throw.on_arm:
+            x, y, yaw = self._predictor.pose()
+            pose = PoseStamped()
+            pose.header.stamp = stamp
+            pose.header.frame_id = FRAME
+            pose.pose.position.x, pose.pose.position.y = x, y
+            q = pose.pose.orientation
+            q.x, q.y, q.z, q.w = yaw_quaternion(yaw)
+            self._pubs['pose'].publish(pose)
         self._pubs['edge'].publish(Int32(data=throw.edge))
         self._pubs['kind'].publish(String(data=throw.kind))
-        self._pubs['radius'].publish(Float64(data=throw.R))
+        if throw.on_arm:
+            self._pubs['radius'].publish(Float64(data=throw.R))
         self._publish_markers(stamp)
 
     def _publish_markers(self, stamp=None, force=False):
@@ -384,8 +412,10 @@ class SimNode(LifecycleNode):
             self._static_markers = marker_array(
                 static_markers(self._scene, self._analysis, radius), FRAME, stamp).markers
         edge, R = self._predictor.state
+        detected = self._last_throw.detected if self._last_throw is not None else \
+            self._predictor.sees(edge, R)
         state = marker_array(state_markers(self._scene, self._analysis, radius, edge, R,
-                                           self._predictor.sees(edge, R)), FRAME, stamp)
+                                           detected), FRAME, stamp)
         self._pubs['markers'].publish(MarkerArray(markers=self._static_markers + state.markers))
 
     def _flush_markers(self):
@@ -416,18 +446,7 @@ class SimNode(LifecycleNode):
             f'{name}: lifecycle', 'ok' if self._active else 'warn', self._lifecycle,
             HARDWARE_ID, {'hardware_mode': self._hardware, 'scene': self._scene.source})]
         if self._predictor is not None:
-            edge, R = self._predictor.state
-            an = self._analysis
-            kind = self._last_throw.kind if self._last_throw else 'none'
-            statuses.append(diagnostic_status(
-                f'{name}: prediction', 'ok',
-                f'edge {edge}, R {100 * R:.2f} cm after {self._predictor.count} throws',
-                HARDWARE_ID,
-                {'edge': edge, 'R': f'{R:.6f}', 'throws': self._predictor.count,
-                 'last_kind': kind, 'in_limit_set': an.limit_set.contains(edge, R),
-                 'goal_edge': an.sensor.goal_edge, 'sensor_radius': f'{an.sensor.radius:.6f}',
-                 'guarantee_radius': f'{an.sensor.guarantee_radius:.6f}',
-                 'warmup_throws': an.sensor.warmup_throws}))
+            statuses.append(self._prediction_status(name))
         c = self._counts
         done, mark_time = self._rate_mark
         total = c['completed'] + c['failed']
@@ -452,22 +471,33 @@ class SimNode(LifecycleNode):
                  'bad_status': c['bad_status'], 'cycles_per_s': f'{rate:.2f}'}))
         self._diag_pub.publish(diagnostic_array(now.to_msg(), statuses))
 
+    def _prediction_status(self, name):
+        pred = self._predictor
+        edge, R = pred.state
+        an = self._analysis
+        values = {'edge': edge, 'R': 'none' if pred.lost else f'{R:.6f}',
+                  'throws': pred.count,
+                  'last_kind': self._last_throw.kind if self._last_throw else 'none',
+                  'in_limit_set': not pred.lost and an.limit_set.contains(edge, R),
+                  'goal_edge': an.sensor.goal_edge, 'sensor_radius': f'{an.sensor.radius:.6f}',
+                  'guarantee_radius': f'{an.sensor.guarantee_radius:.6f}',
+                  'warmup_throws': an.sensor.warmup_throws,
+                  'noisy_sensor': pred.noisy_sensor,
+                  'arm_length': f'{self._scene.arm_length:.6f}'
+                  if self._scene.arm_length is not None and math.isfinite(self._scene.arm_length)
+                  else 'unbounded'}
+        if pred.lost:
+            values['lost_at_seq'] = self._lost_seq
+            return diagnostic_status(f'{name}: prediction', 'error',
+                                     f"part lost off the arm's end at cycle {self._lost_seq}",
+                                     HARDWARE_ID, values)
+        return diagnostic_status(f'{name}: prediction', 'ok',
+                                 f'edge {edge}, R {100 * R:.2f} cm after {pred.count} throws',
+                                 HARDWARE_ID, values)
+
 
 def main(args=None):
-    try:
-        with rclpy.init(args=args):
-            try:
-                node = SimNode()
-            except InvalidParameterValueException as exc:
-                print(f'sim_node: {exc}', file=sys.stderr)
-                return 2
-            # Start-up objects (numba, throwmap's analysis) never die: keep them out of the
-            # garbage collector's way, so that a collection cannot stall a cycle.
-            gc.freeze()
-            rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    return 0
+    return run_node(SimNode, 'sim_node', args)
 
 
 if __name__ == '__main__':

@@ -33,3 +33,15 @@ def triangle():
 @pytest.fixture(scope='session')
 def triangle_analysis(triangle):
     return analyse(triangle)
+
+
+@pytest.fixture(scope='session')
+def short_arm():
+    """Load the triangle on a 33 cm arm (tests/scenes/short_arm.yaml): parts near its end fall."""
+    return load_scene(str(REPO / 'tests' / 'scenes' / 'short_arm.yaml'))
+
+
+@pytest.fixture(scope='session')
+def house_path():
+    """Return scenes/house.yaml: release noise, a noisy sensor, a finite carry, a 40 cm arm."""
+    return str(SCENES / 'house.yaml')

@@ -79,3 +79,12 @@ def test_sensor_marker_sits_at_the_radius_and_shows_the_bit(specs, triangle, tri
     assert all(p[0] == pytest.approx(radius) for p in m[('sensor', 1)].points)
     off = by_key(feeder_markers(triangle, triangle_analysis, radius, 1, 0.2, False))
     assert off[('sensor', 0)].color != m[('sensor', 0)].color
+
+
+def test_a_lost_part_is_deleted_and_a_finite_arm_drawn_to_its_length(short_arm):
+    from throwmap import analyse
+    an = analyse(short_arm)
+    specs = by_key(feeder_markers(short_arm, an, an.sensor.radius, -1, float('nan'), False))
+    assert specs[('part', 0)].delete and specs[('part', 1)].delete
+    assert specs[('arm', 0)].scale[0] == pytest.approx(0.33)
+    assert not any(s.delete for k, s in specs.items() if k[0] != 'part')

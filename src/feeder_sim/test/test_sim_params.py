@@ -75,3 +75,9 @@ def test_config_yaml_matches_the_table():
             else:
                 assert value == specs[name].default, (node, name)
             assert type(value) is type(specs[name].default), (node, name)
+
+
+def test_a_start_beyond_a_finite_arm_is_rejected(short_arm):
+    assert check_start(short_arm.model, 1, 0.32) is None
+    reason = check_start(short_arm.model, 1, 0.34)
+    assert "beyond the arm's end" in reason and '0.33' in reason

@@ -1,0 +1,167 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Scenes with effects on real DDS: the paper's experiment, a part lost off the arm's end."""
+
+from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_nodes import (check_ready_correctness, Collector, Diagnostics, EXPERIMENT, LATCHED,
+                          monitor, REPO, run_cycles, SHORT_ARM, sim_as_hardware,
+                          STARTUP_TIMEOUT, status_values, wait_for_monitor, wait_for_readers)
+from geometry_msgs.msg import PoseStamped
+from sensor_msgs.msg import Range
+from std_msgs.msg import Bool, Float64, Int32, String
+from std_srvs.srv import Trigger
+from throwmap import load_scene
+
+PERIOD = 0.01
+HW = '/feeder/feeder_driver'
+PRED = '/feeder/predictor/feeder_sim'
+LOST_MESSAGE = "part lost off the arm's end at cycle {}"
+
+
+def test_experiment_ready_exactly_when_the_part_is_seen_on_the_goal_edge(graph, ros):
+    """Back-plate friction and the 40 cm arm: the same ready-correctness as the triangle's."""
+    check_ready_correctness(graph, ros, EXPERIMENT, cycles=150, period=PERIOD, min_ready=5)
+
+
+class Predictions:
+    """predicted/* of one sim (namespace prefix ``ns``)."""
+
+    def __init__(self, ros, ns):
+        self.edge = Collector(ros, Int32, f'{ns}/predicted/edge')
+        self.kind = Collector(ros, String, f'{ns}/predicted/throw_kind')
+        self.radius = Collector(ros, Float64, f'{ns}/predicted/radius')
+        self.pose = Collector(ros, PoseStamped, f'{ns}/predicted/part_pose')
+
+    def __len__(self):
+        return min(len(self.edge), len(self.kind))
+
+    def last(self, count):
+        return [m.data for m in self.edge.msgs[-count:]], \
+            [m.data for m in self.kind.msgs[-count:]]
+
+
+def prediction_statuses(diags, node):
+    return diags.by_name.get(f'{node}: prediction', [])
+
+
+def wait_for_prediction_status(ros, diags, node, level, message):
+    def seen():
+        got = prediction_statuses(diags, node)
+        return bool(got) and got[-1].level == level and got[-1].message == message
+    ros.spin_until(seen, 10.0, f'{node}: prediction "{message}"')
+
+
+def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
+    """
+    The part starts near the end of the 33 cm arm and falls off at the first throw.
+
+    Sim as hardware and a predictor-mode sim report it (edge -1 and kind lost on every cycle
+    from then on, no radius, no pose; ERROR in /diagnostics naming the cycle); the monitor sees
+    a silence the limit set cannot produce; ~/place_part and the start parameters put a part
+    back.
+    """
+    start = ('start_radius:=0.32', 'diagnostics_period:=0.2')
+    sim_as_hardware(graph, f'cycle_period:={PERIOD}', *start, scene=SHORT_ARM)
+    graph.start('feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder/predictor', '-r',
+                'cycle_status:=/feeder/cycle_status', '-p', f'scene:={SHORT_ARM}',
+                *[a for p in start for a in ('-p', p)], name='predictor')
+    monitor(graph, 'settle_cycles:=0', 'diagnostics_period:=0.2', scene=SHORT_ARM)
+    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    prox = Collector(ros, Range, '/feeder/proximity')
+    hw = Predictions(ros, '/feeder')
+    pred = Predictions(ros, '/feeder/predictor')
+    diags = Diagnostics(ros)
+    wait_for_monitor(ros, ready)
+    wait_for_readers(ros, '/feeder/cycle_status', 3)     # predictor, monitor, us
+    wait_for_readers(ros, '/feeder/proximity', 2)
+    ros.spin_until(lambda: ros.node.count_publishers('/feeder/predictor/predicted/edge') >= 1,
+                   STARTUP_TIMEOUT, 'the predictor active')
+    ros.spin_for(0.5)
+
+    # 40 cycles: the part is lost in the first; the arm keeps cycling empty.
+    cycles = 40
+    run_cycles(ros, cycles, statuses, PERIOD)
+    ros.spin_until(lambda: len(hw) == len(pred) == len(statuses) and len(ready) > len(statuses),
+                   10.0, 'the predictor and the monitor to follow')
+    n = len(statuses)
+    assert [status_values(s)['sensor'] for s in statuses.msgs] == ['0'] * n
+    assert all(s.level == DiagnosticStatus.OK and s.message == 'completed'
+               for s in statuses.msgs)
+    assert len(prox) == n and all(p.range == float('inf') for p in prox.msgs)
+    for side in (hw, pred):
+        assert side.last(n) == ([-1] * n, ['lost'] * n)
+        assert len(side.radius) == 0 and len(side.pose) == 0    # no NaN, no made-up pose
+    for node in ('feeder_driver', 'feeder_sim'):
+        wait_for_prediction_status(ros, diags, node, DiagnosticStatus.ERROR,
+                                   LOST_MESSAGE.format(1))
+        values = Diagnostics.values(prediction_statuses(diags, node)[-1])
+        assert (values['edge'], values['R'], values['lost_at_seq']) == ('-1', 'none', '1')
+    # The monitor: no detection for longer than the limit set allows.
+    name = 'feeder_monitor: readiness'
+    ros.spin_until(lambda: DiagnosticStatus.ERROR in diags.levels(name), 5.0,
+                   'the monitor anomaly')
+    error = [s for s in diags.by_name[name] if s.level == DiagnosticStatus.ERROR][0]
+    assert 'no detection for' in error.message and "fallen off the arm's end" in error.message
+    assert not any(m.data for m in ready.msgs)
+
+    # ~/place_part puts a part at the start state (near the end again): lost at once.
+    for node in (HW, PRED):
+        res = ros.call(Trigger, f'{node}/place_part', Trigger.Request())
+        assert res.success and res.message == 'part placed on edge 1 at R 0.3200 m', res.message
+    res = ros.call(Trigger, f'{HW}/trigger_cycle', Trigger.Request())
+    assert res.success and res.message == f'fired cycle seq {n + 1}', res.message
+    ros.spin_until(lambda: len(hw) == len(pred) == n + 1, 10.0, 'cycle n + 1')
+    assert hw.last(1) == pred.last(1) == ([-1], ['lost'])
+    for node in ('feeder_driver', 'feeder_sim'):
+        wait_for_prediction_status(ros, diags, node, DiagnosticStatus.ERROR,
+                                   LOST_MESSAGE.format(n + 1))
+
+    # New start parameters put the part back where it stays on the arm.
+    for node in (HW, PRED):
+        assert ros.set_parameters(node, {'start_radius': 0.12})['start_radius'].successful
+    ros.call(Trigger, f'{HW}/trigger_cycle', Trigger.Request())
+    ros.spin_until(lambda: len(hw) == len(pred) == n + 2 and len(hw.radius) == len(pred.radius)
+                   == len(hw.pose) == len(pred.pose) == 1, 10.0, 'cycle n + 2')
+    edge, R, kind = load_scene(SHORT_ARM).model.f(1, 0.12)
+    for side in (hw, pred):
+        assert side.last(1) == ([edge], [kind]) and side.radius.msgs[0].data == R
+        assert len(side.pose) == 1
+    for node in ('feeder_driver', 'feeder_sim'):
+        wait_for_prediction_status(
+            ros, diags, node, DiagnosticStatus.OK, f'edge {edge}, R {100 * R:.2f} cm after 1 '
+            'throws')
+
+
+def test_scenes_the_nodes_cannot_run_stop_them_with_the_reason(graph, tmp_path):
+    """Exit status 2 and throwmap's message when the analysis fails or gives no sensor."""
+    lost = tmp_path / 'lost_from_start.yaml'
+    lost.write_text(open(SHORT_ARM).read().replace('start: {edge: 1, R: 0.12}',
+                                                   'start: {edge: 1, R: 0.32}'))
+    cases = {   # scene: what the message says
+        str(lost): 'the part was lost (fell off the arm)',
+        str(REPO / 'scenes' / 'hard' / 'fast_spin.yaml'): 'the orbit left the domain of f',
+        str(REPO / 'scenes' / 'hard' / 'slow_release.yaml'): 'gives no finite radius',
+    }
+    procs = []
+    for scene, text in cases.items():
+        procs.append((graph.start('feeder_sim', 'sim_node', '--ros-args', '-p',
+                                  f'scene:={scene}'), text))
+        procs.append((graph.start('feeder_monitor', 'monitor_node', '--ros-args', '-p',
+                                  f'scene:={scene}'), text))
+    for proc, text in procs:
+        assert proc.wait(timeout=60) == 2, graph.log(proc)
+        log = graph.log(proc)
+        assert text in log and ': error: scene ' in log, log
