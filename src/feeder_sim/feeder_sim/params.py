@@ -59,7 +59,7 @@ SIM_PARAMS = (
               "the prediction; false: follow the driver's cycle_status", read_only=True),
     ParamSpec('start_edge', 0, 'edge the part rests on before the first throw (default: the '
               "scene's start); setting it (or start_radius) restarts the prediction there",
-              minimum=0, maximum=63,
+              minimum=0, maximum=1023,
               constraints='a stable edge; (start_edge, start_radius) in the domain of f'),
     ParamSpec('start_radius', 0.0, "R before the first throw, m (default: the scene's start)",
               minimum=0.0, maximum=10.0,
