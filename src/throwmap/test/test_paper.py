@@ -138,3 +138,20 @@ def test_first_stable_rule_gives_same_cycle_on_triangle():
                        math.radians(320), -9.66, settle_rule='first_stable')
     ls = limit_set(model, 1, 0.12, 4000)
     assert ls.pattern == (0, 2, 1)
+
+
+def test_sensor_design_when_only_the_goal_edge_recurs():
+    """A limit set on the goal edge alone: every spot its shadow covers proves the goal edge."""
+    from throwmap import load_scene
+    from throwmap_testing import SCENES
+    scene = load_scene(str(SCENES / 'hard' / 'slow_release.yaml'))
+    an = analyse(scene)
+    assert set(an.limit_set.bands) == {an.sensor.goal_edge}
+    assert an.sensor.guarantee_radius == float('-inf') and an.sensor.feasible
+    assert math.isfinite(an.sensor.radius) and an.sensor.radius < an.sensor.reach_radius
+    assert an.sensor.detection_rate > 0
+
+
+def test_a_lost_part_is_never_seen(triangle_scene):
+    assert not triangle_scene.sense(-1, 0.24, x=0.25)
+    assert triangle_scene.sense(1, 0.24, x=0.25)

@@ -25,6 +25,7 @@ Quick use::
 from .dynamics import (analyse, Analysis, Basin, basin, default_grid, design_radii, limit_set,
                        limit_set_from_orbit, LimitSet, Orbit, orbit, sees, sensor_design,
                        SensorDesign)
+from .effect_model import EffectModel, PartLost
 from .errors import DomainError, InputError, NumericalError, ThrowmapError
 from .grasp import edge_grasp, grasp_table, in_dynamic_grasp, wrench_cone_margins
 from .model import Accuracy, Impact, ThrowModel, ThrowResult
@@ -32,7 +33,7 @@ from .part import Part
 from .scene import load_scene, Scene
 
 __all__ = ['Accuracy', 'analyse', 'Analysis', 'basin', 'Basin', 'default_grid', 'design_radii',
-           'DomainError', 'edge_grasp', 'grasp_table', 'Impact', 'in_dynamic_grasp',
+           'DomainError', 'edge_grasp', 'EffectModel', 'grasp_table', 'Impact', 'in_dynamic_grasp',
            'InputError', 'limit_set', 'limit_set_from_orbit', 'LimitSet', 'load_scene',
-           'NumericalError', 'orbit', 'Orbit', 'Part', 'Scene', 'sees', 'sensor_design',
+           'NumericalError', 'orbit', 'Orbit', 'Part', 'PartLost', 'Scene', 'sees', 'sensor_design',
            'SensorDesign', 'ThrowmapError', 'ThrowModel', 'ThrowResult', 'wrench_cone_margins']

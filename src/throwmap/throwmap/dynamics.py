@@ -394,8 +394,16 @@ def sensor_design(model, ls, goal_edge, footprint=0.0, radius=None, basin_result
     reach = goal_top + footprint
     feasible = goal_edge in ls.bands and reach > guarantee
     if radius is None:
-        # Beyond the guarantee, with a margin of a quarter of the usable window.
-        radius = guarantee + 0.25 * (reach - guarantee) if feasible else guarantee
+        if feasible and math.isinf(guarantee):
+            # Only the goal edge recurs: any spot its shadow covers proves it; take the middle
+            # of the window the goal states' shadows span.
+            goal_low = ls.bands[goal_edge][0] + part.U.min(axis=1)[goal_edge] - footprint
+            radius = 0.5 * (goal_low + reach)
+        elif feasible:
+            # Beyond the guarantee, with a margin of a quarter of the usable window.
+            radius = guarantee + 0.25 * (reach - guarantee)
+        else:
+            radius = guarantee
     tail_seen = sees(part, ls.tail_edges, ls.tail_radii, radius, footprint)
     detection_rate = float(tail_seen.mean()) if tail_seen.size else 0.0
     warmup = 0

@@ -333,6 +333,8 @@ class Scene:
         if x is None:
             raise InputError('sensor.radius', 'missing', 'give the sensor position, or pass x')
         footprint = self.sensor_footprint if footprint is None else footprint
+        if edge < 0:
+            return False
         if isinstance(self.model, EffectModel):
             return self.model.sensor_reading(edge, R, x, footprint)
         return sees(self.part, edge, R, x, footprint)
