@@ -33,7 +33,8 @@ from .part import Part
 from .scene import load_scene, Scene
 
 __all__ = ['Accuracy', 'analyse', 'Analysis', 'basin', 'Basin', 'default_grid', 'design_radii',
-           'DomainError', 'edge_grasp', 'EffectModel', 'grasp_table', 'Impact', 'in_dynamic_grasp',
-           'InputError', 'limit_set', 'limit_set_from_orbit', 'LimitSet', 'load_scene',
-           'NumericalError', 'orbit', 'Orbit', 'Part', 'PartLost', 'Scene', 'sees', 'sensor_design',
-           'SensorDesign', 'ThrowmapError', 'ThrowModel', 'ThrowResult', 'wrench_cone_margins']
+           'DomainError', 'edge_grasp', 'EffectModel', 'grasp_table', 'Impact',
+           'in_dynamic_grasp', 'InputError', 'limit_set', 'limit_set_from_orbit', 'LimitSet',
+           'load_scene', 'NumericalError', 'orbit', 'Orbit', 'Part', 'PartLost', 'Scene', 'sees',
+           'sensor_design', 'SensorDesign', 'ThrowmapError', 'ThrowModel', 'ThrowResult',
+           'wrench_cone_margins']
