@@ -27,6 +27,7 @@ import os
 import re
 import warnings
 
+import numpy as np
 import yaml
 
 from . import effects as fx
@@ -333,11 +334,11 @@ class Scene:
         if x is None:
             raise InputError('sensor.radius', 'missing', 'give the sensor position, or pass x')
         footprint = self.sensor_footprint if footprint is None else footprint
-        if edge < 0:
-            return False
         if isinstance(self.model, EffectModel):
             return self.model.sensor_reading(edge, R, x, footprint)
-        return sees(self.part, edge, R, x, footprint)
+        edge = np.asarray(edge)
+        # Index -1 would read the last edge's shadow: a lost part must read as nothing.
+        return sees(self.part, np.maximum(edge, 0), R, x, footprint) & (edge >= 0)
 
     @property
     def release_speed(self):
