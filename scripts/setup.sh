@@ -28,6 +28,11 @@ _feeder_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
   if ! python -c 'import throwmap' 2>/dev/null; then
     python -m pip install --quiet --disable-pip-version-check --no-deps -e "$ROOT/src/throwmap"
   fi
+  # An editable install follows setup.cfg's [develop] script_dir (lib/throwmap, where
+  # `ros2 run` looks after colcon build --symlink-install): put the CLI on the venv's PATH too.
+  if [ ! -e "$VENV/bin/throwmap" ] && [ -x "$VENV/lib/throwmap/throwmap" ]; then
+    ln -s ../lib/throwmap/throwmap "$VENV/bin/throwmap"
+  fi
   if [ "${FEEDER_SKIP_COLCON:-0}" != 1 ] && ls "$ROOT"/src/feeder_*/package.xml >/dev/null 2>&1
   then
     echo "setup: colcon build (ros2_ws)"

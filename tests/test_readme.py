@@ -89,3 +89,15 @@ def test_topics_of_the_contract_are_in_the_readme():
     block = README[start:README.index('### Parameters')]
     for topic in topics:
         assert f'`{topic}`' in block, topic
+
+
+def test_the_throwmap_cli_is_on_the_path():
+    """README commands call `throwmap ...` after `. scripts/setup.sh`."""
+    import shutil
+    import subprocess
+    exe = shutil.which('throwmap')
+    assert exe, 'throwmap is not on PATH after scripts/setup.sh'
+    out = subprocess.run([exe, 'grasp', str(REPO / 'scenes' / 'triangle.yaml'), '--json'],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert '"R_grasp"' in out.stdout
