@@ -155,3 +155,14 @@ def test_sensor_design_when_only_the_goal_edge_recurs():
 def test_a_lost_part_is_never_seen(triangle_scene):
     assert not triangle_scene.sense(-1, 0.24, x=0.25)
     assert triangle_scene.sense(1, 0.24, x=0.25)
+
+
+def test_figure_7_with_the_papers_100_throws_labels_every_start(triangle):
+    """100 throws per start, as in Figure 7: slow starts enter late but follow the cycle."""
+    ref = limit_set(triangle, 1, 0.12, 10_000)
+    starts_e, starts_r = default_grid(triangle, radii_per_edge=50)
+    bas = basin(triangle, starts_e, starts_r, throws=100, reference=ref)
+    assert bas.summary() == {'0-2-1': 150}
+    assert bas.transients.max() > 50          # some starts take most of the 100 throws
+    short = basin(triangle, starts_e, starts_r, throws=10, reference=ref)
+    assert short.summary().get('not converged', 0) > 0

@@ -224,8 +224,11 @@ def basin(model, start_edges, start_radii, throws=100, reference=None, progress=
     """
     Iterate f from every start.
 
-    ``reference`` (a LimitSet) sets which bands count as 'in'. ``progress(done, total)`` is
-    called after each chunk of starts.
+    ``reference`` (a LimitSet) sets which bands count as 'in'. A start whose orbit ends inside
+    them, flipping only as the reference's pattern does, is labelled with the reference's
+    signature, however few throws are left after its transient; one that never gets inside is
+    'not converged'. Without a reference each orbit's own tail names its limit set.
+    ``progress(done, total)`` is called after each chunk of starts.
     """
     start_edges = np.asarray(start_edges)
     start_radii = np.asarray(start_radii, dtype=float)
@@ -246,13 +249,32 @@ def basin(model, start_edges, start_radii, throws=100, reference=None, progress=
                                                         float(r[s, done[s]])))
             continue
         ls = limit_set_from_orbit(e[s], r[s], rot[s])
-        sigs.append(ls.signature)
         ref = reference or ls
         inside = np.array([ref.contains(a, b) for a, b in zip(e[s], r[s])])
         outside = np.flatnonzero(~inside)
         transients[s] = int(outside[-1] + 1) if outside.size else 0
+        if reference is None:
+            sigs.append(ls.signature)
+        elif transients[s] >= e.shape[1]:
+            sigs.append('not converged')
+        elif _follows(flip_pattern(e[s, transients[s]:], rot[s, transients[s]:]),
+                      reference.pattern):
+            sigs.append(reference.signature)
+        else:
+            sigs.append(ls.signature)
     return Basin(np.asarray(start_edges), np.asarray(start_radii), e, r, rot, status,
                  tuple(sigs), transients)
+
+
+def _follows(flips, pattern):
+    """Tell whether each flip in ``flips`` goes to the edge that follows in cyclic ``pattern``."""
+    if not pattern:
+        return not flips
+    nxt = {pattern[k]: pattern[(k + 1) % len(pattern)] for k in range(len(pattern))}
+    if len(nxt) != len(pattern):    # an edge visited twice per cycle: compare as a sequence
+        text = ','.join(map(str, pattern * (len(flips) // len(pattern) + 2)))
+        return ','.join(map(str, flips)) in text
+    return all(f in nxt for f in flips) and all(nxt[a] == b for a, b in zip(flips, flips[1:]))
 
 
 def _first_flip(model, edge, lo, hi, samples):
