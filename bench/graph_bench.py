@@ -42,7 +42,8 @@ import time
 REPO = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / 'scripts'))
 
-from demo_graph import free_domain, Processes  # noqa: E402
+from demo_graph import Processes  # noqa: E402
+from feeder_testing import claim_domain_id  # noqa: E402
 
 SCENE = str(REPO / 'scenes' / 'triangle.yaml')
 CLK_TCK = os.sysconf('SC_CLK_TCK')
@@ -280,7 +281,7 @@ def main():
     ap.add_argument('--rate-seconds', type=float, default=5.0)
     ap.add_argument('--cpu-seconds', type=float, default=20.0)
     args = ap.parse_args()
-    domain, lock = free_domain()
+    domain, lock = claim_domain_id()
     os.environ['ROS_DOMAIN_ID'] = str(domain)
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     import rclpy

@@ -38,14 +38,9 @@ import time
 REPO = pathlib.Path(__file__).resolve().parents[1]
 INSTALL = REPO / 'ros2_ws' / 'install'
 STARTUP_TIMEOUT = 90.0
-# The domain picker and the node environment come from the installed feeder_driver.
-sys.path.insert(0, str(INSTALL / 'feeder_driver' / 'lib' / f'python{sys.version_info.major}.'
-                       f'{sys.version_info.minor}' / 'site-packages'))
-try:
-    from feeder_driver.testing import claim_domain_id as free_domain, install_env
-except ImportError:
-    raise SystemExit(f'demo_graph: feeder_driver is not installed in {INSTALL}: run '
-                     '. scripts/setup.sh first') from None
+# The domain picker and the node environment are the graph tests' (tests/feeder_testing.py).
+sys.path.insert(0, str(REPO / 'tests'))
+from feeder_testing import claim_domain_id, install_env  # noqa: E402
 
 
 def parse_args():
@@ -66,6 +61,21 @@ def parse_args():
 
 def node_env():
     return install_env(INSTALL)
+
+
+def demo_domain():
+    """
+    Return (ROS_DOMAIN_ID, lock or None): the caller's, so that its shell sees the graph.
+
+    Without ROS_DOMAIN_ID in the environment, a free one is claimed (tests/feeder_testing.py).
+    """
+    given = os.environ.get('ROS_DOMAIN_ID', '').strip()
+    if given:
+        if not given.isdigit() or not 0 <= int(given) <= 232:
+            raise SystemExit(f'demo_graph: ROS_DOMAIN_ID={given!r} is not a domain id '
+                             '(0..232; 0..101 keeps Fast DDS ports valid everywhere)')
+        return int(given), None
+    return claim_domain_id()
 
 
 class Processes:
@@ -115,7 +125,7 @@ def main():
     bag = out / 'bag'
     if bag.exists():
         shutil.rmtree(bag)
-    domain, lock = free_domain()
+    domain, lock = demo_domain()
     os.environ['ROS_DOMAIN_ID'] = str(domain)
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     procs = Processes(out / 'logs')
@@ -137,7 +147,8 @@ def main():
         return run(args, scene, out, procs, t0)
     finally:
         procs.stop_all()
-        lock.close()
+        if lock is not None:
+            lock.close()
 
 
 def run(args, scene_path, out, procs, t0):

@@ -152,16 +152,3 @@ def test_predictor_mode_predicts_with_the_noise_free_map(house_path, triangle):
     pred = Predictor(scene, 0, 0.15, 0.2129, 0.005, model=model)
     bits = [pred.step() for _ in range(200)]
     assert all(t.detected == pred.sees(t.edge, t.R) for t in bits)
-
-
-def test_stamp_text_round_trip():
-    from feeder_sim.ros_glue import stamp_from_text, stamp_text
-    t = stamp_from_text('1795362335.204302396')
-    assert (t.sec, t.nanosec) == (1795362335, 204302396)
-    assert stamp_text(t) == '1795362335.204302396'
-    assert stamp_from_text(stamp_text(stamp_from_text('3.000000007'))).nanosec == 7
-    assert stamp_from_text('12.5').nanosec == 500_000_000
-    assert stamp_from_text('7').sec == 7
-    for bad in ('', '-1.5', '1.2e3', 'x'):
-        with pytest.raises(ValueError):
-            stamp_from_text(bad)
