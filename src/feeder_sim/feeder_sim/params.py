@@ -31,7 +31,6 @@ SIM_PARAMS = (
     ParamSpec('scene', '', 'scene YAML (throwmap format, e.g. scenes/triangle.yaml); must load',
               read_only=True, constraints='a file throwmap.load_scene accepts'),
     ParamSpec('hardware_mode', False, 'true: stand in for the driver, with exactly its '
-              
               'interface (services ~/trigger_cycle, ~/enable; topics proximity, cycle_status, '
               'joint_states), sensor bits from the simulated part; false: the predictor, '
               "following the driver's cycle_status", read_only=True),
