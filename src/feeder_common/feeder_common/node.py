@@ -81,9 +81,11 @@ def make_executor(kind=None):
     """
     Return the executor named ``kind`` (``events`` or ``single``).
 
-    Default: FEEDER_EXECUTOR, else :data:`DEFAULT_EXECUTOR`. The events executor supports no
-    guard conditions: a thread that must wake the node hands the executor a task
-    (``node.executor.create_task(callback)``, thread-safe in both).
+    Default: FEEDER_EXECUTOR, else :data:`DEFAULT_EXECUTOR`. The events executor of rclpy 9.1
+    supports no guard conditions (a thread that must wake the node hands the executor a task:
+    ``node.executor.create_task(callback)``, thread-safe in both) and cannot pass a
+    MessageInfo to a callback: a node that needs one names ``single`` in its ``executor_kind``
+    attribute (the run helper passes it here).
     """
     kind = kind or os.environ.get('FEEDER_EXECUTOR') or DEFAULT_EXECUTOR
     if kind == 'events':
@@ -201,7 +203,7 @@ def _run(make_node, prog, stop):
         except StartupError as exc:
             print(f'{prog}: error: {exc}', file=sys.stderr)
             return 2
-        executor = make_executor()
+        executor = make_executor(getattr(node, 'executor_kind', None))
         executor.add_node(node)
         wake = _SignalWake(executor)
         # Start-up objects (numba, throwmap's analysis) never die: keep them out of the

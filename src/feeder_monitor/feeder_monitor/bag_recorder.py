@@ -106,6 +106,10 @@ def subscription_qos(publisher_qos):
 class BagRecorder(Node):
     """Subscribes (raw) to the selected topics as they appear and writes them to a bag."""
 
+    # The send time of each message comes with its MessageInfo, which rclpy 9.1's events
+    # executor cannot pass to a callback.
+    executor_kind = 'single'
+
     def __init__(self, writer, topics=None, exclude=None, discovery_period=0.5,
                  max_messages=None, duration=None, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
