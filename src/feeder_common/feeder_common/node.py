@@ -33,6 +33,7 @@ import sys
 import threading
 
 import rclpy
+from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
 from rclpy.signals import SignalHandlerOptions
@@ -77,7 +78,7 @@ class FeederLifecycleNode(LifecycleNode):
         return 'lifecycle shutdown' if self.lifecycle_state == 'finalized' else None
 
 
-def make_executor(kind=None):
+def make_executor(kind=None, context=None):
     """
     Return the executor named ``kind`` (``events`` or ``single``).
 
@@ -90,9 +91,9 @@ def make_executor(kind=None):
     kind = kind or os.environ.get('FEEDER_EXECUTOR') or DEFAULT_EXECUTOR
     if kind == 'events':
         from rclpy.experimental import EventsExecutor
-        return EventsExecutor()
+        return EventsExecutor(context=context)
     if kind == 'single':
-        return SingleThreadedExecutor()
+        return SingleThreadedExecutor(context=context)
     raise ValueError(f'FEEDER_EXECUTOR={kind!r}: use events or single')
 
 
@@ -125,13 +126,9 @@ class _SignalWake:
 
     def close(self):
         signal.set_wakeup_fd(self._previous)
-        try:
-            self._rsock.shutdown(socket.SHUT_RDWR)
-        except OSError:
-            pass
+        self._wsock.close()         # the reader sees the end of the stream and returns
         self._thread.join(timeout=1.0)
         self._rsock.close()
-        self._wsock.close()
 
 
 def _nothing():
@@ -167,7 +164,7 @@ def autostart(node):
 
 def run_node(make_node, prog, args=None):
     """
-    Run ``make_node()`` until SIGINT, SIGTERM or its end; the exit status of the executable.
+    Run ``make_node(context=...)`` until SIGINT, SIGTERM or its end; the executable's status.
 
     0 after a clean stop; 2 (one line on stderr) for a bad start-up parameter, a
     :class:`StartupError` or a failed autostart. An exception from a callback tears the node
@@ -181,17 +178,22 @@ def run_node(make_node, prog, args=None):
         stop.setdefault('reason', f'interrupted ({signal.Signals(signum).name})')
 
     previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    context = Context()
     try:
-        with rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO):
-            return _run(make_node, prog, stop)
+        with rclpy.init(args=args, context=context,
+                        signal_handler_options=SignalHandlerOptions.NO):
+            return _run(make_node, prog, stop, context)
     finally:
+        # Destroying the context ends the DDS participant, which tells every peer at once
+        # that this process left (else they wait for its lease, 20 s, to run out).
+        context.destroy()
         for s, handler in previous.items():
             signal.signal(s, handler)
 
 
-def _run(make_node, prog, stop):
+def _run(make_node, prog, stop, context):
     try:
-        node = make_node()
+        node = make_node(context=context)
     except (ParameterError, StartupError) as exc:
         print(f'{prog}: error: {exc}', file=sys.stderr)
         return 2
@@ -203,7 +205,7 @@ def _run(make_node, prog, stop):
         except StartupError as exc:
             print(f'{prog}: error: {exc}', file=sys.stderr)
             return 2
-        executor = make_executor(getattr(node, 'executor_kind', None))
+        executor = make_executor(getattr(node, 'executor_kind', None), context)
         executor.add_node(node)
         wake = _SignalWake(executor)
         # Start-up objects (numba, throwmap's analysis) never die: keep them out of the
@@ -226,3 +228,5 @@ def _run(make_node, prog, stop):
             executor.remove_node(node)
             executor.shutdown()
         node.destroy_node()
+        # The frozen start-up objects hold the context's users: let them go.
+        gc.unfreeze()

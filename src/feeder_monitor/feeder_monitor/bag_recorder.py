@@ -188,9 +188,9 @@ def main(argv=None):
         return 2
     made = []
 
-    def make_node():
+    def make_node(**kwargs):
         made.append(BagRecorder(writer, args.topics, args.exclude, args.discovery_period,
-                                args.max_messages, args.duration))
+                                args.max_messages, args.duration, **kwargs))
         return made[-1]
 
     try:

@@ -55,20 +55,18 @@ def test_specs_are_typed_ranged_and_documented():
 
 
 def test_config_yaml_matches_the_table():
+    """One '/**' section for both roles; every run-time parameter without a scene default."""
     import yaml
     path = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'sim.yaml'
     data = yaml.safe_load(path.read_text())
     specs = {s.name: s for s in SIM_PARAMS}
-    assert set(data) == {'/**/feeder_sim', '/**/feeder_driver'}
-    for node, section in data.items():
-        params = section['ros__parameters']
-        assert set(params) <= set(specs), set(params) - set(specs)
-        for name, value in params.items():
-            if name == 'hardware_mode':
-                assert value == (node == '/**/feeder_driver')
-            else:
-                assert value == specs[name].default, (node, name)
-            assert type(value) is type(specs[name].default), (node, name)
+    assert list(data) == ['/**']
+    params = data['/**']['ros__parameters']
+    assert set(params) == {s.name for s in SIM_PARAMS if not s.read_only} - \
+        {'start_edge', 'start_radius'}
+    for name, value in params.items():
+        assert value == specs[name].default, name
+        assert type(value) is type(specs[name].default), name
 
 
 def test_a_start_beyond_a_finite_arm_is_rejected(short_arm):
