@@ -177,7 +177,11 @@ def run_node(make_node, prog, args=None):
     def on_signal(signum, frame):
         stop.setdefault('reason', f'interrupted ({signal.Signals(signum).name})')
 
-    previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    # The handlers stay until the process ends: a Ctrl-C in a terminal reaches every process
+    # of its group and ros2 launch forwards one more, so a second signal may come while the
+    # node shuts down or the interpreter exits; it must not turn a clean exit into a crash.
+    for s in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(s, on_signal)
     context = Context()
     try:
         with rclpy.init(args=args, context=context,
@@ -187,8 +191,6 @@ def run_node(make_node, prog, args=None):
         # Destroying the context ends the DDS participant, which tells every peer at once
         # that this process left (else they wait for its lease, 20 s, to run out).
         context.destroy()
-        for s, handler in previous.items():
-            signal.signal(s, handler)
 
 
 def _run(make_node, prog, stop, context):
