@@ -132,18 +132,19 @@ def installed_scenes():
 
 
 def resolve_scene(scene):
-    """Path of a scene given by name (an installed one) or by path."""
+    """Path of a scene given by name (an installed one, e.g. hard/fast_spin) or by path."""
     path = pathlib.Path(os.path.expanduser(scene))
-    if path.suffix in ('.yaml', '.yml') or os.sep in scene:
+    if path.suffix not in ('.yaml', '.yml'):
+        found = share('feeder_bringup') / 'scenes' / f'{scene}.yaml'
+        if found.is_file():
+            return str(found)
         if not path.is_file():
-            raise LaunchArgumentError(f'scene:={scene}: no such file; give an installed scene '
-                                      f'({", ".join(installed_scenes())}) or a path')
-        return str(path.resolve())
-    found = share('feeder_bringup') / 'scenes' / f'{scene}.yaml'
-    if not found.is_file():
-        raise LaunchArgumentError(f'scene:={scene}: not an installed scene; installed: '
-                                  f'{", ".join(installed_scenes())} (or give a path)')
-    return str(found)
+            raise LaunchArgumentError(f'scene:={scene}: not an installed scene; installed: '
+                                      f'{", ".join(installed_scenes())} (or give a path)')
+    if not path.is_file():
+        raise LaunchArgumentError(f'scene:={scene}: no such file; give an installed scene '
+                                  f'({", ".join(installed_scenes())}) or a path')
+    return str(path.resolve())
 
 
 def number(args, name, minimum=None):
