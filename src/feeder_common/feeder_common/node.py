@@ -191,6 +191,10 @@ def run_node(make_node, prog, args=None):
         # Destroying the context ends the DDS participant, which tells every peer at once
         # that this process left (else they wait for its lease, 20 s, to run out).
         context.destroy()
+        # Nothing is left to stop: ignore further signals while the interpreter exits (it
+        # resets handlers it runs to the default, which would end the process by the signal).
+        for s in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(s, signal.SIG_IGN)
 
 
 def _run(make_node, prog, stop, context):
