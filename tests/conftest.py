@@ -44,7 +44,7 @@ os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
 # The domain picker and the process environment are feeder_testing's (beside this file; one
 # implementation for the tests, the demo and the benchmarks).
-from feeder_testing import claim_domain_id, install_env  # noqa: E402, I100
+from feeder_testing import claim_domain_id, install_env  # noqa: E402, I100, I202
 
 
 @pytest.fixture(autouse=True)

@@ -27,7 +27,7 @@ import shutil
 import signal
 import subprocess
 
-from feeder_testing import install_env, INSTALL
+from feeder_testing import INSTALL, install_env
 
 SKIP_REASON = ('the real ros2 CLI / ros2 launch is not installed here (no wheels exist): '
                'set FEEDER_ROS_CLI_VENV to a venv built with shared/tools/ros-cli-venv.sh, or '

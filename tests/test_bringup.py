@@ -13,8 +13,10 @@
 # limitations under the License.
 
 """
-feeder_bringup without ``launch``: every launch file's plan against the install space, the
-URDF (a tree whose frames are the ones the topics name) and the RViz config.
+feeder_bringup without ``launch``.
+
+Every launch file's plan against the install space, the URDF (a tree whose frames are the ones
+the topics name) and the RViz config.
 """
 
 import ast

@@ -122,7 +122,7 @@ CONFIGS = {
 
 
 def config_values(path, fqn):
-    """The parameters ``ros2 param load`` sends to ``fqn`` (rclpy's own file parser)."""
+    """Return the parameters ``ros2 param load`` sends to ``fqn`` (rclpy's file parser)."""
     return {name: parameter_value_to_python(p.value) for name, p in
             parameter_dict_from_yaml_file(str(path), True, target_nodes=[fqn]).items()}
 
@@ -271,7 +271,7 @@ def test_the_hardware_stand_in_offers_exactly_the_drivers_interface(graph, ros):
 
 
 def test_the_configs_are_the_installed_ones():
-    """The files tested above are the ones the packages install (share/<pkg>/config)."""
+    """Check that the files tested above are the installed ones (share/<pkg>/config)."""
     install = REPO / 'ros2_ws' / 'install'
     for pkg, path in (('feeder_driver', CONFIGS['driver']), ('feeder_sim', CONFIGS['sim']),
                       ('feeder_monitor', CONFIGS['monitor'])):

@@ -13,8 +13,7 @@
 # limitations under the License.
 
 """
-The launch files with the real ``ros2 launch``, the configs with ``ros2 param load``, and
-several feeders side by side.
+The real ``ros2 launch``, ``ros2 param load``, and several feeders side by side.
 
 The ``ros2`` tests run where the CLI exists (tests/ros_cli.py) and are skipped elsewhere with
 the reason; three feeders side by side also run as plain processes everywhere.
@@ -149,14 +148,14 @@ def test_hardware_launch_with_the_emulator(cli, ros, tmp_path, launches):
 
 def test_an_integer_for_a_double_in_launch_xml(cli, ros, tmp_path, launches):
     xml = tmp_path / 'one.launch.xml'
-    xml.write_text(f'''<launch>
+    xml.write_text(f"""<launch>
   <node pkg="feeder_sim" exec="sim_node" name="feeder_driver" namespace="/xml">
     <param name="scene" value="{TRIANGLE}"/>
     <param name="hardware_mode" value="true"/>
     <param name="cycle_period" value="1"/>
   </node>
 </launch>
-''')
+""")
     log = tmp_path / 'xml.log'
     proc = ros_cli.start(['launch', str(xml)], cli, log)
     try:

@@ -23,7 +23,7 @@ from .launch_support import executable_path, installed, LaunchArgumentError
 
 
 def declare(arguments):
-    """DeclareLaunchArgument actions of an argument table."""
+    """Return the DeclareLaunchArgument actions of an argument table."""
     return [DeclareLaunchArgument(name, default_value=default, description=text)
             for name, (default, text) in arguments.items()]
 
@@ -45,7 +45,7 @@ def actions(plan):
 
 
 def from_plan(arguments, planner):
-    """The launch description's entities: declared arguments, then the plan at launch time."""
+    """Return the entities: the declared arguments, then the plan made at launch time."""
     def launch_setup(context):
         given = {name: LaunchConfiguration(name).perform(context) for name in arguments}
         try:

@@ -199,7 +199,7 @@ def scene_geometry(scene_path):
 
 def robot_description(sensor_radius, arm_offset, arm_length=0.4, urdf=None):
     """
-    The feeder's URDF with a scene's numbers written in (no xacro).
+    Return the feeder's URDF with a scene's numbers written in (no xacro).
 
     The sensor joint sits at (sensor_radius, 0, arm_offset) on the arm; the arm's box is
     ``arm_length`` long, its top surface at z = arm_offset.
@@ -251,7 +251,7 @@ def _common_nodes(args, ns, scene):
 
 
 def plan_sim(given):
-    """The simulated feeder: the sim as hardware, the predictor, the monitor (+ options)."""
+    """Plan the simulated feeder: the sim as hardware, the predictor, the monitor (+ options)."""
     args = given if isinstance(given, Arguments) else Arguments(SIM_ARGUMENTS, given)
     ns = namespace(args['namespace'])
     scene = resolve_scene(args['scene'])
@@ -264,7 +264,7 @@ def plan_sim(given):
 
 
 def plan_hardware(given):
-    """The real feeder: driver_node on a port (or on the controller emulator's pty) (+ all)."""
+    """Plan the real feeder: driver_node on a port or the emulator's pty, predictor, monitor."""
     args = Arguments(HARDWARE_ARGUMENTS, given)
     ns = namespace(args['namespace'])
     scene = resolve_scene(args['scene'])
@@ -286,7 +286,7 @@ def plan_hardware(given):
 
 
 def plan_feeders(given):
-    """Several simulated feeders side by side, one per namespace, in one domain."""
+    """Plan several simulated feeders side by side, one per namespace, in one domain."""
     args = Arguments(FEEDERS_ARGUMENTS, given)
     names = [n.strip() for n in args['namespaces'].split(',') if n.strip()]
     if not names:

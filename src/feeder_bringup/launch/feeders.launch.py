@@ -25,5 +25,6 @@ from feeder_bringup.launch_actions import from_plan
 from feeder_bringup.launch_support import FEEDERS_ARGUMENTS, plan_feeders
 from launch import LaunchDescription
 
+
 def generate_launch_description():
     return LaunchDescription(from_plan(FEEDERS_ARGUMENTS, plan_feeders))

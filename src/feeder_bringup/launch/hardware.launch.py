@@ -26,5 +26,6 @@ from feeder_bringup.launch_actions import from_plan
 from feeder_bringup.launch_support import HARDWARE_ARGUMENTS, plan_hardware
 from launch import LaunchDescription
 
+
 def generate_launch_description():
     return LaunchDescription(from_plan(HARDWARE_ARGUMENTS, plan_hardware))

@@ -24,8 +24,9 @@ Enable cycling with: ros2 service call /feeder/feeder_driver/enable std_srvs/srv
 """
 
 from feeder_bringup.launch_actions import from_plan
-from feeder_bringup.launch_support import SIM_ARGUMENTS, plan_sim
+from feeder_bringup.launch_support import plan_sim, SIM_ARGUMENTS
 from launch import LaunchDescription
+
 
 def generate_launch_description():
     return LaunchDescription(from_plan(SIM_ARGUMENTS, plan_sim))
