@@ -195,7 +195,8 @@ def test_every_node_exits_0_and_leaves_the_graph_at_once(graph, ros, tmp_path, s
         status, gone = stop_and_time_gone(ros, graph, proc, fqn, sig)
         log = graph.log(proc)
         assert status == 0 and 'Traceback' not in log, log
-        assert gone < 2.0, f'{fqn} stayed on the graph {gone:.1f} s'
+        # (typically 0.1-0.3 s; the bound separates "at once" from the 20 s DDS lease)
+        assert gone < 5.0, f'{fqn} stayed on the graph {gone:.1f} s'
     assert 'stopped: interrupted' in graph.log(procs['/feeder/feeder_bag_recorder'])
 
 
@@ -227,7 +228,8 @@ def test_a_lifecycle_shutdown_ends_the_process(graph, ros, role):
     req = ChangeState.Request(transition=Transition(id=Transition.TRANSITION_ACTIVE_SHUTDOWN))
     assert ros.call(ChangeState, f'{fqn}/change_state', req).success
     assert proc.wait(timeout=10) == 0, graph.log(proc)
-    ros.spin_until(lambda: fqn not in nodes_on_graph(ros), 2.0, f'{fqn} off the graph')
+    # (typically 0.1-0.3 s; the bound separates "at once" from the 20 s DDS lease)
+    ros.spin_until(lambda: fqn not in nodes_on_graph(ros), 5.0, f'{fqn} off the graph')
     assert 'Traceback' not in graph.log(proc)
 
 
