@@ -18,15 +18,22 @@ import argparse
 import json
 import math
 import os
+import re
 import sys
 import time
 import warnings
 
 import numpy as np
 
-from .dynamics import analyse, basin, default_grid, limit_set, orbit
+from .analysis import analyse
+from .basins import basin, default_grid
 from .errors import ThrowmapError
+from .orbits import limit_set, orbit
 from .scene import load_scene
+from .status import LOST, OK
+
+# The batch reads stdin in blocks of this many lines: one f_batch, one write, one flush each.
+BATCH_BLOCK = 4096
 
 
 def _json_default(obj):
@@ -100,10 +107,9 @@ def cmd_grasp(scene, args, out):
                           'u_l': float(scene.part.u_l[g.edge]),
                           'u_r': float(scene.part.u_r[g.edge])} for g in rows],
                'R_grasp': r_all, 'mu_min': mu_all,
-               'carry_R_min': ({str(i): float(scene.model.r_grasp[i])
-                                for i in scene.part.stable_edges}
-                               if getattr(getattr(scene, 'effects', None), 'carry', None)
-                               else None)}, out)
+               'domain_R_min': ({str(i): float(scene.model.r_min(i))
+                                 for i in scene.part.stable_edges}
+                                if scene.model.domain_note() else None)}, out)
         return 0
     out.write(f'{scene.name}: dynamic grasp (impulse cone, constraints (1)-(4)), h = '
               f'{scene.h * 100:g} cm\n')
@@ -114,21 +120,138 @@ def cmd_grasp(scene, args, out):
               'binding': f'({g.binding})' if g.stable else '-'} for g in rows]
     _table(table, ['edge', 'stable', 'd (cm)', 'R_grasp (cm)', 'mu_min', 'binding'], out)
     out.write(f'all stable edges: R >= {r_all * 100:.3f} cm with mu >= {mu_all:.3f}\n')
-    carry = getattr(getattr(scene, 'effects', None), 'carry', None)
-    if carry is not None:
-        # The impulse cone above is the paper's limit; the scene's carry has its own domain.
-        out.write(f'with the finite carry (release at {math.degrees(carry.release_angle):g} deg, '
-                  f'mu = {scene.model.mu:g}): R >= '
-                  + ', '.join(f'{scene.model.r_grasp[i] * 100:.3f} cm on E{i}'
-                              for i in scene.part.stable_edges) + '\n')
+    note = scene.model.domain_note()
+    if note:
+        # The impulse cone above is the paper's limit; an effect (finite_carry) moves the domain.
+        out.write(note + '\n')
     return 0
 
 
-def _throw_row(model, edge, R):
-    res = model.throw(edge, R)
-    return {'edge': res.edge, 'R': res.R, 'kind': res.kind, 'flight_time': res.flight_time,
-            'net_rotation': res.net_rotation, 'impacts': len(res.impacts),
-            'first_contact_vertex': res.first_contact_vertex}
+# One state as JSON, the common spelling: {"edge": <int>, "R": <number>} (JSON's number grammar).
+_STATE = re.compile(r'\s*\{\s*"edge"\s*:\s*(-?(?:0|[1-9][0-9]*))\s*,\s*"R"\s*:\s*'
+                    r'(-?(?:0|[1-9][0-9]*)(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?)\s*\}\s*')
+
+
+def _parse_state(line, lineno):
+    """
+    Return (edge, R) of one input line; ValueError with the line number if it is not a state.
+
+    The common spelling is matched directly; anything else goes through json.loads, which
+    accepts exactly what JSON does and says what is wrong.
+    """
+    m = _STATE.fullmatch(line)
+    if m:
+        return int(m.group(1)), float(m.group(2))
+    try:
+        state = json.loads(line)
+        if not isinstance(state, dict) or 'edge' not in state or 'R' not in state:
+            raise ValueError('expected an object with "edge" and "R"')
+        unknown = set(state) - {'edge', 'R'}
+        if unknown:
+            raise ValueError(f'unknown keys {sorted(unknown)}; allowed: edge, R')
+    except ValueError as exc:
+        raise ValueError(f'line {lineno}: {exc}') from None
+    return state['edge'], state['R']
+
+
+def _number(x):
+    """JSON text of a float as json.dumps writes it; nan and inf (not JSON) as null."""
+    return repr(x) if math.isfinite(x) else 'null'
+
+
+def _batch_rows(model, block):
+    """
+    Throw every state of a block of (line number, text) with one f_batch, in order.
+
+    Returns one row per line: a dict of the throw, or {'error': message}: the error
+    model.throw(edge, R) would raise for that line.
+    """
+    rows = [None] * len(block)
+    todo, edges, radii = [], [], []
+    part = model.part
+    for k, (lineno, line) in enumerate(block):
+        try:
+            edge, R = _parse_state(line, lineno)
+        except ValueError as exc:
+            rows[k] = {'error': str(exc)}
+            continue
+        # What throw() refuses before throwing: types, edge numbers, unstable edges, R finite.
+        if not (type(edge) is int and type(R) is float and 0 <= edge < part.n
+                and part.stable[edge] and math.isfinite(R)):
+            err = model.domain_error(edge, R)
+            if err is not None and err.condition in ('edge_index', 'stable_edge', 'radius'):
+                rows[k] = {'error': str(err)}
+                continue
+        todo.append(k)
+        edges.append(int(edge))
+        radii.append(float(R))
+    if todo:
+        res = model.f_batch(np.array(edges, dtype=np.int64), np.array(radii))
+        codes = res['status'].tolist()
+        e1, r1, kind = res['edge'].tolist(), res['R'].tolist(), res['kind'].tolist()
+        t, rot = res['flight_time'].tolist(), res['net_rotation'].tolist()
+        events, vertex = res['events'].tolist(), res['first_contact_vertex'].tolist()
+        for i, k in enumerate(todo):
+            if codes[i] not in (OK, LOST):
+                rows[k] = {'error': model.error_message(codes[i], edges[i], radii[i])}
+                continue
+            rows[k] = {'edge': e1[i], 'R': r1[i], 'kind': kind[i], 'flight_time': t[i],
+                       'net_rotation': rot[i], 'impacts': events[i],
+                       'first_contact_vertex': vertex[i]}
+    return rows
+
+
+def _json_line(row):
+    if 'error' in row:
+        return json.dumps({'error': row['error']}) + '\n'
+    return (f'{{"edge": {row["edge"]}, "R": {_number(row["R"])}, "kind": "{row["kind"]}", '
+            f'"flight_time": {_number(row["flight_time"])}, '
+            f'"net_rotation": {_number(row["net_rotation"])}, "impacts": {row["impacts"]}, '
+            f'"first_contact_vertex": {row["first_contact_vertex"]}}}\n')
+
+
+def _blocks(stream, size=BATCH_BLOCK):
+    """Yield lists of (line number, text) of the non-blank lines, ``size`` lines at a time."""
+    block = []
+    lineno = 0
+    while True:
+        lines = stream.readlines(1 << 16)
+        if not lines:
+            break
+        for line in lines:
+            lineno += 1
+            if line.strip():
+                block.append((lineno, line))
+                if len(block) >= size:
+                    yield block
+                    block = []
+    if block:
+        yield block
+
+
+def throw_batch(model, stream, out, as_json=True):
+    """
+    Answer one state per input line, in order, block by block; return the exit code.
+
+    JSON: one line per state with edge, R, kind, flight_time, net_rotation, impacts (the
+    catch's events), first_contact_vertex, or {"error": ...}, written and flushed once per
+    block. A table otherwise. Exit code 1 if any line failed.
+    """
+    failed = False
+    table = []
+    for block in _blocks(stream):
+        rows = _batch_rows(model, block)
+        failed = failed or any('error' in r for r in rows)
+        if as_json:
+            out.write(''.join(_json_line(r) for r in rows))
+            out.flush()
+        else:
+            table.extend(rows)
+    if not as_json:
+        _table([{k: (f'{v:.6g}' if isinstance(v, float) else v) for k, v in r.items()}
+                for r in table], ['edge', 'R', 'kind', 'flight_time', 'net_rotation', 'error'],
+               out)
+    return 1 if failed else 0
 
 
 def cmd_throw(scene, args, out):
@@ -158,35 +281,7 @@ def cmd_throw(scene, args, out):
                     'omega+ (rad/s)', 'E- (J/kg)', 'E+ (J/kg)'], out)
         return 0
     # Batch: one JSON object per line on stdin, one answer per line, in order.
-    status = 0
-    rows = []
-    for lineno, line in enumerate(sys.stdin, 1):
-        if not line.strip():
-            continue
-        try:
-            state = json.loads(line)
-            if not isinstance(state, dict) or 'edge' not in state or 'R' not in state:
-                raise ValueError('expected an object with "edge" and "R"')
-            unknown = set(state) - {'edge', 'R'}
-            if unknown:
-                raise ValueError(f'unknown keys {sorted(unknown)}; allowed: edge, R')
-            row = _throw_row(model, state['edge'], state['R'])
-        except ThrowmapError as exc:
-            row = {'error': str(exc)}
-            status = 1
-        except ValueError as exc:
-            row = {'error': f'line {lineno}: {exc}'}
-            status = 1
-        if args.json:
-            _dump(row, out)
-            out.flush()
-        else:
-            rows.append(row)
-    if not args.json:
-        _table([{k: (f'{v:.6g}' if isinstance(v, float) else v) for k, v in r.items()}
-                for r in rows], ['edge', 'R', 'kind', 'flight_time', 'net_rotation', 'error'],
-               out)
-    return status
+    return throw_batch(model, sys.stdin, out, as_json=args.json)
 
 
 def _start(scene, args):
