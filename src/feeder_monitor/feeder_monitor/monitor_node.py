@@ -16,7 +16,7 @@
 monitor_node: raises edge1_ready when a detection proves the part lies on the goal edge.
 
 ROS glue only: the rules and the state machine are feeder_monitor.readiness's, the analysis is
-throwmap's (through feeder_sim.analysis, the same numbers the sim uses).
+throwmap's (throwmap.scene_analysis, the same numbers the sim uses).
 """
 
 import functools
@@ -25,7 +25,6 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from feeder_sim.analysis import load, scene_analysis
 from feeder_sim.params import check_changes
 from feeder_sim.ros_glue import (CYCLE_STATUS_QOS, declare, diagnostic_array, diagnostic_status,
                                  DIAGNOSTICS_QOS, LATCHED_QOS, ParameterGate, run_node,
@@ -34,7 +33,7 @@ from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Range
 from std_msgs.msg import Bool
-from throwmap import analyse, ThrowmapError
+from throwmap import analyse, load_scene, scene_analysis, ThrowmapError
 
 from .params import MONITOR_PARAMS
 from .readiness import (ANOMALY, CyclePairer, limit_set_orbit, ReadinessMonitor,
@@ -51,7 +50,7 @@ class MonitorNode(Node):
         super().__init__('feeder_monitor', **kwargs)
         self._specs = {s.name: s for s in MONITOR_PARAMS}
         # Scenes by path, loaded once (the parameter checks load them too).
-        self._load_scene = functools.lru_cache(maxsize=None)(load)
+        self._load_scene = functools.lru_cache(maxsize=None)(load_scene)
         self._scene = None
         self._base = None
         self._orbit = None

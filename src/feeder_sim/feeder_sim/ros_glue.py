@@ -30,8 +30,6 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker, MarkerArray
 
-from .predictor import yaw_quaternion
-
 # Latched state: the last message reaches late subscribers (transient local on both ends).
 LATCHED_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                          reliability=ReliabilityPolicy.RELIABLE,
@@ -53,6 +51,11 @@ LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN,
 _MARKER_TYPES = {'cube': Marker.CUBE, 'sphere': Marker.SPHERE, 'line_strip': Marker.LINE_STRIP,
                  'line_list': Marker.LINE_LIST, 'triangle_list': Marker.TRIANGLE_LIST,
                  'text': Marker.TEXT_VIEW_FACING}
+
+
+def yaw_quaternion(yaw):
+    """(x, y, z, w) of a rotation by ``yaw`` about z."""
+    return 0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)
 
 
 def descriptor(spec):

@@ -15,8 +15,9 @@
 """
 sim_node: predicted part states; with ``hardware_mode:=true`` it stands in for the driver.
 
-ROS glue only: the throw map is throwmap's, the state is feeder_sim.predictor's, the marker
-geometry feeder_sim.markers'. Interfaces: docs/interfaces.md; parameters: docs/nodes.md.
+ROS glue only: the throw map, the part's state (throwmap.PartOnArm) and the analysis are
+throwmap's, the marker geometry feeder_sim.markers'. Interfaces: docs/interfaces.md;
+parameters: docs/nodes.md.
 """
 
 import functools
@@ -29,17 +30,17 @@ from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
 from sensor_msgs.msg import JointState, Range
 from std_msgs.msg import Float64, Float64MultiArray, Int32, MultiArrayDimension, String
 from std_srvs.srv import SetBool, Trigger
-from throwmap import analyse, ThrowmapError
+from throwmap import (analyse, analysis_json, LIMIT_SET_FIELDS, limit_set_rows, load_scene,
+                      PartOnArm, scene_analysis, ThrowmapError)
+from throwmap.part_on_arm import LOST
 from visualization_msgs.msg import MarkerArray
 
-from . import analysis as scene_analysis_mod
 from .markers import state_markers, static_markers
 from .params import check_changes, check_start, SIM_PARAMS
-from .predictor import (has_noisy_sensor, LOST, prediction_model, Predictor,
-                        yaw_quaternion)
 from .ros_glue import (CYCLE_STATUS_QOS, declare, DEFAULT_DEPTH, diagnostic_array,
                        diagnostic_status, DIAGNOSTICS_QOS, LATCHED_QOS, marker_array,
-                       ParameterGate, run_node, stamp_from_text, stamp_text, StartupError)
+                       ParameterGate, run_node, stamp_from_text, stamp_text, StartupError,
+                       yaw_quaternion)
 
 FRAME = 'feeder_base'
 SENSOR_FRAME = 'feeder_sensor'
@@ -54,7 +55,7 @@ class SimNode(LifecycleNode):
         super().__init__('feeder_sim', **kwargs)
         self._specs = {s.name: s for s in SIM_PARAMS}
         # Scenes by path, loaded once (the parameter checks load them too).
-        self._load_scene = functools.lru_cache(maxsize=None)(scene_analysis_mod.load)
+        self._load_scene = functools.lru_cache(maxsize=None)(load_scene)
         self._scene = None
         self._active = False
         self._lifecycle = 'unconfigured'
@@ -125,7 +126,7 @@ class SimNode(LifecycleNode):
         if 'start_edge' in changes or 'start_radius' in changes:
             self._place_part()
         if 'sensor_radius' in changes:
-            self._analysis = scene_analysis_mod.scene_analysis(
+            self._analysis = scene_analysis(
                 self._scene, changes['sensor_radius'], self._base_analysis)
             self._predictor.sensor_radius = self._analysis.sensor.radius
             self._static_markers = None
@@ -141,7 +142,7 @@ class SimNode(LifecycleNode):
     def _place_part(self):
         """Restart the prediction with a part at (start_edge, start_radius)."""
         edge, R = self._param('start_edge'), self._param('start_radius')
-        self._predictor.reset(edge, R)
+        self._predictor.place(edge, R)
         self._last_throw = None
         self._lost_seq = None
         self.get_logger().info(f'prediction restarted at edge {edge}, R {R:.4f} m')
@@ -163,17 +164,17 @@ class SimNode(LifecycleNode):
         scene = self._scene
         try:
             self._base_analysis = analyse(scene)
-            self._analysis = scene_analysis_mod.scene_analysis(
+            self._analysis = scene_analysis(
                 scene, self._param('sensor_radius'), self._base_analysis)
             seed = self._param('seed')
             sensor = self._analysis.sensor
             # Hardware mode samples the scene's random effects (seeded); predictor mode
             # predicts with the noise-free map and the geometric sensor bit.
-            self._predictor = Predictor(
+            self._predictor = PartOnArm(
                 scene, self._param('start_edge'), self._param('start_radius'), sensor.radius,
                 sensor.footprint,
-                model=None if self._hardware else prediction_model(scene),
-                noisy_sensor=self._hardware and has_noisy_sensor(scene),
+                model=None if self._hardware else scene.model.nominal(),
+                noisy_sensor=self._hardware and scene.noisy_sensor,
                 seed=(seed if seed >= 0 else scene.seed) if self._hardware else None)
         except ThrowmapError as exc:
             self._configure_error = f'scene {scene.source}: {exc}'
@@ -284,7 +285,7 @@ class SimNode(LifecycleNode):
         stamp = self.get_clock().now().to_msg()
         self._publish_joint(stamp, self._scene.release_speed)
         try:
-            throw = self._predictor.step()
+            throw = self._predictor.throw()
         except ThrowmapError as exc:
             self._counts['failed'] += 1
             self._publish_joint(stamp, 0.0)
@@ -350,7 +351,7 @@ class SimNode(LifecycleNode):
         self._counts['missed'] += missed
         try:
             for k in range(missed + 1):
-                throw = self._predictor.step()
+                throw = self._predictor.throw()
                 if throw.kind == LOST and throw.count == self._predictor.lost_at:
                     self._report_lost(seq - missed + k, throw)
         except ThrowmapError as exc:
@@ -427,8 +428,8 @@ class SimNode(LifecycleNode):
     def _publish_latched(self):
         if not self._active:
             return
-        rows = scene_analysis_mod.limit_set_rows(self._analysis.limit_set)
-        fields = len(scene_analysis_mod.LIMIT_SET_FIELDS)
+        rows = limit_set_rows(self._analysis.limit_set)
+        fields = len(LIMIT_SET_FIELDS)
         msg = Float64MultiArray()
         msg.layout.dim = [
             MultiArrayDimension(label='edges', size=len(rows), stride=len(rows) * fields),
@@ -436,7 +437,7 @@ class SimNode(LifecycleNode):
         msg.data = [v for row in rows for v in row]
         self._pubs['limit_set'].publish(msg)
         self._pubs['analysis'].publish(
-            String(data=scene_analysis_mod.analysis_json(self._analysis)))
+            String(data=analysis_json(self._analysis)))
         self._publish_markers(force=True)
 
     def _publish_diagnostics(self):

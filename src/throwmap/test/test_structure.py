@@ -102,7 +102,7 @@ def imports(dotted, path):
 
 
 def own(module):
-    """The throwmap module an import refers to (a name inside a module maps to the module)."""
+    """Return the throwmap module an import refers to (a name in a module: that module)."""
     parts = module.split('.')
     if parts[0] != 'throwmap':
         return None
@@ -161,7 +161,7 @@ def registry_names():
 
 
 def code_words(path):
-    """Identifiers and string constants of a module, docstrings left out."""
+    """Return the identifiers and string constants of a module, docstrings left out."""
     tree = ast.parse(path.read_text(encoding='utf-8'))
     docstrings = set()
     for node in ast.walk(tree):

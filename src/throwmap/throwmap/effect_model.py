@@ -71,14 +71,17 @@ class EffectModel(ThrowModel):
     With random effects the model owns a seeded numpy Generator (``rng``): every f, f_batch and
     orbit call draws from it, so results depend on the seed and on the order of calls;
     ``reseed(seed)`` starts the sequence again. ``knobs``: the simulator's and the effects'
-    accuracy knobs. f and throw reuse one record buffer: one model per thread.
+    accuracy knobs; ``arm_length``: the scene's (inf without one). f and throw reuse one record
+    buffer: one model per thread.
     """
 
     def __init__(self, part, offset, release_speed, gravity, mu=None, settle_rule='full',
                  accuracy=None, effects=None, simulator=None, knobs=None, seed=0,
-                 field_prefix=''):
+                 arm_length=None, field_prefix=''):
         super().__init__(part, offset, release_speed, gravity, mu=mu, settle_rule=settle_rule,
                          accuracy=accuracy, field_prefix=field_prefix)
+        if arm_length is not None:
+            self.arm_length = float(arm_length)     # the scene's arm.length
         self.effects = effects or EffectSet()
         self.simulator = simulator or SimulatorAccuracy()
         values = dict(vars(self.simulator))

@@ -153,6 +153,7 @@ class ThrowModel:
 
     stochastic = False
     seed = None
+    arm_length = math.inf       # the paper's arm has no end (effect finite_arm gives it one)
 
     def __init__(self, part, offset, release_speed, gravity, mu=None, settle_rule='full',
                  accuracy=None, field_prefix=''):

@@ -164,15 +164,15 @@ class PartOnArm:
         return self.part.pose_vertices(self.edge, self.R, self.scene.h)
 
     # ----------------------------------------------------------------------------- orbits
-    def orbit(self, throws, attempts=20):
+    def orbit(self, throws, start=None, attempts=20):
         """
-        Return the next ``throws`` states from this part's state (the state does not move).
+        Return the ``throws`` states after ``start`` (default: this part's state, not moved).
 
         An orbit may end early: the part is lost off a finite arm, or a noisy throw leaves the
         domain of f. The states before that are kept as one segment and, when the map is random
-        (release_noise), the orbit starts again from the same state, up to ``attempts`` times.
+        (release_noise), the orbit starts again from ``start``, up to ``attempts`` times.
         """
-        start = self.state
+        start = self.state if start is None else (int(start[0]), float(start[1]))
         edges, radii, segments, total = [], [], [], 0
         for _ in range(attempts):
             e, r, _, _, done = self.model.orbits([start[0]], [start[1]], int(throws) - total)

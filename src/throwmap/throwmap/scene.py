@@ -284,7 +284,8 @@ class Scene:
             else:
                 self.model = EffectModel(self.part, h, w, g, mu=mu, settle_rule=rule,
                                          accuracy=accuracy, effects=self.effects,
-                                         simulator=simulator, knobs=knobs, seed=self.seed)
+                                         simulator=simulator, knobs=knobs, seed=self.seed,
+                                         arm_length=self.arm_length)
         self.warnings = [str(c.message) for c in caught]
         for msg in self.warnings:
             warnings.warn(f'{source}: {msg}', stacklevel=2)

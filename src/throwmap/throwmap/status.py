@@ -125,9 +125,8 @@ def _sim_cap(model, status, edge, R):
 
 
 def _lost(model, status, edge, R):
-    arm = model.effects.get('finite_arm')
     return PartLost(f'lost: from ({edge}, {R:.6g} m) the part left the arm [0, '
-                    f'{arm.length:g} m]')
+                    f'{model.arm_length:g} m]')
 
 
 def _arm_strike(model, status, edge, R):
