@@ -55,6 +55,7 @@ from ..errors import InputError
 
 REGISTRY = (
     'backplate_friction',
+    'air_drag',
     'finite_carry',
     'impact_restitution',
     'finite_arm',
