@@ -15,6 +15,7 @@
 """``throwmap`` command line: grasp, throw, orbit, limit-set, basin, design, plot."""
 
 import argparse
+import itertools
 import json
 import math
 import os
@@ -127,9 +128,14 @@ def cmd_grasp(scene, args, out):
     return 0
 
 
-# One state as JSON, the common spelling: {"edge": <int>, "R": <number>} (JSON's number grammar).
-_STATE = re.compile(r'\s*\{\s*"edge"\s*:\s*(-?(?:0|[1-9][0-9]*))\s*,\s*"R"\s*:\s*'
-                    r'(-?(?:0|[1-9][0-9]*)(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?)\s*\}\s*')
+# One state as JSON, the common spelling: {"edge": <int>, "R": <number>} (JSON's grammar: its
+# whitespace, its numbers). Anything else goes through json.loads.
+_WS = r'[ \t\n\r]*'
+_STATE_TEXT = (_WS + r'\{' + _WS + r'"edge"' + _WS + ':' + _WS + r'(-?(?:0|[1-9][0-9]*))' + _WS
+               + ',' + _WS + r'"R"' + _WS + ':' + _WS
+               + r'(-?(?:0|[1-9][0-9]*)(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?)' + _WS + r'\}' + _WS)
+_STATE = re.compile(_STATE_TEXT)
+_STATES = re.compile('^' + _STATE_TEXT.replace(r'[ \t\n\r]', r'[ \t\r]') + '$', re.MULTILINE)
 
 
 def _parse_state(line, lineno):
@@ -154,79 +160,126 @@ def _parse_state(line, lineno):
     return state['edge'], state['R']
 
 
+# One answer: what model.throw(edge, R) gives, as json.dumps would write it (floats by repr).
+_ROW = ('{"edge": %d, "R": %r, "kind": "%s", "flight_time": %r, "net_rotation": %r, '
+        '"impacts": %d, "first_contact_vertex": %d}\n')
+
+
 def _number(x):
-    """JSON text of a float as json.dumps writes it; nan and inf (not JSON) as null."""
-    return repr(x) if math.isfinite(x) else 'null'
+    """Return a float for JSON: nan and inf (not JSON) as None."""
+    return x if math.isfinite(x) else None
 
 
-def _batch_rows(model, block):
+def _states(model, lines, first):
     """
-    Throw every state of a block of (line number, text) with one f_batch, in order.
+    Parse a block of lines (the first is line ``first``); return (answers, todo, edges, R).
 
-    Returns one row per line: a dict of the throw, or {'error': message}: the error
-    model.throw(edge, R) would raise for that line.
+    ``answers`` holds the error of each line that is refused before throwing (not a state, or
+    what throw() refuses first: types, edge numbers, unstable edges, R), BLANK for a blank
+    line; ``todo`` the other lines, in order, with their states. A block of states in the
+    common spelling is parsed at once.
     """
-    rows = [None] * len(block)
-    todo, edges, radii = [], [], []
+    answers = [None] * len(lines)
     part = model.part
-    for k, (lineno, line) in enumerate(block):
+    found = _STATES.findall(''.join(lines))
+    if len(found) == len(lines):        # every line in the common spelling
+        text_e, text_r = zip(*found)
         try:
-            edge, R = _parse_state(line, lineno)
-        except ValueError as exc:
-            rows[k] = {'error': str(exc)}
+            edges = np.fromiter(map(int, text_e), np.int64, len(lines))
+        except OverflowError:       # an edge beyond 64 bits: line by line
+            pass
+        else:
+            radii = np.fromiter(map(float, text_r), np.float64, len(lines))
+            good = (edges >= 0) & (edges < part.n)
+            good[good] = part.stable[edges[good]]
+            good &= np.isfinite(radii)
+            if good.all():
+                return answers, range(len(lines)), edges, radii
+    stable = part.stable.tolist()
+    todo, edges, radii = [], [], []
+    for k, line in enumerate(lines):
+        if not line.strip():
+            answers[k] = BLANK
             continue
-        # What throw() refuses before throwing: types, edge numbers, unstable edges, R finite.
+        try:
+            edge, R = _parse_state(line, first + k)
+        except ValueError as exc:
+            answers[k] = str(exc)
+            continue
         if not (type(edge) is int and type(R) is float and 0 <= edge < part.n
-                and part.stable[edge] and math.isfinite(R)):
+                and stable[edge] and math.isfinite(R)):
             err = model.domain_error(edge, R)
             if err is not None and err.condition in ('edge_index', 'stable_edge', 'radius'):
-                rows[k] = {'error': str(err)}
+                answers[k] = str(err)
                 continue
         todo.append(k)
         edges.append(int(edge))
         radii.append(float(R))
-    if todo:
-        res = model.f_batch(np.array(edges, dtype=np.int64), np.array(radii))
-        codes = res['status'].tolist()
-        e1, r1, kind = res['edge'].tolist(), res['R'].tolist(), res['kind'].tolist()
-        t, rot = res['flight_time'].tolist(), res['net_rotation'].tolist()
-        events, vertex = res['events'].tolist(), res['first_contact_vertex'].tolist()
-        for i, k in enumerate(todo):
-            if codes[i] not in (OK, LOST):
-                rows[k] = {'error': model.error_message(codes[i], edges[i], radii[i])}
-                continue
-            rows[k] = {'edge': e1[i], 'R': r1[i], 'kind': kind[i], 'flight_time': t[i],
-                       'net_rotation': rot[i], 'impacts': events[i],
-                       'first_contact_vertex': vertex[i]}
-    return rows
+    return answers, todo, np.array(edges, dtype=np.int64), np.array(radii, dtype=np.float64)
 
 
-def _json_line(row):
-    if 'error' in row:
-        return json.dumps({'error': row['error']}) + '\n'
-    return (f'{{"edge": {row["edge"]}, "R": {_number(row["R"])}, "kind": "{row["kind"]}", '
-            f'"flight_time": {_number(row["flight_time"])}, '
-            f'"net_rotation": {_number(row["net_rotation"])}, "impacts": {row["impacts"]}, '
-            f'"first_contact_vertex": {row["first_contact_vertex"]}}}\n')
+def _batch(model, lines, first):
+    """
+    Throw the state of every line of a block with one f_batch, in order.
+
+    Returns (answers, plain): one answer per line, (edge, R, kind, flight time, net rotation,
+    events, first contact vertex) of the throw or an error message (str), the error
+    model.throw(edge, R) would raise for that line; ``plain``: every answer is a throw that
+    landed on the arm (the common case).
+    """
+    answers, todo, edges, radii = _states(model, lines, first)
+    if not len(todo):
+        return answers, False
+    res = model.f_batch(edges, radii)
+    codes = res['status']
+    rows = list(zip(res['edge'].tolist(), res['R'].tolist(), res['kind'].tolist(),
+                    res['flight_time'].tolist(), res['net_rotation'].tolist(),
+                    res['events'].tolist(), res['first_contact_vertex'].tolist()))
+    if len(todo) == len(lines) and not codes.any():
+        return rows, True
+    for i, (k, code, row) in enumerate(zip(todo, codes.tolist(), rows)):
+        if code == OK or code == LOST:
+            answers[k] = row
+        else:
+            answers[k] = model.error_message(code, int(edges[i]), float(radii[i]))
+    return answers, False
+
+
+def _json_lines(answers, plain):
+    """Return the JSON lines of a block's answers (json.dumps' formatting, floats by repr)."""
+    if plain:
+        return ''.join(map(_ROW.__mod__, answers))
+    return ''.join([_ROW % a if type(a) is tuple and a[0] >= 0 else _json_special(a)
+                    for a in answers if a is not BLANK])
+
+
+def _json_special(a):
+    if type(a) is str:
+        return json.dumps({'error': a}) + '\n'
+    # lost: no R (nan), no JSON number for it
+    return json.dumps(dict(zip(ROW_KEYS, [_number(x) if isinstance(x, float) else x
+                                          for x in a]))) + '\n'
+
+
+ROW_KEYS = ('edge', 'R', 'kind', 'flight_time', 'net_rotation', 'impacts',
+            'first_contact_vertex')
+BLANK = object()        # the answer to a blank input line: none
 
 
 def _blocks(stream, size=BATCH_BLOCK):
-    """Yield lists of (line number, text) of the non-blank lines, ``size`` lines at a time."""
-    block = []
-    lineno = 0
+    """
+    Yield (lines, number of the first) of ``size`` input lines at a time, blank ones included.
+
+    A block is answered as soon as its last line has arrived (the iterator returns what the
+    pipe holds, it does not wait for a full buffer), so answers stream with the input.
+    """
+    first = 1
     while True:
-        lines = stream.readlines(1 << 16)
+        lines = list(itertools.islice(stream, size))
         if not lines:
-            break
-        for line in lines:
-            lineno += 1
-            if line.strip():
-                block.append((lineno, line))
-                if len(block) >= size:
-                    yield block
-                    block = []
-    if block:
-        yield block
+            return
+        yield lines, first
+        first += len(lines)
 
 
 def throw_batch(model, stream, out, as_json=True):
@@ -239,14 +292,15 @@ def throw_batch(model, stream, out, as_json=True):
     """
     failed = False
     table = []
-    for block in _blocks(stream):
-        rows = _batch_rows(model, block)
-        failed = failed or any('error' in r for r in rows)
+    for lines, first in _blocks(stream):
+        answers, plain = _batch(model, lines, first)
+        failed = failed or (not plain and any(type(a) is str for a in answers))
         if as_json:
-            out.write(''.join(_json_line(r) for r in rows))
+            out.write(_json_lines(answers, plain))
             out.flush()
         else:
-            table.extend(rows)
+            table.extend({'error': a} if type(a) is str else dict(zip(ROW_KEYS, a))
+                         for a in answers if a is not BLANK)
     if not as_json:
         _table([{k: (f'{v:.6g}' if isinstance(v, float) else v) for k, v in r.items()}
                 for r in table], ['edge', 'R', 'kind', 'flight_time', 'net_rotation', 'error'],
