@@ -163,6 +163,7 @@ def _parse_state(line, lineno):
 # One answer: what model.throw(edge, R) gives, as json.dumps would write it (floats by repr).
 _ROW = ('{"edge": %d, "R": %r, "kind": "%s", "flight_time": %r, "net_rotation": %r, '
         '"impacts": %d, "first_contact_vertex": %d}\n')
+_ROW_TEXT = _ROW.replace('%r', '%s')
 
 
 def _number(x):
@@ -222,33 +223,45 @@ def _batch(model, lines, first):
     """
     Throw the state of every line of a block with one f_batch, in order.
 
-    Returns (answers, plain): one answer per line, (edge, R, kind, flight time, net rotation,
-    events, first contact vertex) of the throw or an error message (str), the error
-    model.throw(edge, R) would raise for that line; ``plain``: every answer is a throw that
-    landed on the arm (the common case).
+    Returns (answers, columns): one answer per line, (edge, R, kind, flight time, net
+    rotation, events, first contact vertex) of the throw or an error message (str), the error
+    model.throw(edge, R) would raise for that line; ``columns`` the f_batch result when every
+    line is a throw that landed on the arm (the common case), else None.
     """
     answers, todo, edges, radii = _states(model, lines, first)
     if not len(todo):
-        return answers, False
+        return answers, None
     res = model.f_batch(edges, radii)
     codes = res['status']
-    rows = list(zip(res['edge'].tolist(), res['R'].tolist(), res['kind'].tolist(),
-                    res['flight_time'].tolist(), res['net_rotation'].tolist(),
-                    res['events'].tolist(), res['first_contact_vertex'].tolist()))
     if len(todo) == len(lines) and not codes.any():
-        return rows, True
+        return None, res
+    rows = zip(res['edge'].tolist(), res['R'].tolist(), res['kind'].tolist(),
+               res['flight_time'].tolist(), res['net_rotation'].tolist(),
+               res['events'].tolist(), res['first_contact_vertex'].tolist())
     for i, (k, code, row) in enumerate(zip(todo, codes.tolist(), rows)):
         if code == OK or code == LOST:
             answers[k] = row
         else:
             answers[k] = model.error_message(code, int(edges[i]), float(radii[i]))
-    return answers, False
+    return answers, None
 
 
-def _json_lines(answers, plain):
+_FLOATS = json.JSONEncoder(check_circular=False)
+
+
+def _texts(column):
+    """Return the JSON texts of a column of floats (encoded at once, as json.dumps does)."""
+    return _FLOATS.encode(column.tolist())[1:-1].split(', ')
+
+
+def _json_lines(answers, columns):
     """Return the JSON lines of a block's answers (json.dumps' formatting, floats by repr)."""
-    if plain:
-        return ''.join(map(_ROW.__mod__, answers))
+    if columns is not None:
+        c = columns
+        return ''.join(map(_ROW_TEXT.__mod__, zip(
+            c['edge'].tolist(), _texts(c['R']), c['kind'].tolist(), _texts(c['flight_time']),
+            _texts(c['net_rotation']), c['events'].tolist(),
+            c['first_contact_vertex'].tolist())))
     return ''.join([_ROW % a if type(a) is tuple and a[0] >= 0 else _json_special(a)
                     for a in answers if a is not BLANK])
 
@@ -293,12 +306,17 @@ def throw_batch(model, stream, out, as_json=True):
     failed = False
     table = []
     for lines, first in _blocks(stream):
-        answers, plain = _batch(model, lines, first)
-        failed = failed or (not plain and any(type(a) is str for a in answers))
+        answers, columns = _batch(model, lines, first)
+        failed = failed or (answers is not None and any(type(a) is str for a in answers))
         if as_json:
-            out.write(_json_lines(answers, plain))
+            out.write(_json_lines(answers, columns))
             out.flush()
         else:
+            if answers is None:
+                c = columns
+                answers = list(zip(c['edge'].tolist(), c['R'].tolist(), c['kind'].tolist(),
+                                   c['flight_time'].tolist(), c['net_rotation'].tolist(),
+                                   c['events'].tolist(), c['first_contact_vertex'].tolist()))
             table.extend({'error': a} if type(a) is str else dict(zip(ROW_KEYS, a))
                          for a in answers if a is not BLANK)
     if not as_json:
