@@ -193,13 +193,19 @@ def load(slots):
     name = f'throwmap_composed_{tag}_{digest}'
     if name in sys.modules:
         return sys.modules[name]
-    path = _write(text, name + '.py')
-    spec = importlib.util.spec_from_file_location(name, path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module      # before it runs: numba's cache index refers to it by name
-    try:
-        spec.loader.exec_module(module)
-    except BaseException:
-        del sys.modules[name]
-        raise
-    return module
+    for attempt in range(3):
+        path = _write(text, name + '.py')
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module      # before it runs: numba's cache index names it
+        try:
+            spec.loader.exec_module(module)
+            return module
+        except FileNotFoundError:
+            # Another process dropped stale modules (throwmap.jit.guard) in between: again.
+            del sys.modules[name]
+            if attempt == 2:
+                raise
+        except BaseException:
+            del sys.modules[name]
+            raise
