@@ -45,7 +45,7 @@ def states(model, count, seed, r_hi=0.28):
     rng = np.random.default_rng(seed)
     part = model.part
     edges = rng.choice(part.stable_edges, count)
-    lo = np.array([max(model.r_grasp[e], -part.u_l[e]) * 1.001 for e in edges])
+    lo = np.array([model.r_min(e) * 1.001 for e in edges])
     return edges, lo + rng.uniform(0, 1, count) * (r_hi - lo)
 
 
