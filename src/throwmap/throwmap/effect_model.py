@@ -212,7 +212,7 @@ class EffectModel(ThrowModel):
             self._raise(st, edge, R)
         if nrec > rec.shape[0]:     # a long catch: again, with room for every event
             rec = np.empty((nrec, REC_COLS))
-            self.composed.throw_one(edge, R, float(z[0]), float(z[1]), self.ctx, self.prm, rec)
+            self._throw(edge, R, z, rec)
         rows = rec[:nrec]
         reason = ''
         if st == LOST:

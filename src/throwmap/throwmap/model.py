@@ -273,13 +273,16 @@ class ThrowModel:
         raise err if err is not None else DomainError(
             'radius', f'R must be a finite number of metres, got {R!r}')
 
+    def _throw_one(self, edge, R, rec):
+        # The compiled throw, called directly (its argument types never change; jit.entry_point).
+        if self._f is None:
+            self._f = entry_point(base_map.throw_one, edge, R, *self._base_args(), rec)
+        return self._f(edge, R, *self._base_args(), rec)
+
     def f(self, edge, R):
         """(edge', R', kind) of one throw; raises DomainError outside the domain."""
         edge, R = self._state(edge, R)
-        if self._f is None:
-            self._f = entry_point(base_map.throw_one, edge, R, *self._base_args(),
-                                  self._no_record)
-        out = self._f(edge, R, *self._base_args(), self._no_record)
+        out = self._throw_one(edge, R, self._no_record)
         if out[0] != OK:
             self._raise(out[0], edge, R)
         return out[1], out[2], throw_kind(edge, out[1], out[4])
@@ -288,12 +291,12 @@ class ThrowModel:
         """Full ThrowResult; with ``trajectory`` the sampled poses (throwmap.trajectory)."""
         edge, R = self._state(edge, R)
         rec = np.empty((64, REC_COLS))
-        st, j, r1, t, rot, nimp, k0, nrec = base_map.throw_one(edge, R, *self._base_args(), rec)
+        st, j, r1, t, rot, nimp, k0, nrec = self._throw_one(edge, R, rec)
         if st != OK:
             self._raise(st, edge, R)
         if nrec > rec.shape[0]:     # rare long rolls: run again with room for every event
             rec = np.empty((nrec, REC_COLS))
-            base_map.throw_one(edge, R, *self._base_args(), rec)
+            self._throw_one(edge, R, rec)
         hd = self.h + self.part.d[edge]
         e0 = 0.5 * self.w ** 2 * (hd * hd + R * R + self.part.rho2) - self.g * self.part.d[edge]
         traj = None
