@@ -16,7 +16,7 @@
 monitor_node: raises edge1_ready when a detection proves the part lies on the goal edge.
 
 ROS glue only: the rules and the state machine are feeder_monitor.readiness's, the analysis is
-throwmap's (through feeder_sim.analysis, the same numbers the sim uses), the contract (QoS,
+throwmap's (throwmap.scene_analysis, the same numbers the sim uses), the contract (QoS,
 message parsers, parameters, run helper) feeder_common's.
 """
 
@@ -32,11 +32,10 @@ from feeder_common.node import run_node, StartupError
 from feeder_common.parameters import ParameterGate
 from feeder_common.params import check_scene
 from feeder_common.stamps import ns_seconds
-from feeder_sim.analysis import load, scene_analysis
 from rclpy.node import Node
 from sensor_msgs.msg import Range
 from std_msgs.msg import Bool
-from throwmap import analyse, ThrowmapError
+from throwmap import analyse, load_scene, scene_analysis, ThrowmapError
 
 from .params import MONITOR_PARAMS
 from .readiness import (ANOMALY, CyclePairer, limit_set_orbit, ReadinessMonitor,
@@ -52,7 +51,7 @@ class MonitorNode(Node):
     def __init__(self, **kwargs):
         super().__init__('feeder_monitor', **kwargs)
         # Scenes by path, loaded once (the parameter checks load them too).
-        self._load_scene = functools.lru_cache(maxsize=None)(load)
+        self._load_scene = functools.lru_cache(maxsize=None)(load_scene)
         self._scene = None
         self._base = None
         self._orbit = None

@@ -17,10 +17,9 @@ import random
 from feeder_monitor.readiness import (ANOMALY, combine_patterns, CyclePairer, detection_pattern,
                                       limit_set_orbit, ReadinessMonitor, READY, Rules,
                                       rules_from_analysis, TRACKING, WARMING_UP)
-from feeder_sim.analysis import scene_analysis
 import numpy as np
 import pytest
-from throwmap import sees
+from throwmap import scene_analysis, sees
 
 
 def make_rules(**kw):

@@ -23,9 +23,9 @@ sim_node: the predictor of the part's state, or (``hardware_mode:=true``) the ha
   ``~/trigger_cycle``, ``~/enable``): the part it throws is simulated, so a predictor can run
   beside it in the same namespace.
 
-ROS glue only: the throw map is throwmap's, the state feeder_sim.predictor's, the marker
-geometry feeder_sim.markers', the contract (QoS, messages, frames, parameters, run helper)
-feeder_common's. Interfaces: docs/interfaces.md; parameters: docs/nodes.md.
+ROS glue only: the throw map, the part's state (throwmap.PartOnArm) and the analysis are
+throwmap's, the marker geometry feeder_sim.markers', the contract (QoS, messages, frames,
+parameters, run helper) feeder_common's. Interfaces: docs/interfaces.md; parameters: docs/nodes.md.
 """
 
 import functools
@@ -45,14 +45,14 @@ from rclpy.lifecycle import TransitionCallbackReturn
 from sensor_msgs.msg import JointState, Range
 from std_msgs.msg import Float64, Float64MultiArray, Int32, MultiArrayDimension, String
 from std_srvs.srv import SetBool, Trigger
-from throwmap import analyse, ThrowmapError
+from throwmap import (analyse, analysis_json, LIMIT_SET_FIELDS, limit_set_rows, load_scene,
+                      PartOnArm, scene_analysis, ThrowmapError)
+from throwmap.part_on_arm import LOST
 from visualization_msgs.msg import MarkerArray
 
-from . import analysis as scene_analysis_mod
 from .marker_msgs import marker_array
 from .markers import state_markers, static_markers
 from .params import check_changes, check_start, SIM_PARAMS
-from .predictor import has_noisy_sensor, LOST, prediction_model, Predictor
 
 HARDWARE_ID = 'sim'
 
@@ -63,7 +63,7 @@ class SimNode(FeederLifecycleNode):
     def __init__(self, **kwargs):
         super().__init__('feeder_sim', **kwargs)
         # Scenes by path, loaded once (the parameter checks load them too).
-        self._load_scene = functools.lru_cache(maxsize=None)(scene_analysis_mod.load)
+        self._load_scene = functools.lru_cache(maxsize=None)(load_scene)
         self._scene = None
         self._active = False
         self._base_analysis = None
@@ -127,7 +127,7 @@ class SimNode(FeederLifecycleNode):
         if 'start_edge' in changes or 'start_radius' in changes:
             self._place_part()
         if 'sensor_radius' in changes:
-            self._analysis = scene_analysis_mod.scene_analysis(
+            self._analysis = scene_analysis(
                 self._scene, changes['sensor_radius'], self._base_analysis)
             self._predictor.sensor_radius = self._analysis.sensor.radius
             self._static_markers = None
@@ -143,7 +143,7 @@ class SimNode(FeederLifecycleNode):
     def _place_part(self):
         """Restart the part (hardware mode) or the prediction at (start_edge, start_radius)."""
         edge, R = self._param('start_edge'), self._param('start_radius')
-        self._predictor.reset(edge, R)
+        self._predictor.place(edge, R)
         self._last_throw = None
         self._lost_seq = None
         what = 'part' if self._hardware else 'prediction'
@@ -166,17 +166,17 @@ class SimNode(FeederLifecycleNode):
         scene = self._scene
         try:
             self._base_analysis = analyse(scene)
-            self._analysis = scene_analysis_mod.scene_analysis(
+            self._analysis = scene_analysis(
                 scene, self._param('sensor_radius'), self._base_analysis)
             seed = self._param('seed')
             sensor = self._analysis.sensor
             # Hardware mode samples the scene's random effects (seeded); predictor mode
             # predicts with the noise-free map and the geometric sensor bit.
-            self._predictor = Predictor(
+            self._predictor = PartOnArm(
                 scene, self._param('start_edge'), self._param('start_radius'), sensor.radius,
                 sensor.footprint,
-                model=None if self._hardware else prediction_model(scene),
-                noisy_sensor=self._hardware and has_noisy_sensor(scene),
+                model=None if self._hardware else scene.model.nominal(),
+                noisy_sensor=self._hardware and scene.noisy_sensor,
                 seed=(seed if seed >= 0 else scene.seed) if self._hardware else None)
         except ThrowmapError as exc:
             self.configure_error = f'scene {scene.source}: {exc}'
@@ -294,7 +294,7 @@ class SimNode(FeederLifecycleNode):
         pubs = self._pubs
         pubs['joint_states'].publish(joint_state(stamp, 0.0, self._scene.release_speed))
         try:
-            throw = self._predictor.step()
+            throw = self._predictor.throw()
         except ThrowmapError as exc:
             self._counts['failed'] += 1
             pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
@@ -338,7 +338,7 @@ class SimNode(FeederLifecycleNode):
         self._counts['missed'] += missed
         try:
             for k in range(missed + 1):
-                throw = self._predictor.step()
+                throw = self._predictor.throw()
                 if throw.kind == LOST and throw.count == self._predictor.lost_at:
                     self._report_lost(seq - missed + k, throw)
         except ThrowmapError as exc:
@@ -414,8 +414,8 @@ class SimNode(FeederLifecycleNode):
     def _publish_latched(self):
         if not self._active or self._hardware:
             return
-        rows = scene_analysis_mod.limit_set_rows(self._analysis.limit_set)
-        fields = len(scene_analysis_mod.LIMIT_SET_FIELDS)
+        rows = limit_set_rows(self._analysis.limit_set)
+        fields = len(LIMIT_SET_FIELDS)
         msg = Float64MultiArray()
         msg.layout.dim = [
             MultiArrayDimension(label='edges', size=len(rows), stride=len(rows) * fields),
@@ -423,7 +423,7 @@ class SimNode(FeederLifecycleNode):
         msg.data = [v for row in rows for v in row]
         self._pubs['limit_set'].publish(msg)
         self._pubs['analysis'].publish(
-            String(data=scene_analysis_mod.analysis_json(self._analysis)))
+            String(data=analysis_json(self._analysis)))
         self._publish_markers(force=True)
 
     # ------------------------------------------------------------------ diagnostics

@@ -15,8 +15,8 @@
 import pathlib
 
 from feeder_common.params import check_scene
-from feeder_sim.analysis import load
 from feeder_sim.params import check_start, SIM_PARAMS
+from throwmap import load_scene as load
 
 
 DOCS = pathlib.Path(__file__).resolve().parents[3] / 'docs' / 'nodes.md'
