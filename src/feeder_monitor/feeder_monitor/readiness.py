@@ -315,7 +315,10 @@ class ReadinessMonitor:
         r = self.rules
         if detected:
             reason = None
-            if self.seen_detection and r.min_gap is not None and self.gap < r.min_gap:
+            # min_gap is the fewest non-detections between two runs: it judges the first
+            # detection of a run (the run rule judges the ones after it).
+            if self.run == 0 and self.seen_detection and r.min_gap is not None and \
+                    self.gap < r.min_gap:
                 reason = (f'detection after only {self.gap} cycles without one; the limit set '
                           f'needs at least {r.min_gap}')
             self.run += 1

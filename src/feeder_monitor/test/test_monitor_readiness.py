@@ -320,3 +320,38 @@ def test_noisy_scene_rules_read_the_noisy_sensor(house, house_analysis):
     assert rules.pattern.detections != exact.detections
     assert rules.pattern.min_gap <= exact.min_gap
     assert rules.pattern.max_gap >= exact.max_gap
+
+
+def test_a_run_the_run_rule_allows_is_no_min_gap_anomaly():
+    """min_gap counts non-detections between runs: the 2nd detection of a run is not early."""
+    m = ReadinessMonitor(make_rules(max_run=2, min_gap=3, warmup_cycles=1))
+    v = feed(m, [1, 1, 0, 0, 0, 1, 1, 0, 0, 0, 1])
+    assert m.counts['anomalies'] == 0, m.last_anomaly
+    assert [x.ready for x in v] == [True, True, False, False, False, True, True, False, False,
+                                    False, True]
+    # A new run that starts too early is still an anomaly.
+    v = feed(m, [0, 1], seq0=12)
+    assert v[-1].anomaly and 'only 1 cycles' in v[-1].anomaly
+
+
+def test_100000_cycles_of_the_triangle_orbit(triangle, triangle_analysis, orbit):
+    """
+    The scene's own part, thrown 100,000 times from its start, through the rules (issue 10).
+
+    The truth is the geometry: a cycle is ready exactly when the sensor sees the part, the part
+    is on the goal edge, and the warm-up is over. Zero anomalies, zero missed, zero false.
+    """
+    rules = rules_from_analysis(triangle, triangle_analysis, orbit)
+    edges, radii, _ = triangle.model.orbit_arrays(*triangle.default_start(), 100_000)
+    edges, radii = edges[1:], radii[1:]
+    assert len(edges) == 100_000
+    bits = np.asarray(sees(triangle.part, edges, radii, rules.sensor_radius, 0.0), dtype=bool)
+    m = ReadinessMonitor(rules)
+    verdicts = np.array([m.completed(k + 1, bool(b)).ready for k, b in enumerate(bits)])
+    assert m.counts['anomalies'] == 0, m.last_anomaly
+    truth = bits & (edges == rules.goal_edge) & \
+        (np.arange(1, len(bits) + 1) >= rules.warmup_cycles)
+    false_ready = np.flatnonzero(verdicts & ~truth) + 1
+    missed = np.flatnonzero(truth & ~verdicts) + 1
+    assert false_ready.size == 0 and missed.size == 0, (false_ready[:5], missed[:5])
+    assert truth.sum() > 3000       # a detection rate of 3-10 % (test_rules_of_the_triangle)
