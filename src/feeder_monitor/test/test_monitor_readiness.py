@@ -146,7 +146,7 @@ def test_failed_cycles_and_seq_gaps_restart_the_warmup():
     v = m.completed(3, True)
     assert 'went back' in v.anomaly and not v.ready
     assert m.counts == {'cycles': 9, 'completed': 8, 'failed': 1, 'detections': 5, 'ready': 2,
-                        'anomalies': 3}
+                        'anomalies': 3, 'untrusted': 0}
 
 
 def test_sensor_disagreement_is_an_anomaly():
@@ -355,3 +355,23 @@ def test_100000_cycles_of_the_triangle_orbit(triangle, triangle_analysis, orbit)
     missed = np.flatnonzero(truth & ~verdicts) + 1
     assert false_ready.size == 0 and missed.size == 0, (false_ready[:5], missed[:5])
     assert truth.sum() > 3000       # a detection rate of 3-10 % (test_rules_of_the_triangle)
+
+
+def test_a_first_seq_above_1_is_said_not_an_anomaly():
+    m = ReadinessMonitor(make_rules())
+    v = feed(m, [0, 0], seq0=50)
+    assert 'first cycle seen is seq 50' in v[0].note and 'cycles 1..49' in v[0].note
+    assert not v[1].note and m.counts['anomalies'] == 0
+    m = ReadinessMonitor(make_rules())
+    assert not feed(m, [0])[0].note
+
+
+def test_an_untrusted_cycle_is_an_anomaly_that_restarts_the_warmup():
+    m = ReadinessMonitor(make_rules(warmup_cycles=2, min_gap=None, max_run=None))
+    feed(m, [0, 0, 0])
+    v = m.untrusted(4, '2 publishers on /feeder/cycle_status')
+    assert not v.ready and v.state == ANOMALY and 'not trusted' in v.anomaly
+    assert m.counts['untrusted'] == 1 and m.last_seq == 3
+    # The driver's next cycle: no seq anomaly (the forged seq did not count); warm-up again.
+    v = feed(m, [1, 1], seq0=4)
+    assert [x.ready for x in v] == [False, True] and m.counts['anomalies'] == 1
