@@ -19,18 +19,22 @@ The forger is this test's own node publishing ``cycle_status`` and ``proximity``
 driver (the sim as hardware): with the monitor's graph check it never gets a ready.
 """
 
+import os
 import signal
+import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common.messages import cycle_status, proximity
-from feeder_nodes import (Collector, LATCHED, monitor, RELIABLE, sim_as_hardware, TRIANGLE,
-                          Verdicts, wait_for_monitor, wait_for_publishers, wait_for_readers)
+from feeder_nodes import (Collector, Diagnostics, LATCHED, monitor, predictor, RELIABLE,
+                          STARTUP_TIMEOUT, sim_as_hardware, status_values, TRIANGLE, Verdicts,
+                          wait_for_monitor, wait_for_publishers, wait_for_readers)
+import pytest
 from rclpy.duration import Duration
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Range
-from std_msgs.msg import Bool
-from std_srvs.srv import Trigger
+from std_msgs.msg import Bool, Int32
+from std_srvs.srv import SetBool, Trigger
 
 PERIOD = 0.01
 
@@ -143,3 +147,89 @@ def test_a_verdict_is_live_false_on_exit_and_a_killed_monitor_shows(graph, ros):
     mon_b.wait(10)
     ros.spin_until(lambda: alive[-1] == 0, 5.0, 'liveliness lost')
     assert ready_b[-1].data is True     # what a consumer must not trust without liveliness
+
+
+def test_a_huge_seq_does_not_hang_the_predictor(graph, ros):
+    """seq 2**70 after seq 1: an anomaly in /diagnostics, and the next cycle is followed."""
+    pred = predictor(graph)
+    edges = Collector(ros, Int32, '/feeder/predicted/edge')
+    diags = Diagnostics(ros)
+    pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', RELIABLE)
+    ros.spin_until(lambda: pub.get_subscription_count() >= 1, 60.0, 'the predictor')
+    ros.spin_for(0.5)
+    stamp = ros.node.get_clock().now().nanoseconds
+    for k, seq in enumerate((1, 2 ** 70, 2 ** 70 + 1)):
+        pub.publish(cycle_status(seq, True, 'completed', False, stamp + k, 'test'))
+    ros.spin_until(lambda: len(edges) >= 2, 10.0, 'predictions of seq 1 and 2**70 + 1')
+    name = 'feeder_sim: sensor agreement'
+    ros.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR
+                               for s in diags.by_name.get(name, [])), 5.0, 'the anomaly')
+    err = next(s for s in diags.by_name[name] if s.level == DiagnosticStatus.ERROR)
+    assert f'seq jumped from 1 to {2 ** 70}' in err.message
+    assert Diagnostics.values(err)['implausible_jumps'] == '1'
+    assert len(edges) == 2 and pred.poll() is None
+
+
+def start_emulator_and_driver(graph, tmp_path, *emulator_args):
+    link = tmp_path / 'feeder-tty'
+    emu = graph.start('feeder_driver', 'controller_emulator', '--scene', TRIANGLE, '--link',
+                      link, '--heartbeat', '0.2', *emulator_args, name='emulator')
+    end = time.monotonic() + STARTUP_TIMEOUT
+    while not os.path.islink(link):
+        assert emu.poll() is None, graph.log(emu)
+        assert time.monotonic() < end, 'the emulator did not create its pty link'
+        time.sleep(0.05)
+    drv = graph.start('feeder_driver', 'driver_node', '--ros-args', '-r', '__ns:=/feeder',
+                      '-p', f'port:={link}', '-p', 'cycle_timeout_s:=30.0',
+                      '-p', 'watchdog_timeout_s:=5.0', name='driver')
+    return emu, drv
+
+
+def wait_for_handshake(ros):
+    end = time.monotonic() + STARTUP_TIMEOUT
+    while True:
+        res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
+        if res.success:
+            return res
+        assert 'refused' in res.message and time.monotonic() < end, res.message
+        ros.spin_for(0.1)
+
+
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
+def test_the_cycle_a_signal_aborts_reaches_cycle_status(graph, ros, tmp_path, sig):
+    """The driver sends STOP and reports the aborted cycle before it leaves (issue 10, item 6)."""
+    emu, drv = start_emulator_and_driver(graph, tmp_path, '--cycle-time', '20')
+    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    wait_for_readers(ros, '/feeder/cycle_status', 1)
+    ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') >= 1, 60.0,
+                   'the driver')
+    res = wait_for_handshake(ros)        # fires cycle 1; it takes 20 s
+    assert 'seq 1' in res.message, res.message
+    ros.spin_for(0.3)
+    drv.send_signal(sig)
+    assert drv.wait(10) == 0, graph.log(drv)
+    ros.spin_until(lambda: statuses.msgs, 5.0, 'the aborted cycle')
+    (st,) = statuses.msgs
+    assert status_values(st)['seq'] == '1' and st.level == DiagnosticStatus.ERROR
+    assert st.message == f'aborted: interrupted ({sig.name})'
+    assert emu.poll() is None
+
+
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_cycling_reports_every_fired_cycle(graph, ros, tmp_path, sig):
+    """At 100 Hz, a signal aborts the cycle in flight: it is the last cycle_status."""
+    emu, drv = start_emulator_and_driver(graph, tmp_path, '--cycle-time', '0.05')
+    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    wait_for_readers(ros, '/feeder/cycle_status', 1)
+    wait_for_handshake(ros)
+    ros.set_parameters('/feeder/feeder_driver', {'cycle_period': 0.01})
+    res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True))
+    assert res.success, res.message
+    ros.spin_until(lambda: len(statuses) >= 20, 20.0, '20 cycles')
+    drv.send_signal(sig)
+    assert drv.wait(10) == 0, graph.log(drv)
+    ros.spin_for(1.0)
+    seqs = [int(status_values(s)['seq']) for s in statuses.msgs]
+    assert seqs == list(range(1, len(seqs) + 1))
+    last = statuses.msgs[-1]
+    assert last.message == f'aborted: interrupted ({sig.name})', (last.message, graph.log(drv))
