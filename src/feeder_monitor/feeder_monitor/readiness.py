@@ -241,7 +241,7 @@ class ReadinessMonitor:
         self.silent = False
 
     def interrupt(self, reason):
-        """The premise broke between cycles (the driver left or was deactivated): warm up."""
+        """Restart the warm-up: the premise broke between cycles (the driver left or stopped)."""
         self._anomaly(self.last_seq, reason)
         self._restart()
         self.state = ANOMALY

@@ -471,7 +471,8 @@ class SimNode(FeederLifecycleNode):
         stat.update({'last_seq': self._seq, 'followed': c['completed'], 'missed': c['missed'],
                      'failed': c['failed'], 'agree': c['agree'], 'disagree': c['disagree'],
                      'bad_status': c['bad_status'],
-                     'implausible_jumps': c['implausible_jumps'], 'cycles_per_s': f'{self._rate():.2f}'})
+                     'implausible_jumps': c['implausible_jumps'],
+                     'cycles_per_s': f'{self._rate():.2f}'})
 
     def _diag_prediction(self, stat):
         pred = self._predictor
