@@ -97,6 +97,12 @@ class Verdicts(Collector):
 
     def __init__(self, ros, topic='/feeder/edge1_verdict'):
         super().__init__(ros, DiagnosticStatus, topic)
+        self.ros = ros
+
+    def wait_matched(self):
+        """Wait until the monitor's writer matched this reader (the topic is volatile)."""
+        self.ros.spin_until(lambda: self.sub.get_publisher_count() >= 1, STARTUP_TIMEOUT,
+                            'the monitor to match the edge1_verdict reader')
 
     @property
     def parsed(self):
@@ -159,7 +165,7 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
     radii = Collector(ros, Float64, '/feeder/predicted/radius')
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
-    wait_for_publishers(ros, '/feeder/edge1_verdict', 1)
+    verdict_stream.wait_matched()
     wait_for_readers(ros, '/feeder/cycle_status', 3)     # the monitor's, the predictor's, ours
     wait_for_readers(ros, '/feeder/proximity', 2)        # the monitor's and ours
     wait_for_publishers(ros, '/feeder/predicted/edge', 1)

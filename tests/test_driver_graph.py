@@ -29,7 +29,7 @@ import time
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_nodes import (Collector, Diagnostics, LATCHED, monitor, STARTUP_TIMEOUT,
                           status_values, TRIANGLE, Verdicts, wait_for_monitor,
-                          wait_for_publishers, wait_for_readers)
+                          wait_for_readers)
 from sensor_msgs.msg import Range
 from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
@@ -79,7 +79,7 @@ def test_every_cycle_accounted_and_ready_exactly_on_the_goal_edge(graph, ros, tm
     prox = Collector(ros, Range, '/feeder/proximity')
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
-    wait_for_publishers(ros, '/feeder/edge1_verdict', 1)
+    verdict_stream.wait_matched()
     wait_for_readers(ros, '/feeder/cycle_status', 2)    # the monitor's and ours
     wait_for_readers(ros, '/feeder/proximity', 2)
 

@@ -27,7 +27,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common.messages import cycle_status, proximity
 from feeder_nodes import (Collector, Diagnostics, LATCHED, monitor, predictor, RELIABLE,
                           STARTUP_TIMEOUT, sim_as_hardware, status_values, TRIANGLE, Verdicts,
-                          wait_for_monitor, wait_for_publishers, wait_for_readers)
+                          wait_for_monitor, wait_for_readers)
 import pytest
 from rclpy.duration import Duration
 from rclpy.event_handler import SubscriptionEventCallbacks
@@ -58,7 +58,7 @@ def test_a_forged_cycle_beside_the_driver_is_never_ready(graph, ros):
     verdicts = Verdicts(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     wait_for_monitor(ros, ready)
-    wait_for_publishers(ros, '/feeder/edge1_verdict', 1)
+    verdicts.wait_matched()
     wait_for_readers(ros, '/feeder/cycle_status', 2)
     wait_for_readers(ros, '/feeder/proximity', 1)
     ros.spin_for(0.5)
@@ -124,7 +124,7 @@ def test_a_verdict_is_live_false_on_exit_and_a_killed_monitor_shows(graph, ros):
             liveliness=lambda e: alive.append(e.alive_count)))
     wait_for_monitor(ros, ready)
     ros.spin_until(lambda: ready_b, 60.0, "monitor b's edge1_ready")
-    wait_for_publishers(ros, '/feeder/edge1_verdict', 1)
+    verdicts.wait_matched()
     wait_for_readers(ros, '/feeder/cycle_status', 2)
     ros.spin_for(0.5)
     trigger_until_ready(ros, verdicts)
