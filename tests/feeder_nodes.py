@@ -17,6 +17,8 @@
 import pathlib
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from feeder_common.messages import parse_edge_verdict
+from feeder_common.stamps import parse_stamp_text
 import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Range
@@ -90,6 +92,23 @@ class Diagnostics:
         return {kv.key: kv.value for kv in status.values}
 
 
+class Verdicts(Collector):
+    """The monitor's per-cycle verdicts (edge1_verdict), parsed."""
+
+    def __init__(self, ros, topic='/feeder/edge1_verdict'):
+        super().__init__(ros, DiagnosticStatus, topic)
+        self.ros = ros
+
+    def wait_matched(self):
+        """Wait until the monitor's writer matched this reader (the topic is volatile)."""
+        self.ros.spin_until(lambda: self.sub.get_publisher_count() >= 1, STARTUP_TIMEOUT,
+                            'the monitor to match the edge1_verdict reader')
+
+    @property
+    def parsed(self):
+        return [parse_edge_verdict(m) for m in self.msgs]
+
+
 def status_values(msg):
     return {kv.key: kv.value for kv in msg.values}
 
@@ -139,12 +158,14 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
     warmup, footprint = an.sensor.warmup_throws, an.sensor.footprint
 
     ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    verdict_stream = Verdicts(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     prox = Collector(ros, Range, '/feeder/proximity')
     edges = Collector(ros, Int32, '/feeder/predicted/edge')
     radii = Collector(ros, Float64, '/feeder/predicted/radius')
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
+    verdict_stream.wait_matched()
     wait_for_readers(ros, '/feeder/cycle_status', 3)     # the monitor's, the predictor's, ours
     wait_for_readers(ros, '/feeder/proximity', 2)        # the monitor's and ours
     wait_for_publishers(ros, '/feeder/predicted/edge', 1)
@@ -169,11 +190,17 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
         assert p.radiation_type == Range.INFRARED and p.header.frame_id == 'feeder_sensor'
         assert p.min_range == p.max_range == pytest.approx(0.02, rel=1e-6)     # float32
 
-    # One edge1_ready per cycle after the initial latched one; align them at the end (the
-    # monitor may have missed the very first cycles while discovery finished).
-    verdicts = [m.data for m in ready.msgs[1:]]
-    missed = n - len(verdicts)
-    assert 0 <= missed <= 3, f'{len(verdicts)} verdicts for {n} cycles'
+    # One verdict per cycle on edge1_verdict, each naming its cycle's seq and sample stamp
+    # (the monitor may have missed the very first cycles while discovery finished).
+    parsed = verdict_stream.parsed
+    missed = n - len(parsed)
+    assert 0 <= missed <= 3, f'{len(parsed)} verdicts for {n} cycles'
+    assert [v.seq for v in parsed] == seqs[missed:]
+    assert [v.stamp_ns for v in parsed] == [parse_stamp_text(status_values(s)['stamp'])
+                                            for s in statuses.msgs[missed:]]
+    verdicts = [v.ready for v in parsed]
+    # edge1_ready (the latched state) ends as the last verdict.
+    assert ready.msgs[-1].data == verdicts[-1]
     on_goal = 0
     for j, verdict in enumerate(verdicts):
         k = j + missed

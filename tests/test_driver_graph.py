@@ -28,7 +28,8 @@ import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_nodes import (Collector, Diagnostics, LATCHED, monitor, STARTUP_TIMEOUT,
-                          status_values, TRIANGLE, wait_for_monitor, wait_for_readers)
+                          status_values, TRIANGLE, Verdicts, wait_for_monitor,
+                          wait_for_readers)
 from sensor_msgs.msg import Range
 from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
@@ -73,10 +74,12 @@ def test_every_cycle_accounted_and_ready_exactly_on_the_goal_edge(graph, ros, tm
     mon = monitor(graph)
 
     ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    verdict_stream = Verdicts(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     prox = Collector(ros, Range, '/feeder/proximity')
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
+    verdict_stream.wait_matched()
     wait_for_readers(ros, '/feeder/cycle_status', 2)    # the monitor's and ours
     wait_for_readers(ros, '/feeder/proximity', 2)
 
@@ -136,9 +139,10 @@ def test_every_cycle_accounted_and_ready_exactly_on_the_goal_edge(graph, ros, tm
             p = by_stamp[int(sec) * 10 ** 9 + int(frac)]
             assert (p.range == float('-inf')) == (v['sensor'] == '1')
 
-    # --- the monitor: one verdict per fired cycle after its initial latched false ----------
-    verdicts = [m.data for m in ready.msgs[1:]]
-    assert len(verdicts) == n, f'{len(verdicts)} verdicts for {n} cycles'
+    # --- the monitor: one verdict per fired cycle on edge1_verdict, naming its seq ---------
+    parsed = verdict_stream.parsed
+    assert [v.seq for v in parsed] == seqs, f'{len(parsed)} verdicts for {n} cycles'
+    verdicts = [v.ready for v in parsed]
     since, expected_ready = 0, 0
     for seq, v, good, verdict in zip(seqs, vals, ok, verdicts):
         if not good:

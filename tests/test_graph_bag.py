@@ -48,6 +48,7 @@ EXPECTED = {
     '/feeder/predicted/analysis': (String, 1),                  # latched, once
     '/feeder/markers': (MarkerArray, None),     # latched + at most one per markers_period
     '/feeder/edge1_ready': (Bool, N + 1),                       # latched false + one per cycle
+    '/feeder/edge1_verdict': (DiagnosticStatus, N),             # one per cycle
     '/diagnostics': (DiagnosticArray, None),
 }
 LATCHED_TOPICS = {'/feeder/predicted/limit_set', '/feeder/predicted/analysis', '/feeder/markers',
@@ -119,7 +120,7 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     bag = tmp_path / 'run'
     sim_as_hardware(graph)
     predictor(graph)
-    monitor(graph)
+    monitor(graph, 'ready_deadline:=60')       # no idle republishing within the test
     ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     wait_for_monitor(ros, ready)

@@ -24,7 +24,7 @@ import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_nodes import (Collector, LATCHED, monitor, predictor, REPO, sim_as_hardware,
-                          STARTUP_TIMEOUT, status_values, TRIANGLE)
+                          STARTUP_TIMEOUT, status_values, TRIANGLE, Verdicts)
 import pytest
 import ros_cli
 from std_msgs.msg import Bool
@@ -173,13 +173,15 @@ def check_feeders_apart(ros, spaces, cycles=40):
     """
     Cycle every feeder but the middle one; each monitor follows its own feeder only.
 
-    Per namespace: cycle_status seqs 1..n of its own; as many edge1_ready after the latched
-    one as its own cycles (none for the idle one); its predictor followed exactly those.
+    Per namespace: cycle_status seqs 1..n of its own; one edge1_verdict per cycle of its own,
+    naming that cycle (none for the idle one); its predictor followed exactly those.
     """
     statuses = {ns: Collector(ros, DiagnosticStatus, f'{ns}/cycle_status') for ns in spaces}
     ready = {ns: Collector(ros, Bool, f'{ns}/edge1_ready', LATCHED) for ns in spaces}
+    verdicts = {ns: Verdicts(ros, f'{ns}/edge1_verdict') for ns in spaces}
     for ns in spaces:
         ros.spin_until(lambda ns=ns: len(ready[ns]) >= 1, STARTUP_TIMEOUT, f'{ns} monitor')
+        verdicts[ns].wait_matched()
         ros.spin_until(lambda ns=ns: ros.node.count_subscribers(f'{ns}/cycle_status') >= 3,
                        STARTUP_TIMEOUT, f'{ns} readers')
     ros.spin_for(0.5)
@@ -195,7 +197,7 @@ def check_feeders_apart(ros, spaces, cycles=40):
     for ns in spaces:
         seqs = [int(status_values(s)['seq']) for s in statuses[ns].msgs]
         assert seqs == list(range(1, len(seqs) + 1)), ns
-        assert len(ready[ns]) == 1 + len(seqs), (ns, len(ready[ns]), len(seqs))
+        assert [v.seq for v in verdicts[ns].parsed] == seqs, ns
         assert all(s.hardware_id == 'sim' for s in statuses[ns].msgs)
     assert not statuses[spaces[1]].msgs
 

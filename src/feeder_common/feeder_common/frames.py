@@ -34,6 +34,9 @@ BASE_FRAME = 'feeder_base'
 ARM_LINK = 'feeder_arm'
 SENSOR_FRAME = 'feeder_sensor'
 ARM_JOINT = 'feeder_arm_joint'
+# A frame name is a short identifier (tf2 looks it up in every transform): a longer one is a
+# mistake, and it would be copied into every message.
+FRAME_ID_MAX_LENGTH = 256
 # The arm turns about F's z, which is -y of feeder_base.
 ARM_AXIS = (0.0, -1.0, 0.0)
 

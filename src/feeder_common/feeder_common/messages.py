@@ -21,6 +21,9 @@ level OK (completed) or ERROR (failed, the reason in ``message``), ``hardware_id
 it, values ``seq``, ``sensor`` (``1``/``0``/``none``), ``stamp`` (the sample time,
 :mod:`feeder_common.stamps`). ``proximity`` (sensor_msgs/Range, REP 117 fixed-distance ranger):
 ``-inf`` part detected, ``+inf`` not. ``joint_states``: the arm joint ``feeder_arm_joint``.
+``edge1_verdict`` (DiagnosticStatus, the monitor's verdict of each judged cycle): ``name =
+'edge1_verdict'``, level OK (ERROR: the cycle revealed an anomaly, its reason in ``message``),
+values ``seq`` and ``stamp`` of the cycle, ``ready`` (``true``/``false``), ``state``.
 Every stamp is integer nanoseconds here; :func:`time_msg` and :func:`time_ns` convert.
 """
 
@@ -36,6 +39,10 @@ from .frames import ARM_JOINT, SENSOR_FRAME
 from .stamps import NS, parse_stamp_text, stamp_text
 
 CYCLE_STATUS_NAME = 'cycle'
+VERDICT_NAME = 'edge1_verdict'
+# A follower of cycle_status replays at most this many missed cycles; a longer jump of seq is
+# implausible (a forged or corrupt seq, or a driver that ran unseen for minutes): an anomaly.
+MAX_SEQ_JUMP = 1000
 _SENSOR_TEXT = {True: '1', False: '0', None: 'none'}
 _SENSOR_BIT = {'1': True, '0': False}
 
@@ -95,6 +102,45 @@ def parse_cycle_status(msg):
     return CycleStatus(seq, msg.level == DiagnosticStatus.OK,
                        _SENSOR_BIT.get(values.get('sensor')), stamp, msg.message,
                        msg.hardware_id)
+
+
+@dataclass(frozen=True)
+class EdgeVerdict:
+    """A parsed ``edge1_verdict``: the monitor's answer for cycle ``seq``."""
+
+    seq: int
+    stamp_ns: Optional[int]
+    ready: bool
+    state: str
+    anomaly: str            # '' unless the cycle revealed an anomaly
+
+
+def edge_verdict(seq, stamp_ns, ready, state, anomaly=None, hardware_id=''):
+    """Build an ``edge1_verdict``; ``stamp_ns`` None: the cycle had no usable stamp."""
+    return DiagnosticStatus(
+        level=DiagnosticStatus.ERROR if anomaly else DiagnosticStatus.OK, name=VERDICT_NAME,
+        message=anomaly or state, hardware_id=hardware_id,
+        values=[KeyValue(key='seq', value=str(int(seq))),
+                KeyValue(key='stamp', value='none' if stamp_ns is None
+                         else stamp_text(stamp_ns)),
+                KeyValue(key='ready', value='true' if ready else 'false'),
+                KeyValue(key='state', value=str(state))])
+
+
+def parse_edge_verdict(msg):
+    """Parse an ``edge1_verdict``; ValueError naming what is wrong."""
+    values = {kv.key: kv.value for kv in msg.values}
+    try:
+        seq = int(values['seq'])
+        ready = {'true': True, 'false': False}[values['ready']]
+    except (KeyError, ValueError) as exc:
+        raise ValueError(f'edge1_verdict without a usable seq/ready ({exc!r})') from None
+    try:
+        stamp = parse_stamp_text(values['stamp'])
+    except (KeyError, ValueError):
+        stamp = None
+    return EdgeVerdict(seq, stamp, ready, values.get('state', ''),
+                       msg.message if msg.level == DiagnosticStatus.ERROR else '')
 
 
 def proximity(stamp_ns, detected, range_m, frame_id=SENSOR_FRAME):

@@ -135,6 +135,25 @@ def _nothing():
     pass
 
 
+# How long a node that stops waits for its last messages to be acknowledged.
+FLUSH_TIMEOUT_S = 0.5
+
+
+def flush(publisher, timeout=FLUSH_TIMEOUT_S):
+    """
+    Wait until every reliable reader acknowledged ``publisher``'s messages (at most ``timeout``).
+
+    A node that publishes on its way out (the driver's aborted cycle, the monitor's final false)
+    calls it before destroying the publisher: DDS drops what a destroyed writer has not
+    delivered. True if all were acknowledged.
+    """
+    from rclpy.duration import Duration
+    try:
+        return publisher.wait_for_all_acked(Duration(seconds=timeout))
+    except Exception:   # noqa: B902 - publisher or context already gone: nothing to wait for
+        return False
+
+
 def _shutdown_transition(node, reason):
     """Tell the node why it stops; run the shutdown transition of a lifecycle node."""
     if hasattr(node, 'exit_reason') and not node.exit_reason:

@@ -55,6 +55,9 @@ def descriptor(spec):
     if spec.choices:
         constraints = (constraints + '; ' if constraints else '') + 'one of ' + \
             ', '.join(str(c) for c in spec.choices)
+    if spec.max_length is not None:
+        constraints = (constraints + '; ' if constraints else '') + \
+            f'at most {spec.max_length} characters'
     desc = ParameterDescriptor(name=spec.name, type=_TYPES[spec.kind],
                                description=spec.description, read_only=spec.read_only,
                                additional_constraints=constraints)

@@ -50,6 +50,7 @@ class ParamSpec:
     read_only: bool = False
     constraints: str = ''
     choices: tuple = ()         # allowed values (e.g. baud rates); empty: any in range
+    max_length: Optional[int] = None    # longest string accepted (characters)
 
     @property
     def kind(self):
@@ -93,6 +94,10 @@ class ParamSpec:
                     f'{", ".join(str(c) for c in self.choices)}')
         if self.kind == 'string' and self.constraints == 'not empty' and not value.strip():
             return f'{self.name} must not be empty'
+        if self.kind == 'string' and self.max_length is not None and \
+                len(value) > self.max_length:
+            return (f'{self.name} is {len(value)} characters long; at most {self.max_length} '
+                    'are accepted')
         return None
 
     def check_range(self, value):

@@ -23,8 +23,9 @@ delivery needs watching (deadline, liveliness, lifespan of a latched value) gets
 own profile, so that publisher and subscriber keep matching.
 """
 
-from rclpy.qos import (DurabilityPolicy, HistoryPolicy, qos_profile_sensor_data, QoSProfile,
-                       ReliabilityPolicy)
+from rclpy.duration import Duration
+from rclpy.qos import (DurabilityPolicy, HistoryPolicy, LivelinessPolicy,
+                       qos_profile_sensor_data, QoSProfile, ReliabilityPolicy)
 
 # The system default, written out: reliable, volatile, keep last 10.
 DEFAULT = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
@@ -45,8 +46,33 @@ CYCLE_STATUS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
 PREDICTION = DEFAULT
 PREDICTION_LATCHED = LATCHED
 MARKERS = LATCHED
-EDGE1_READY = LATCHED
-# /diagnostics: reliable, depth 1, like diagnostic_updater.
-DIAGNOSTICS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+
+
+def edge1_ready(period):
+    """
+    ``edge1_ready``: the latched state, with the promise that it is live (docs/interfaces.md).
+
+    The monitor publishes it at least every ``period`` s (every judged cycle, and again when
+    idle): deadline ``period``. Its process asserts liveliness automatically, lease ``period``:
+    a reader that asks for deadline and lease >= ``period`` learns within that time that a
+    verdict is stale (the monitor hangs or died, even by SIGKILL) and must then take it as
+    false. Depth 1: a late joiner gets the current state, never a history.
+    """
+    d = Duration(seconds=float(period))
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL, deadline=d,
+                      liveliness=LivelinessPolicy.AUTOMATIC, liveliness_lease_duration=d)
+
+
+# The verdict of every judged cycle (seq, stamp, ready, state): a reader that counts or logs
+# verdicts must not lose one (a depth-1 latched writer may replace a sample before a reader
+# acknowledged it): reliable, volatile, deep.
+EDGE1_VERDICT = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
+                           reliability=ReliabilityPolicy.RELIABLE,
+                           durability=DurabilityPolicy.VOLATILE)
+# /diagnostics: reliable, like diagnostic_updater, but depth 10 on our writers: at depth 1 a
+# message (an ERROR that lasted one period) could be replaced before a slow reader got it.
+DIAGNOSTICS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.VOLATILE)

@@ -182,3 +182,61 @@ def test_proximity_is_a_fixed_distance_ranger():
 def test_joint_state_names_the_arm_joint():
     js = messages.joint_state(7, 0.0, 5.58)
     assert js.name == [frames.ARM_JOINT] and list(js.velocity) == [5.58] and not js.effort
+
+
+def test_edge_verdict_round_trip():
+    msg = messages.edge_verdict(7, 1795362335_204302396, True, 'ready', None, 'triangle')
+    assert msg.name == 'edge1_verdict' and msg.level == DiagnosticStatus.OK
+    v = messages.parse_edge_verdict(msg)
+    assert (v.seq, v.stamp_ns, v.ready, v.state, v.anomaly) == \
+        (7, 1795362335_204302396, True, 'ready', '')
+    bad = messages.parse_edge_verdict(messages.edge_verdict(8, None, False, 'anomaly', 'why'))
+    assert (bad.stamp_ns, bad.ready, bad.anomaly) == (None, False, 'why')
+    with pytest.raises(ValueError, match='seq/ready'):
+        messages.parse_edge_verdict(DiagnosticStatus(values=[KeyValue(key='seq', value='1')]))
+
+
+def test_a_string_longer_than_its_bound_is_refused_with_its_length():
+    spec = ParamSpec('frame_id', 'feeder_sensor', 'f', max_length=frames.FRAME_ID_MAX_LENGTH)
+    assert spec.validate('x' * 256) == ('x' * 256, None)
+    value, reason = spec.validate('x' * 1_000_000)
+    assert value is None
+    assert reason == 'frame_id is 1000000 characters long; at most 256 are accepted'
+
+
+def test_edge1_ready_promises_deadline_and_liveliness():
+    from feeder_common import qos
+    from rclpy.qos import DurabilityPolicy, LivelinessPolicy
+    p = qos.edge1_ready(0.25)
+    assert p.depth == 1 and p.durability == DurabilityPolicy.TRANSIENT_LOCAL
+    assert p.deadline.nanoseconds == p.liveliness_lease_duration.nanoseconds == 250_000_000
+    assert p.liveliness == LivelinessPolicy.AUTOMATIC
+    assert qos.EDGE1_VERDICT.depth >= 1000 and qos.DIAGNOSTICS.depth >= 10
+
+
+def test_the_publisher_guard_trusts_one_node_and_its_writer(domain_id):
+    import rclpy
+    from rclpy.context import Context
+    from feeder_common.graph import PublisherGuard
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=domain_id)
+    try:
+        me = rclpy.create_node('feeder_monitor', namespace='/feeder', context=ctx)
+        driver = rclpy.create_node('feeder_driver', namespace='/feeder', context=ctx)
+        guard = PublisherGuard(me, ('/feeder/cycle_status',), '/feeder/feeder_driver')
+        assert 'no publisher on /feeder/cycle_status' in guard.check()
+        pub = driver.create_publisher(DiagnosticStatus, 'cycle_status', 10)
+        assert guard.check() is None and guard.crowded() is None
+        forger = rclpy.create_node('forger', context=ctx)
+        forged = forger.create_publisher(DiagnosticStatus, '/feeder/cycle_status', 10)
+        assert '2 publishers on /feeder/cycle_status' in guard.crowded()
+        assert '/forger besides or instead of /feeder/feeder_driver' in guard.check()
+        forger.destroy_publisher(forged)
+        assert guard.check() is None
+        # The driver's writer replaced (a restart, or a node that took its name): said once.
+        driver.destroy_publisher(pub)
+        driver.create_publisher(DiagnosticStatus, 'cycle_status', 10)
+        assert 'changed (GID' in guard.check()
+        assert guard.check() is None
+    finally:
+        rclpy.shutdown(context=ctx)

@@ -32,7 +32,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common import qos
 from feeder_common.diagnostics import Updater
 from feeder_common.messages import cycle_status, joint_state, proximity
-from feeder_common.node import FeederLifecycleNode, run_node
+from feeder_common.node import FeederLifecycleNode, flush, run_node
 from feeder_common.parameters import ParameterGate
 from rclpy.lifecycle import TransitionCallbackReturn
 from sensor_msgs.msg import JointState, Range
@@ -149,6 +149,11 @@ class DriverNode(FeederLifecycleNode):
             return
         if self.core.running or self.core.pending is not None:
             self._apply(self.core.stop(time.monotonic(), self._stamp(), reason))
+            # The aborted cycle's status must reach its readers before the writer goes (DDS
+            # drops what a destroyed writer has not delivered).
+            for pub in (self._pub_prox, self._pub_status, self._pub_joint):
+                if pub is not None:
+                    flush(pub)
         if self.link is not None:
             self.link.close()
             self.link = None

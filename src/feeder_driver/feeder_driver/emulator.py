@@ -29,6 +29,7 @@ tests can account for every cycle. CLI table: docs/driver.md.
 """
 
 import argparse
+import collections
 import fcntl
 import heapq
 import itertools
@@ -45,6 +46,8 @@ import tty
 from . import protocol as p
 
 FIRMWARE = 'feeder-emu-1.0'
+# Truth records kept in memory by default (the newest); the command line keeps none.
+KEEP_RECORDS = 10_000
 
 
 class EmulatorError(Exception):
@@ -249,7 +252,8 @@ class Controller:
 
     def __init__(self, link, throw, sense, release_speed, state=None, cycle_time=0.1,
                  heartbeat=1.0, faults=None, truth_log=None, firmware=FIRMWARE, header=None,
-                 log=None, clock=time.monotonic, sees=None, place=None):
+                 log=None, clock=time.monotonic, sees=None, place=None,
+                 keep_records=KEEP_RECORDS):
         self._throw = throw
         self._sense = sense
         self._sees = sees
@@ -277,7 +281,9 @@ class Controller:
         self.cycles = 0
         self.unplugs = 0
         self.resets = 0
-        self.records = []
+        # The newest truth records, in memory for in-process users (tests); bounded, or a long
+        # run grows by one record (about 0.8 KB) per cycle. The truth log keeps them all.
+        self.records = collections.deque(maxlen=keep_records)
         self._boot = 0
         self._boot_t0 = clock()
         self._events = []
@@ -654,7 +660,8 @@ def main(argv=None):
                         args.unplug_for, 0 if args.seed is None else args.seed)
         ctl = from_scene(args.scene, args.sensor_radius, args.seed, link=args.link,
                          cycle_time=args.cycle_time, heartbeat=args.heartbeat, faults=faults,
-                         truth_log=args.truth_log, firmware=args.firmware, log=log)
+                         truth_log=args.truth_log, firmware=args.firmware, log=log,
+                         keep_records=0)
     except (EmulatorError, OSError) as exc:
         print(f'controller_emulator: error: {exc}', file=sys.stderr)
         return 2

@@ -21,6 +21,7 @@ say. config/driver.yaml and the table in docs/driver.md list the same names, def
 ranges (a test checks both).
 """
 
+from feeder_common.frames import FRAME_ID_MAX_LENGTH
 from feeder_common.params import by_name, ParamSpec
 
 BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 500000,
@@ -54,7 +55,7 @@ SPECS = (
     ParamSpec('sensor_range_m', 0.02, 'fixed distance of the proximity ranger, m '
               '(Range.min_range = max_range)', 0.001, 10.0),
     ParamSpec('frame_id', 'feeder_sensor', 'frame_id of the proximity messages',
-              constraints='not empty'),
+              constraints='not empty', max_length=FRAME_ID_MAX_LENGTH),
     ParamSpec('diagnostic_updater.period', 1.0, 'seconds between /diagnostics messages',
               0.1, 60.0),
 )

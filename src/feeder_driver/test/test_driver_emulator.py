@@ -375,3 +375,28 @@ def test_a_scene_whose_analysis_fails_is_refused(tmp_path):
                    str(tmp_path / 'l'))
     assert res.returncode == 2
     assert 'analysis failed' in res.stderr and 'left the domain of f' in res.stderr
+
+
+def test_memory_stays_flat_over_many_cycles(emu_factory, link_path):
+    """Issue 10: the emulator grew about 0.8 KB per cycle (every truth record kept)."""
+    import tracemalloc
+    emu = emu_factory(cycle_time=0.0, keep_records=100)
+    cl = Client(link_path)
+
+    def run(first, count):
+        for seq in range(first, first + count):
+            cl.send(p.Fire(seq))
+            cl.wait(lambda e, s=seq: isinstance(e, p.Sens) and e.seq == s)
+            cl.events.clear()
+
+    run(1, 300)                     # past the kept records and every warm-up allocation
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        run(301, 1000)
+        grown = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert grown < 100_000, f'{grown} bytes more after 1000 cycles'
+    assert [r['seq'] for r in emu.records] == list(range(1201, 1301))
+    cl.close()

@@ -389,6 +389,7 @@ def test_second_driver_cannot_open_the_same_port(harness, emulator, link_path, d
     ('ack_timeout_s', 2.0, 'must be smaller than cycle_timeout_s'),
     ('reconnect_initial_s', 30.0, 'must not exceed reconnect_max_s'),
     ('frame_id', ' ', 'frame_id must not be empty'),
+    ('frame_id', 'f' * 1_000_000, 'frame_id is 1000000 characters long; at most 256'),
     ('port', '/dev/other', 'read-only'),
     ('baud_rate', 9600, 'read-only'),
 ])

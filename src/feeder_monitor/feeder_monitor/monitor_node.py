@@ -27,11 +27,14 @@ import time
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common import qos
 from feeder_common.diagnostics import Updater
-from feeder_common.messages import parse_cycle_status, proximity_detected, time_ns
-from feeder_common.node import run_node, StartupError
+from feeder_common.graph import PublisherGuard
+from feeder_common.messages import (edge_verdict, parse_cycle_status, proximity_detected,
+                                    time_ns)
+from feeder_common.node import flush, run_node, StartupError
 from feeder_common.parameters import ParameterGate
 from feeder_common.params import check_scene
 from feeder_common.stamps import ns_seconds
+from lifecycle_msgs.msg import TransitionEvent
 from rclpy.node import Node
 from sensor_msgs.msg import Range
 from std_msgs.msg import Bool
@@ -46,7 +49,16 @@ RULE_PARAMS = ('sensor_radius', 'warmup_cycles', 'settle_cycles', 'silence_margi
 
 
 class MonitorNode(Node):
-    """Consumes proximity and cycle_status; publishes edge1_ready and /diagnostics."""
+    """
+    Consumes proximity and cycle_status; publishes edge1_ready, edge1_verdict, /diagnostics.
+
+    It decides only on cycles from the one node it trusts (``driver_node``): a cycle that
+    arrives while another node publishes ``cycle_status`` or ``proximity`` is an anomaly, and
+    a detection is judged only after the publishers were checked to be exactly the pinned
+    driver (feeder_common.graph). ``edge1_ready`` is live (deadline and liveliness lease
+    ``ready_deadline``), false on a clean exit, when the driver leaves the graph or leaves its
+    active state.
+    """
 
     def __init__(self, **kwargs):
         super().__init__('feeder_monitor', **kwargs)
@@ -79,7 +91,20 @@ class MonitorNode(Node):
         self._lost_mark = 0
         self._bad_input = 0
 
-        self._ready_pub = self.create_publisher(Bool, 'edge1_ready', qos.EDGE1_READY)
+        self._ready = False
+        self._ready_sent = 0.0          # time.monotonic() of the last edge1_ready
+        self._ready_pub = self.create_publisher(
+            Bool, 'edge1_ready', qos.edge1_ready(self._param('ready_deadline')))
+        self._verdict_pub = self.create_publisher(DiagnosticStatus, 'edge1_verdict',
+                                                  qos.EDGE1_VERDICT)
+        driver = self.resolve_topic_name(self._param('driver_node'))
+        self._guard = PublisherGuard(self, (self.resolve_topic_name('cycle_status'),
+                                            self.resolve_topic_name('proximity')), driver)
+        self._distrust = None           # why the publishers are not trusted now, or None
+        self.create_subscription(TransitionEvent, f'{driver}/transition_event',
+                                 self._on_driver_transition, qos.DEFAULT)
+        # Keeps edge1_ready's deadline while idle; checks who publishes the driver's topics.
+        self.create_timer(self._param('ready_deadline') / 2, self._on_heartbeat)
         self.create_subscription(Range, 'proximity', self._on_proximity,
                                  qos.PROXIMITY_SUBSCRIPTION)
         self.create_subscription(DiagnosticStatus, 'cycle_status', self._on_cycle_status,
@@ -91,7 +116,7 @@ class MonitorNode(Node):
         self._diagnostics = Updater(self, self._param('diagnostics_period'), self._scene.name)
         self._diagnostics.add('readiness', self._diag_readiness)
         self._diagnostics.add('inputs', self._diag_inputs)
-        self._ready_pub.publish(Bool(data=False))
+        self._publish_ready(False)
         self._log_rules(rules)
 
     # ------------------------------------------------------------------ parameters
@@ -169,7 +194,8 @@ class MonitorNode(Node):
             return
         stamp = None if status.stamp_ns is None else ns_seconds(status.stamp_ns)
         self._decide(self._pairer.add_status(status.seq, status.ok, status.sensor, stamp,
-                                             status.message, time.monotonic()))
+                                             status.message, time.monotonic(),
+                                             status.stamp_ns))
 
     def _on_expire(self):
         self._decide(self._pairer.expire(time.monotonic()))
@@ -180,17 +206,65 @@ class MonitorNode(Node):
         elif self._expire_timer.is_canceled():
             self._expire_timer.reset()
         for c in cycles:
-            if c.completed:
+            # A second publisher costs one graph lookup per cycle to see; the full identity
+            # check (GIDs) runs before a detection is judged, the only cycles that can be ready.
+            distrust = self._guard.crowded()
+            if distrust is None and c.completed and c.detected:
+                distrust = self._guard.check()
+            if distrust is not None:
+                v = self._monitor.untrusted(c.seq, distrust)
+            elif c.completed:
                 v = self._monitor.completed(c.seq, c.detected, c.note)
             else:
                 v = self._monitor.failed(c.seq, c.reason)
-            self._ready_pub.publish(Bool(data=v.ready))
+            self._publish_ready(v.ready)
+            self._verdict_pub.publish(edge_verdict(v.seq, c.stamp_ns, v.ready, v.state,
+                                                   v.anomaly, self._scene.name))
+            if v.note:
+                self.get_logger().warning(v.note)
             if v.anomaly:
                 self._anomaly_in_period = (v.seq, v.anomaly)
                 self.get_logger().warning(f'anomaly at cycle {v.seq}: {v.anomaly}',
                                           throttle_duration_sec=1.0)
             if v.ready:
                 self.get_logger().debug(f'cycle {v.seq}: part proven on the goal edge')
+
+    def _publish_ready(self, ready):
+        self._ready = bool(ready)
+        self._ready_sent = time.monotonic()
+        self._ready_pub.publish(Bool(data=self._ready))
+
+    def _on_heartbeat(self):
+        distrust = self._guard.check()
+        if distrust != self._distrust:
+            self._distrust = distrust
+            if distrust:
+                self.get_logger().info(f'publishers: {distrust}')
+        if distrust and self._ready:
+            self._interrupt(distrust)
+        elif time.monotonic() - self._ready_sent >= self._param('ready_deadline') / 2:
+            self._publish_ready(self._ready)
+
+    def _on_driver_transition(self, msg):
+        if msg.goal_state.label != 'active' and msg.start_state.label == 'active':
+            self._interrupt(f'{self._guard.trusted_node} left its active state '
+                            f'({msg.transition.label})')
+
+    def _interrupt(self, reason):
+        """No cycle can be judged (the driver left or stopped): false, warm up again."""
+        self._monitor.interrupt(reason)
+        self._anomaly_in_period = (self._monitor.last_seq, reason)
+        self.get_logger().warning(f'{reason}: edge1_ready false, warming up again')
+        self._publish_ready(False)
+
+    def destroy_node(self):
+        # A clean exit says false, and waits (briefly) until the readers have it.
+        try:
+            self._publish_ready(False)
+            flush(self._ready_pub)
+        except Exception:   # noqa: B902 - context already gone: nothing can be said
+            pass
+        return super().destroy_node()
 
     # ------------------------------------------------------------------ diagnostics
     def _diag_readiness(self, stat):
@@ -214,6 +288,8 @@ class MonitorNode(Node):
             message = f'{message} (noisy sensor: {self._noise_note(r)})'
         stat.summary(level, message)
         stat.update({'state': m.state, 'last_seq': m.last_seq, **m.counts,
+                     'trusted_publisher': self._guard.trusted_node,
+                     'publishers': self._distrust or 'trusted',
                      'since_restart': m.since_restart, 'cycles_since_detection': m.gap,
                      'last_anomaly': m.last_anomaly, **r.as_dict(),
                      'namespace': self.get_namespace()})

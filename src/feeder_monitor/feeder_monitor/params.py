@@ -40,6 +40,14 @@ MONITOR_PARAMS = (
               'their stamps differ by at most this, s', minimum=1e-6, maximum=0.002),
     ParamSpec('pair_timeout', 0.5, 'a cycle_status waits this long for its proximity, s (then '
               'its own sensor bit is used)', minimum=0.01, maximum=10.0),
+    ParamSpec('driver_node', 'feeder_driver', 'the one node trusted to publish cycle_status '
+              "and proximity (relative to the monitor's namespace, or absolute); a cycle seen "
+              'while another node publishes them is an anomaly', read_only=True,
+              constraints='not empty', max_length=256),
+    ParamSpec('ready_deadline', 1.0, 'edge1_ready is published at least this often, s (every '
+              'judged cycle, and again when idle): its offered deadline and liveliness lease; '
+              'a reader that sees either lapse must take the verdict as stale (false)',
+              minimum=0.02, maximum=60.0, read_only=True),
     ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages', minimum=0.1,
               maximum=60.0),
 )

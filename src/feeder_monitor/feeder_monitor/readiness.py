@@ -205,6 +205,7 @@ class Cycle:
     detected: Optional[bool] = None
     reason: str = ''            # failure reason of a failed cycle
     note: str = ''              # '', 'proximity lost' or 'sensor disagreement'
+    stamp_ns: Optional[int] = None  # the cycle's sample stamp (cycle_status), if it had one
 
 
 @dataclass(frozen=True)
@@ -215,6 +216,7 @@ class Verdict:
     ready: bool
     state: str
     anomaly: Optional[str] = None   # set on the cycle that revealed an anomaly
+    note: str = ''                  # worth a word, not an anomaly (e.g. a late first seq)
 
 
 class ReadinessMonitor:
@@ -224,7 +226,8 @@ class ReadinessMonitor:
         self.rules = rules
         self.last_seq = None
         self.counts = {'cycles': 0, 'completed': 0, 'failed': 0, 'detections': 0, 'ready': 0,
-                       'anomalies': 0}
+                       'anomalies': 0, 'untrusted': 0}
+        self.note = ''
         self.last_anomaly = None
         self.state = WARMING_UP
         self._restart()
@@ -236,6 +239,12 @@ class ReadinessMonitor:
         self.seen_detection = False  # a detection since settling
         self.need_clear = need_clear  # after an impossible run: wait for a non-detection
         self.silent = False
+
+    def interrupt(self, reason):
+        """Restart the warm-up: the premise broke between cycles (the driver left or stopped)."""
+        self._anomaly(self.last_seq, reason)
+        self._restart()
+        self.state = ANOMALY
 
     def set_rules(self, rules):
         """Take new rules (e.g. the sensor moved): the warm-up starts again; no anomaly."""
@@ -249,7 +258,12 @@ class ReadinessMonitor:
 
     def _check_seq(self, seq):
         last, self.last_seq = self.last_seq, seq
-        if last is None or seq == last + 1:
+        if last is None:
+            if seq > 1:
+                self.note = (f'first cycle seen is seq {seq}: cycles 1..{seq - 1} were not '
+                             'seen (the monitor started after the driver); warming up')
+            return None
+        if seq == last + 1:
             return None
         if seq > last + 1:
             return f'missing cycles: seq jumped from {last} to {seq} ({seq - last - 1} missing)'
@@ -259,6 +273,20 @@ class ReadinessMonitor:
         self.counts['anomalies'] += 1
         self.last_anomaly = (seq, reason)
         return reason
+
+    def untrusted(self, seq, reason):
+        """
+        Judge a cycle whose source is in doubt (another publisher on the driver's topics).
+
+        An anomaly: no verdict can rest on it, the warm-up starts again, and its seq does not
+        count (the driver's next cycle is then judged against the last trusted one).
+        """
+        self.counts['cycles'] += 1
+        self.counts['untrusted'] += 1
+        anomaly = self._anomaly(seq, f'cycle {seq} not trusted: {reason}')
+        self._restart()
+        self.state = ANOMALY
+        return Verdict(seq, False, ANOMALY, anomaly)
 
     def failed(self, seq, reason):
         """Judge a fired cycle that failed: the part may be anywhere; warm up again."""
@@ -315,7 +343,10 @@ class ReadinessMonitor:
         r = self.rules
         if detected:
             reason = None
-            if self.seen_detection and r.min_gap is not None and self.gap < r.min_gap:
+            # min_gap is the fewest non-detections between two runs: it judges the first
+            # detection of a run (the run rule judges the ones after it).
+            if self.run == 0 and self.seen_detection and r.min_gap is not None and \
+                    self.gap < r.min_gap:
                 reason = (f'detection after only {self.gap} cycles without one; the limit set '
                           f'needs at least {r.min_gap}')
             self.run += 1
@@ -335,6 +366,7 @@ class ReadinessMonitor:
         return None
 
     def _verdict(self, seq, ready, anomaly):
+        note, self.note = self.note, ''
         if anomaly or self.need_clear or self.silent:
             state = ANOMALY
         elif self.since_restart < self.rules.warmup_cycles:
@@ -342,7 +374,7 @@ class ReadinessMonitor:
         else:
             state = READY if ready else TRACKING
         self.state = state
-        return Verdict(seq, ready, state, anomaly)
+        return Verdict(seq, ready, state, anomaly, note)
 
 
 @dataclass
@@ -353,6 +385,7 @@ class _Status:
     stamp: Optional[float]
     reason: str
     arrival: float
+    stamp_ns: Optional[int] = None
 
 
 class CyclePairer:
@@ -377,10 +410,10 @@ class CyclePairer:
         self._proximities.append((float(stamp), bool(detected), float(now)))
         return self._drain(now)
 
-    def add_status(self, seq, ok, detected, stamp, reason, now):
+    def add_status(self, seq, ok, detected, stamp, reason, now, stamp_ns=None):
         self._statuses.append(_Status(int(seq), bool(ok), detected,
                                       None if stamp is None else float(stamp), str(reason),
-                                      float(now)))
+                                      float(now), stamp_ns))
         return self._drain(now)
 
     def expire(self, now):
@@ -402,7 +435,7 @@ class CyclePairer:
             st = self._statuses[0]
             if not st.ok:
                 self._statuses.popleft()
-                out.append(Cycle(st.seq, False, None, st.reason))
+                out.append(Cycle(st.seq, False, None, st.reason, stamp_ns=st.stamp_ns))
                 continue
             prox = self._match(st)
             if prox is not None:
@@ -412,18 +445,19 @@ class CyclePairer:
                 if st.detected is not None and st.detected != prox[1]:
                     note = 'sensor disagreement'
                     self.counts['disagreements'] += 1
-                out.append(Cycle(st.seq, True, prox[1], '', note))
+                out.append(Cycle(st.seq, True, prox[1], '', note, st.stamp_ns))
                 continue
             newer = bool(self._proximities)     # _match dropped every older one
             if (newer or now - st.arrival > self.timeout) and st.detected is not None:
                 self._statuses.popleft()
                 self.counts['proximity_lost'] += 1
-                out.append(Cycle(st.seq, True, st.detected, '', 'proximity lost'))
+                out.append(Cycle(st.seq, True, st.detected, '', 'proximity lost', st.stamp_ns))
                 continue
             if newer or now - st.arrival > self.timeout:
                 # Neither a bit in the status nor a proximity: report it as a failed cycle.
                 self._statuses.popleft()
-                out.append(Cycle(st.seq, False, None, 'no sensor bit for a completed cycle'))
+                out.append(Cycle(st.seq, False, None, 'no sensor bit for a completed cycle',
+                                 stamp_ns=st.stamp_ns))
                 continue
             break
         return out

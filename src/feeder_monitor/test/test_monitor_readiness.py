@@ -146,7 +146,7 @@ def test_failed_cycles_and_seq_gaps_restart_the_warmup():
     v = m.completed(3, True)
     assert 'went back' in v.anomaly and not v.ready
     assert m.counts == {'cycles': 9, 'completed': 8, 'failed': 1, 'detections': 5, 'ready': 2,
-                        'anomalies': 3}
+                        'anomalies': 3, 'untrusted': 0}
 
 
 def test_sensor_disagreement_is_an_anomaly():
@@ -320,3 +320,58 @@ def test_noisy_scene_rules_read_the_noisy_sensor(house, house_analysis):
     assert rules.pattern.detections != exact.detections
     assert rules.pattern.min_gap <= exact.min_gap
     assert rules.pattern.max_gap >= exact.max_gap
+
+
+def test_a_run_the_run_rule_allows_is_no_min_gap_anomaly():
+    """min_gap counts non-detections between runs: the 2nd detection of a run is not early."""
+    m = ReadinessMonitor(make_rules(max_run=2, min_gap=3, warmup_cycles=1))
+    v = feed(m, [1, 1, 0, 0, 0, 1, 1, 0, 0, 0, 1])
+    assert m.counts['anomalies'] == 0, m.last_anomaly
+    assert [x.ready for x in v] == [True, True, False, False, False, True, True, False, False,
+                                    False, True]
+    # A new run that starts too early is still an anomaly.
+    v = feed(m, [0, 1], seq0=12)
+    assert v[-1].anomaly and 'only 1 cycles' in v[-1].anomaly
+
+
+def test_100000_cycles_of_the_triangle_orbit(triangle, triangle_analysis, orbit):
+    """
+    The scene's own part, thrown 100,000 times from its start, through the rules (issue 10).
+
+    The truth is the geometry: a cycle is ready exactly when the sensor sees the part, the part
+    is on the goal edge, and the warm-up is over. Zero anomalies, zero missed, zero false.
+    """
+    rules = rules_from_analysis(triangle, triangle_analysis, orbit)
+    edges, radii, _ = triangle.model.orbit_arrays(*triangle.default_start(), 100_000)
+    edges, radii = edges[1:], radii[1:]
+    assert len(edges) == 100_000
+    bits = np.asarray(sees(triangle.part, edges, radii, rules.sensor_radius, 0.0), dtype=bool)
+    m = ReadinessMonitor(rules)
+    verdicts = np.array([m.completed(k + 1, bool(b)).ready for k, b in enumerate(bits)])
+    assert m.counts['anomalies'] == 0, m.last_anomaly
+    truth = bits & (edges == rules.goal_edge) & \
+        (np.arange(1, len(bits) + 1) >= rules.warmup_cycles)
+    false_ready = np.flatnonzero(verdicts & ~truth) + 1
+    missed = np.flatnonzero(truth & ~verdicts) + 1
+    assert false_ready.size == 0 and missed.size == 0, (false_ready[:5], missed[:5])
+    assert truth.sum() > 3000       # a detection rate of 3-10 % (test_rules_of_the_triangle)
+
+
+def test_a_first_seq_above_1_is_said_not_an_anomaly():
+    m = ReadinessMonitor(make_rules())
+    v = feed(m, [0, 0], seq0=50)
+    assert 'first cycle seen is seq 50' in v[0].note and 'cycles 1..49' in v[0].note
+    assert not v[1].note and m.counts['anomalies'] == 0
+    m = ReadinessMonitor(make_rules())
+    assert not feed(m, [0])[0].note
+
+
+def test_an_untrusted_cycle_is_an_anomaly_that_restarts_the_warmup():
+    m = ReadinessMonitor(make_rules(warmup_cycles=2, min_gap=None, max_run=None))
+    feed(m, [0, 0, 0])
+    v = m.untrusted(4, '2 publishers on /feeder/cycle_status')
+    assert not v.ready and v.state == ANOMALY and 'not trusted' in v.anomaly
+    assert m.counts['untrusted'] == 1 and m.last_seq == 3
+    # The driver's next cycle: no seq anomaly (the forged seq did not count); warm-up again.
+    v = feed(m, [1, 1], seq0=4)
+    assert [x.ready for x in v] == [False, True] and m.counts['anomalies'] == 1

@@ -76,10 +76,13 @@ def check_start(model, edge, R):
         return f'start_radius must be a finite number, got {R!r}'
     arm = getattr(model, 'arm_length', math.inf)
     if R > arm:
-        return (f"start state (edge {edge}, R {R} m) rejected: R is beyond the arm's end "
+        return (f"start_radius = {R} m (start_edge {edge}) rejected: R is beyond the arm's end "
                 f'({arm:g} m; scene arm.length)')
     err = model.domain_error(int(edge), float(R))
-    if err is not None:
-        return (f'start state (edge {edge}, R {R} m) rejected: {err} (to change edge and '
-                'radius together, set both in one atomic call)')
-    return None
+    if err is None:
+        return None
+    if err.condition in ('edge_index', 'stable_edge'):
+        # The edge alone is wrong: name start_edge (the radius is checked against it next).
+        return f'start_edge = {edge} rejected: {err}'
+    return (f'start_radius = {R} m on start_edge {edge} rejected: {err} (to change edge and '
+            'radius together, set both in one atomic call)')

@@ -36,8 +36,8 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common import qos
 from feeder_common.diagnostics import Updater
 from feeder_common.frames import BASE_FRAME, plane_point, plane_quaternion
-from feeder_common.messages import (cycle_status, joint_state, parse_cycle_status, proximity,
-                                    time_msg)
+from feeder_common.messages import (cycle_status, joint_state, MAX_SEQ_JUMP, parse_cycle_status,
+                                    proximity, time_msg)
 from feeder_common.node import FeederLifecycleNode, run_node
 from feeder_common.parameters import ParameterGate
 from geometry_msgs.msg import PoseStamped
@@ -76,7 +76,8 @@ class SimNode(FeederLifecycleNode):
         self._lost_seq = None           # cycle that lost the part off the arm's end
         self._seq = 0
         self._counts = {'completed': 0, 'failed': 0, 'missed': 0, 'agree': 0, 'disagree': 0,
-                        'bad_status': 0}
+                        'bad_status': 0, 'implausible_jumps': 0}
+        self._implausible = None        # the last implausible seq jump (text), for diagnostics
         self._rate_mark = (0, self.get_clock().now())
         self._last_followed_seq = None
         self._static_markers = None     # Marker messages that only change with the analysis
@@ -335,6 +336,15 @@ class SimNode(FeederLifecycleNode):
                                       'kept; the part may have moved', throttle_duration_sec=5.0)
             return
         missed = seq - last - 1 if last is not None and seq > last + 1 else 0
+        if missed > MAX_SEQ_JUMP:
+            # Replaying them would take (for seq 2**70) forever: an anomaly, not a catch-up.
+            # The prediction stays where it was; the next cycles are followed from this seq.
+            self._counts['implausible_jumps'] += 1
+            self._implausible = (f'seq jumped from {last} to {seq} ({missed} cycles unseen, '
+                                 f'more than the {MAX_SEQ_JUMP} a prediction replays): '
+                                 'prediction not advanced; place_part or a restart resyncs it')
+            self.get_logger().error(self._implausible, throttle_duration_sec=5.0)
+            return
         self._counts['missed'] += missed
         try:
             for k in range(missed + 1):
@@ -453,10 +463,16 @@ class SimNode(FeederLifecycleNode):
         bad = c['disagree'] or c['missed'] or c['failed'] or c['bad_status']
         msg = (f'{c["agree"]} of {c["agree"] + c["disagree"]} sensor bits as predicted'
                if c['agree'] + c['disagree'] else 'no cycle followed yet')
-        stat.summary('warn' if bad else 'ok', msg)
+        if self._implausible:
+            stat.summary('error', self._implausible)
+            self._implausible = None
+        else:
+            stat.summary('warn' if bad else 'ok', msg)
         stat.update({'last_seq': self._seq, 'followed': c['completed'], 'missed': c['missed'],
                      'failed': c['failed'], 'agree': c['agree'], 'disagree': c['disagree'],
-                     'bad_status': c['bad_status'], 'cycles_per_s': f'{self._rate():.2f}'})
+                     'bad_status': c['bad_status'],
+                     'implausible_jumps': c['implausible_jumps'],
+                     'cycles_per_s': f'{self._rate():.2f}'})
 
     def _diag_prediction(self, stat):
         pred = self._predictor

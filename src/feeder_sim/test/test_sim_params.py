@@ -38,6 +38,9 @@ def test_start_checks_use_the_domain_of_f(triangle):
     assert check_start(triangle.model, 1, 0.12) is None
     assert 'no dynamic grasp' in check_start(triangle.model, 1, 0.001)
     assert 'does not exist' in check_start(triangle.model, 7, 0.12)
+    # The parameter at fault is named first (issue 10: start_edge:=99 named start_radius).
+    assert check_start(triangle.model, 99, 0.12).startswith('start_edge = 99 rejected')
+    assert check_start(triangle.model, 1, 0.001).startswith('start_radius = 0.001 m')
     assert 'finite' in check_start(triangle.model, 1, float('nan'))
 
 

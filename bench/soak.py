@@ -1,0 +1,280 @@
+#!/usr/bin/env python3
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Soak: the sim as hardware, the predictor, the monitor and the bag recorder, N cycles at the
+fastest period, then every cycle reconciled from the bag (issue 10). Not in CI.
+
+The sim (hardware mode, triangle, ``cycle_period`` 0.005 s, its minimum) cycles until it has
+fired N cycles; the recorder records ``cycle_status``, ``proximity``, ``edge1_verdict``,
+``edge1_ready`` and the predictor's ``predicted/edge`` and ``predicted/radius``. The bag is
+read with the mcap reader (not the recorder's code) and every cycle is checked:
+
+* ``cycle_status``: seq 1..n, contiguous, every cycle completed, one ``proximity`` each;
+* the truth of a cycle is the geometry of the predicted state (the scene is deterministic, so
+  the predictor's state is the simulated part's): the sensor sees the part, and whether it
+  lies on the goal edge; the sim's sensor bit must equal it;
+* ``edge1_verdict``: one per cycle; ready exactly when the part is seen on the goal edge after
+  the warm-up. It counts false ready, missed ready after the warm-up, and anomalies (the
+  triangle's orbit has none: each one is false);
+* memory: every node's RSS (/proc/<pid>/status) sampled every few seconds; the growth over
+  the second half of the run, per 1000 cycles.
+
+Prints a table; exit status 0 when every count is zero and memory is flat (growth under
+``--flat-kb`` KB per 1000 cycles), else 1. Usage (after ``. scripts/setup.sh``):
+
+    python bench/soak.py [--cycles 100000] [--out DIR]
+"""
+
+import argparse
+import os
+import pathlib
+import signal
+import sys
+import tempfile
+import time
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / 'scripts'))
+
+from demo_graph import Processes  # noqa: E402
+from feeder_testing import claim_domain_id  # noqa: E402
+
+SCENE = str(REPO / 'scenes' / 'triangle.yaml')
+PERIOD = 0.005
+TOPICS = ('cycle_status', 'proximity', 'edge1_verdict', 'edge1_ready', 'predicted/edge',
+          'predicted/radius')
+
+
+def rss_kb(pid):
+    with open(f'/proc/{pid}/status') as fh:
+        for line in fh:
+            if line.startswith('VmRSS:'):
+                return int(line.split()[1])
+    return 0
+
+
+def start(procs, bag):
+    ns = ['-r', '__ns:=/feeder']
+    procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-r',
+                '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p', f'scene:={SCENE}',
+                '-p', f'cycle_period:={PERIOD}')
+    procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-p',
+                f'scene:={SCENE}')
+    procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
+                f'scene:={SCENE}')
+    procs.start('recorder', 'feeder_monitor', 'bag_recorder', bag, '--topics', *TOPICS,
+                '--ros-args', *ns)
+
+
+class Driver:
+    """The soak's node: enables cycling, reads the sim's seq from /diagnostics (1 Hz)."""
+
+    def __init__(self, rclpy):
+        from diagnostic_msgs.msg import DiagnosticArray
+        self.rclpy = rclpy
+        self.node = rclpy.create_node('feeder_soak')
+        self.seq = 0
+        self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50)
+
+    def _on_diag(self, msg):
+        for s in msg.status:
+            if s.name == 'feeder_driver: actuator':
+                self.seq = int({kv.key: kv.value for kv in s.values}['seq'])
+
+    def spin_until(self, cond, timeout, what, procs=None):
+        end = time.monotonic() + timeout
+        while not cond():
+            if time.monotonic() > end:
+                raise SystemExit(f'soak: timed out waiting for {what}')
+            if procs is not None:
+                procs.check()
+            self.rclpy.spin_once(self.node, timeout_sec=0.1)
+
+    def enable(self, on):
+        from std_srvs.srv import SetBool
+        client = self.node.create_client(SetBool, '/feeder/feeder_driver/enable')
+        self.spin_until(client.service_is_ready, 120, 'the sim')
+        fut = client.call_async(SetBool.Request(data=on))
+        self.spin_until(fut.done, 10, 'enable')
+        assert fut.result().success, fut.result().message
+        self.node.destroy_client(client)
+
+
+def read_bag(bag):
+    """Messages of the bag by topic, in log order (the mcap reader; rclpy deserializes)."""
+    import importlib
+    from mcap.reader import make_reader
+    from rclpy.serialization import deserialize_message
+    out, classes = {}, {}
+    files = sorted(pathlib.Path(bag).glob('*.mcap'))
+    if not files:
+        raise SystemExit(f'soak: no .mcap file in {bag}')
+    for path in files:
+        with open(path, 'rb') as fh:
+            for schema, channel, message in make_reader(fh).iter_messages(log_time_order=True):
+                cls = classes.get(schema.name)
+                if cls is None:
+                    pkg, kind, name = schema.name.split('/')
+                    cls = classes[schema.name] = getattr(
+                        importlib.import_module(f'{pkg}.{kind}'), name)
+                out.setdefault(channel.topic, []).append(deserialize_message(message.data, cls))
+    return out
+
+
+def reconcile(msgs):
+    """Count, cycle by cycle, what the bag shows against the geometry's truth."""
+    import numpy as np
+    from feeder_common.messages import parse_cycle_status, parse_edge_verdict
+    from throwmap import analyse, load_scene, sees
+    scene = load_scene(SCENE)
+    sensor = analyse(scene).sensor
+    statuses = [parse_cycle_status(m) for m in msgs.get('/feeder/cycle_status', [])]
+    n = len(statuses)
+    seqs = [s.seq for s in statuses]
+    problems = {}
+    if seqs != list(range(1, n + 1)):
+        problems['cycle_status seqs not 1..n'] = sum(
+            1 for k, s in enumerate(seqs) if s != k + 1)
+    problems['failed cycles'] = sum(not s.ok for s in statuses)
+    problems['proximity count - cycles'] = len(msgs.get('/feeder/proximity', [])) - n
+    edges = np.array([m.data for m in msgs.get('/feeder/predicted/edge', [])])
+    radii = np.array([m.data for m in msgs.get('/feeder/predicted/radius', [])])
+    problems['predictions - cycles'] = len(edges) - n
+    m = min(n, len(edges), len(radii))
+    seen = np.asarray(sees(scene.part, edges[:m], radii[:m], sensor.radius, sensor.footprint),
+                      dtype=bool)
+    bits = np.array([bool(s.sensor) for s in statuses[:m]])
+    problems['sensor bit != geometry'] = int((bits != seen).sum())
+    truth = seen & (edges[:m] == sensor.goal_edge) & \
+        (np.arange(1, m + 1) >= sensor.warmup_throws)
+    verdicts = {}
+    dup = 0
+    for v in (parse_edge_verdict(x) for x in msgs.get('/feeder/edge1_verdict', [])):
+        dup += v.seq in verdicts
+        verdicts[v.seq] = v
+    problems['cycles without a verdict'] = sum(1 for s in seqs if s not in verdicts)
+    problems['duplicate verdicts'] = dup
+    ready = np.array([verdicts[k + 1].ready if k + 1 in verdicts else False for k in range(m)])
+    problems['false ready'] = int((ready & ~truth).sum())
+    problems['missed ready after warm-up'] = int((truth & ~ready).sum())
+    problems['anomalies (false)'] = sum(1 for v in verdicts.values() if v.anomaly)
+    return n, int(truth.sum()), problems
+
+
+def memory_growth(samples, cycles):
+    """RSS growth per 1000 cycles over the second half of the run (least squares), per node."""
+    import numpy as np
+    out = {}
+    for name, pts in samples.items():
+        pts = [(s, kb) for s, kb in pts if s >= cycles / 2]
+        if len(pts) < 3:
+            out[name] = (None, None, None)
+            continue
+        x = np.array([p[0] for p in pts], float)
+        y = np.array([p[1] for p in pts], float)
+        slope = np.polyfit(x, y, 1)[0] * 1000.0
+        out[name] = (slope, int(y[0]), int(y[-1]))
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0].strip())
+    ap.add_argument('--cycles', type=int, default=100_000)
+    ap.add_argument('--out', type=pathlib.Path, default=None,
+                    help='directory for the bag and the logs (default: a new temporary one)')
+    ap.add_argument('--sample-every', type=float, default=2.0, metavar='S',
+                    help='seconds between RSS samples (default 2)')
+    ap.add_argument('--flat-kb', type=float, default=5.0,
+                    help='memory counts as flat below this growth, KB per 1000 cycles '
+                    '(default 5: 0.5 MB per 100,000 cycles)')
+    args = ap.parse_args()
+    out = (args.out or pathlib.Path(tempfile.mkdtemp(prefix='feeder-soak-'))).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    bag = out / 'bag'
+    if bag.exists():
+        raise SystemExit(f'soak: {bag} exists; give another --out')
+    domain, lock = claim_domain_id()
+    os.environ['ROS_DOMAIN_ID'] = str(domain)
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    load0 = ', '.join(f'{x:.1f}' for x in os.getloadavg())
+    print(f'soak: {args.cycles} cycles at cycle_period {PERIOD} s, ROS_DOMAIN_ID={domain} '
+          f'(loopback), load average {load0}, bag and logs in {out}', flush=True)
+    import rclpy
+    rclpy.init()
+    procs = Processes(out)
+    drv = Driver(rclpy)
+    samples = {}
+    try:
+        start(procs, bag)
+        drv.spin_until(lambda: drv.node.count_subscribers('/feeder/cycle_status') >= 3, 120,
+                       'the readers of cycle_status', procs)
+        drv.spin_until(lambda: drv.node.count_publishers('/feeder/edge1_verdict') >= 1, 120,
+                       'the monitor', procs)
+        drv.spin_until(lambda: drv.node.count_publishers('/feeder/predicted/edge') >= 1, 120,
+                       'the predictor', procs)
+        end = time.monotonic() + 3.0      # the recorder's discovery of every topic
+        drv.spin_until(lambda: time.monotonic() > end, 10, 'discovery')
+        t0 = time.monotonic()
+        drv.enable(True)
+        next_sample = 0.0
+        while drv.seq < args.cycles:
+            procs.check()
+            now = time.monotonic()
+            if now >= next_sample:
+                next_sample = now + args.sample_every
+                for name, p in procs.procs.items():
+                    samples.setdefault(name, []).append((drv.seq, rss_kb(p.pid)))
+            rclpy.spin_once(drv.node, timeout_sec=0.2)
+        drv.enable(False)
+        wall = time.monotonic() - t0
+        end = time.monotonic() + 3.0      # the last cycles reach the monitor and the bag
+        drv.spin_until(lambda: time.monotonic() > end, 10, 'the last cycles')
+        procs.procs['recorder'].send_signal(signal.SIGINT)
+        procs.procs['recorder'].wait(60)
+    finally:
+        drv.node.destroy_node()
+        rclpy.shutdown()
+        procs.stop_all()
+        lock.close()
+    fired = drv.seq
+    print(f'soak: {fired}+ cycles in {wall:.0f} s ({fired / wall:.0f} cycles/s); reading the '
+          'bag', flush=True)
+    n, ready_truth, problems = reconcile(read_bag(bag))
+    growth = memory_growth(samples, n)
+    load1 = ', '.join(f'{x:.1f}' for x in os.getloadavg())
+    rows = [('cycles in the bag', str(n), ''),
+            ('cycles whose part is seen on the goal edge after the warm-up', str(ready_truth),
+             '')]
+    rows += [(k, str(v), '0') for k, v in problems.items()]
+    flat = True
+    for name, (slope, first, last) in growth.items():
+        if slope is None:
+            rows.append((f'RSS of {name}', 'too few samples', ''))
+            continue
+        flat &= slope < args.flat_kb
+        rows.append((f'RSS of {name}, second half', f'{first} -> {last} KB, '
+                     f'{slope:+.2f} KB per 1000 cycles', f'< {args.flat_kb:g}'))
+    print(f'\nload average: {load0} at the start, {load1} at the end\n')
+    print('| check | result | target |\n|---|---|---|')
+    for r in rows:
+        print('| ' + ' | '.join(r) + ' |')
+    ok = flat and not any(problems.values()) and n >= args.cycles
+    print(f'\nsoak: {"PASS" if ok else "FAIL"}')
+    return 0 if ok else 1
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,235 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Issue 10 on real DDS: a forged cycle, a stale verdict, a huge seq, the driver's last words.
+
+The forger is this test's own node publishing ``cycle_status`` and ``proximity`` beside the
+driver (the sim as hardware): with the monitor's graph check it never gets a ready.
+"""
+
+import os
+import signal
+import time
+
+from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_common.messages import cycle_status, proximity
+from feeder_nodes import (Collector, Diagnostics, LATCHED, monitor, predictor, RELIABLE,
+                          STARTUP_TIMEOUT, sim_as_hardware, status_values, TRIANGLE, Verdicts,
+                          wait_for_monitor, wait_for_readers)
+import pytest
+from rclpy.duration import Duration
+from rclpy.event_handler import SubscriptionEventCallbacks
+from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Range
+from std_msgs.msg import Bool, Int32
+from std_srvs.srv import SetBool, Trigger
+
+PERIOD = 0.01
+
+
+def trigger_until_ready(ros, verdicts, limit=600):
+    """Fire single cycles until the monitor's verdict is ready (the part proven on goal)."""
+    for _ in range(limit):
+        n = len(verdicts)
+        res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
+        assert res.success, res.message
+        ros.spin_until(lambda: len(verdicts) > n, 10.0, 'a verdict')
+        if verdicts.parsed[-1].ready:
+            return verdicts.parsed[-1]
+    raise AssertionError(f'no ready verdict in {limit} cycles')
+
+
+def test_a_forged_cycle_beside_the_driver_is_never_ready(graph, ros):
+    sim_as_hardware(graph, f'cycle_period:={PERIOD}')
+    monitor(graph)
+    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    verdicts = Verdicts(ros)
+    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    wait_for_monitor(ros, ready)
+    verdicts.wait_matched()
+    wait_for_readers(ros, '/feeder/cycle_status', 2)
+    wait_for_readers(ros, '/feeder/proximity', 1)
+    ros.spin_for(0.5)
+    trigger_until_ready(ros, verdicts)
+    last = verdicts.parsed[-1]
+
+    # The forger: seq = last + 1, sensor 1, a matching proximity, 100 times.
+    status_pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', RELIABLE)
+    prox_pub = ros.node.create_publisher(Range, '/feeder/proximity', RELIABLE)
+    ros.spin_until(lambda: status_pub.get_subscription_count() >= 2 and
+                   prox_pub.get_subscription_count() >= 1, 20.0, 'the monitor to see the forger')
+    ros.spin_for(0.3)
+    n_ready, n_verdicts = len(ready), len(verdicts)
+    stamp = ros.node.get_clock().now().nanoseconds
+    for k in range(1, 101):
+        t = stamp + k * 10_000_000
+        prox_pub.publish(proximity(t, True, 0.02))
+        status_pub.publish(cycle_status(last.seq + k, True, 'completed', True, t, 'forged'))
+        ros.spin_for(0.002)
+    ros.spin_until(lambda: len(verdicts) >= n_verdicts + 100, 10.0, '100 verdicts')
+    forged = verdicts.parsed[n_verdicts:]
+    assert [v.ready for v in forged] == [False] * 100
+    assert all('not trusted' in v.anomaly and 'publish' in v.anomaly for v in forged)
+    assert not any(m.data for m in ready.msgs[n_ready:])
+
+    # The driver's own cycles are not trusted either while the forger is there ...
+    res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
+    assert res.success
+    ros.spin_until(lambda: len(verdicts) > n_verdicts + 100, 10.0, 'the driver cycle')
+    assert not verdicts.parsed[-1].ready and 'not trusted' in verdicts.parsed[-1].anomaly
+    # ... and once it has gone, the monitor warms up again and proves the goal edge anew.
+    ros.node.destroy_publisher(status_pub)
+    ros.node.destroy_publisher(prox_pub)
+    ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') == 1, 20.0,
+                   'the forger to leave')
+    ros.spin_for(0.5)
+    again = trigger_until_ready(ros, verdicts)
+    assert again.seq > last.seq
+    assert len(statuses) >= again.seq
+
+
+def test_a_verdict_is_live_false_on_exit_and_a_killed_monitor_shows(graph, ros):
+    """edge1_ready: republished while idle (deadline), false on SIGINT, liveliness on SIGKILL."""
+    sim_as_hardware(graph, f'cycle_period:={PERIOD}')
+    mon_a = monitor(graph, 'ready_deadline:=0.2')
+    mon_b = graph.start('feeder_monitor', 'monitor_node', '--ros-args', '-r', '__ns:=/feeder',
+                        '-r', '__node:=feeder_monitor_b', '-r', 'edge1_ready:=edge1_ready_b',
+                        '-r', 'edge1_verdict:=edge1_verdict_b',
+                        '-p', f'scene:={TRIANGLE}', '-p', 'ready_deadline:=0.2',
+                        name='monitor_b')
+    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    verdicts = Verdicts(ros)
+    alive = []
+    # A consumer as docs/interfaces.md tells it: deadline and lease >= the offered 0.2 s.
+    watch = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                       liveliness=LivelinessPolicy.AUTOMATIC)
+    watch.liveliness_lease_duration = watch.deadline = Duration(seconds=0.5)
+    ready_b = []
+    ros.node.create_subscription(
+        Bool, '/feeder/edge1_ready_b', ready_b.append, watch,
+        event_callbacks=SubscriptionEventCallbacks(
+            liveliness=lambda e: alive.append(e.alive_count)))
+    wait_for_monitor(ros, ready)
+    ros.spin_until(lambda: ready_b, 60.0, "monitor b's edge1_ready")
+    verdicts.wait_matched()
+    wait_for_readers(ros, '/feeder/cycle_status', 2)
+    ros.spin_for(0.5)
+    trigger_until_ready(ros, verdicts)
+
+    # Idle: the true verdict is republished within the deadline.
+    n = len(ready)
+    ros.spin_for(1.0)
+    assert len(ready) - n >= 3 and all(m.data for m in ready.msgs[n:])
+    ros.spin_until(lambda: ready_b[-1].data, 5.0, 'monitor b ready')
+
+    # A clean exit says false.
+    mon_a.send_signal(signal.SIGINT)
+    assert mon_a.wait(10) == 0
+    ros.spin_for(0.3)
+    assert ready.msgs[-1].data is False
+
+    # A killed monitor's true stays in the reader's cache, but its liveliness goes.
+    assert alive and alive[-1] == 1
+    mon_b.send_signal(signal.SIGKILL)
+    mon_b.wait(10)
+    ros.spin_until(lambda: alive[-1] == 0, 5.0, 'liveliness lost')
+    assert ready_b[-1].data is True     # what a consumer must not trust without liveliness
+
+
+def test_a_huge_seq_does_not_hang_the_predictor(graph, ros):
+    """seq 2**70 after seq 1: an anomaly in /diagnostics, and the next cycle is followed."""
+    pred = predictor(graph)
+    edges = Collector(ros, Int32, '/feeder/predicted/edge')
+    diags = Diagnostics(ros)
+    pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', RELIABLE)
+    ros.spin_until(lambda: pub.get_subscription_count() >= 1, 60.0, 'the predictor')
+    ros.spin_for(0.5)
+    stamp = ros.node.get_clock().now().nanoseconds
+    for k, seq in enumerate((1, 2 ** 70, 2 ** 70 + 1)):
+        pub.publish(cycle_status(seq, True, 'completed', False, stamp + k, 'test'))
+    ros.spin_until(lambda: len(edges) >= 2, 10.0, 'predictions of seq 1 and 2**70 + 1')
+    name = 'feeder_sim: sensor agreement'
+    ros.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR
+                               for s in diags.by_name.get(name, [])), 5.0, 'the anomaly')
+    err = next(s for s in diags.by_name[name] if s.level == DiagnosticStatus.ERROR)
+    assert f'seq jumped from 1 to {2 ** 70}' in err.message
+    assert Diagnostics.values(err)['implausible_jumps'] == '1'
+    assert len(edges) == 2 and pred.poll() is None
+
+
+def start_emulator_and_driver(graph, tmp_path, *emulator_args):
+    link = tmp_path / 'feeder-tty'
+    emu = graph.start('feeder_driver', 'controller_emulator', '--scene', TRIANGLE, '--link',
+                      link, '--heartbeat', '0.2', *emulator_args, name='emulator')
+    end = time.monotonic() + STARTUP_TIMEOUT
+    while not os.path.islink(link):
+        assert emu.poll() is None, graph.log(emu)
+        assert time.monotonic() < end, 'the emulator did not create its pty link'
+        time.sleep(0.05)
+    drv = graph.start('feeder_driver', 'driver_node', '--ros-args', '-r', '__ns:=/feeder',
+                      '-p', f'port:={link}', '-p', 'cycle_timeout_s:=30.0',
+                      '-p', 'watchdog_timeout_s:=5.0', name='driver')
+    return emu, drv
+
+
+def wait_for_handshake(ros):
+    end = time.monotonic() + STARTUP_TIMEOUT
+    while True:
+        res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
+        if res.success:
+            return res
+        assert 'refused' in res.message and time.monotonic() < end, res.message
+        ros.spin_for(0.1)
+
+
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
+def test_the_cycle_a_signal_aborts_reaches_cycle_status(graph, ros, tmp_path, sig):
+    """The driver sends STOP and reports the aborted cycle before it leaves (issue 10, item 6)."""
+    emu, drv = start_emulator_and_driver(graph, tmp_path, '--cycle-time', '20')
+    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    wait_for_readers(ros, '/feeder/cycle_status', 1)
+    ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') >= 1, 60.0,
+                   'the driver')
+    res = wait_for_handshake(ros)        # fires cycle 1; it takes 20 s
+    assert 'seq 1' in res.message, res.message
+    ros.spin_for(0.3)
+    drv.send_signal(sig)
+    assert drv.wait(10) == 0, graph.log(drv)
+    ros.spin_until(lambda: statuses.msgs, 5.0, 'the aborted cycle')
+    (st,) = statuses.msgs
+    assert status_values(st)['seq'] == '1' and st.level == DiagnosticStatus.ERROR
+    assert st.message == f'aborted: interrupted ({sig.name})'
+    assert emu.poll() is None
+
+
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_while_cycling_reports_every_fired_cycle(graph, ros, tmp_path, sig):
+    """At 100 Hz, a signal aborts the cycle in flight: it is the last cycle_status."""
+    emu, drv = start_emulator_and_driver(graph, tmp_path, '--cycle-time', '0.05')
+    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    wait_for_readers(ros, '/feeder/cycle_status', 1)
+    wait_for_handshake(ros)
+    ros.set_parameters('/feeder/feeder_driver', {'cycle_period': 0.01})
+    res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True))
+    assert res.success, res.message
+    ros.spin_until(lambda: len(statuses) >= 20, 20.0, '20 cycles')
+    drv.send_signal(sig)
+    assert drv.wait(10) == 0, graph.log(drv)
+    ros.spin_for(1.0)
+    seqs = [int(status_values(s)['seq']) for s in statuses.msgs]
+    assert seqs == list(range(1, len(seqs) + 1))
+    last = statuses.msgs[-1]
+    assert last.message == f'aborted: interrupted ({sig.name})', (last.message, graph.log(drv))
