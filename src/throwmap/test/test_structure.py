@@ -51,6 +51,7 @@ LAYERS = [
     ('analysis',),
     ('scene',),
     ('part_on_arm',),
+    ('design',),
     ('internal', 'plots'),
     ('cli',),
     ('__init__',),
