@@ -460,7 +460,7 @@ def check_scene(scene):
                          'design`')
 
 
-def eval_options(scene, radii_per_edge=25, throws=100, ref_throws=2000, zmax_samples=64,
+def eval_options(scene, radii_per_edge=20, throws=150, ref_throws=2000, zmax_samples=64,
                  cycle=None):
     """Return the kernel's EvalOptions for ``scene`` (its footprint, arm length, mu, cycle)."""
     for name, value, least in (('radii_per_edge', radii_per_edge, 2), ('throws', throws, 10),
@@ -535,6 +535,9 @@ def evaluate_grid(scene, hs, ws, goals=None, fractions=(0.25,), options=None, wo
                        out_design[a:b], out_sensor[a:b], out_bands[a:b], out_starts[a:b])
         return b - a
 
+    # Compile (or load from numba's cache) before the clock starts: no design, same types.
+    evaluate_chunk(hs[:0], ws[:0], g, arrays, knobs, opt, goals, fractions, *_buffers(part, opt),
+                   out_design[:0], out_sensor[:0], out_bands[:0], out_starts[:0])
     t0 = time.perf_counter()
     done = 0
     if workers <= 1 or len(chunks) <= 1:
