@@ -113,7 +113,7 @@ class CycleTime:
 def _r_min(edge, h, mu, part):
     """Lower end of f's domain on a stable edge at offset h (ThrowModel.r_min, compiled)."""
     rg = impulse_grasp_radius(edge, h, mu, part.rho2, part.d, part.u_l, part.u_r)
-    return max(rg, -part.u_l[edge] + 1e-12), rg
+    return max(rg, -part.u_l[edge]), rg
 
 
 @njit
@@ -126,6 +126,8 @@ def _z_top(w, g, h, r_grasp, lo, r_max, part, knobs, rec, samples):
     """
     n = part.n
     for i in range(n):
+        # R_min moved 1e-12 m inside the domain where the toe-stub bound (an open end) binds.
+        lo[i] = max(lo[i], -part.u_l[i] + 1e-12)
         r_max[i] = lo[i]
         if not part.stable[i]:
             continue
@@ -205,7 +207,7 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     """
     Evaluate one design (module docstring); every buffer is the caller's (no allocation).
 
-    edge_buf: (3, n); work_*: (starts, throws + 1); ref_*: (ref_throws + 1,); labels, scratch: (starts,);
+    edge_buf: (4, n); work_*: (starts, throws + 1); ref_*: (ref_throws + 1,); labels, scratch: (starts,);
     out_design: (D_COLS,); out_sensor: (goals, fractions, S_COLS); out_bands: (n, 2) R band per
     edge of the reference limit set (NaN where absent); out_starts: (starts, 2) edge and R.
     """
@@ -224,7 +226,10 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     if n_stable == 0 or w <= 0.0:
         out_design[D_STATUS] = ST_NO_GRASP
         return
-    st, r_hi = _z_top(w, g, h, r_grasp, lo, edge_buf[2], part, knobs, rec, opt.zmax_samples)
+    for i in range(n):
+        edge_buf[3, i] = lo[i]
+    st, r_hi = _z_top(w, g, h, r_grasp, edge_buf[3], edge_buf[2], part, knobs, rec,
+                      opt.zmax_samples)
     if st != ST_OK:
         out_design[D_STATUS] = st
         return
@@ -236,10 +241,11 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
         if not part.stable[i]:
             continue
         top = max(r_hi, lo[i] * 1.5)
+        a = lo[i] + 0.01 * (top - lo[i])
+        step = (top - a) / (m - 1)
         for k in range(m):
-            a = lo[i] + 0.01 * (top - lo[i])
             out_starts[s, 0] = i
-            out_starts[s, 1] = a + (top - a) * k / (m - 1) if m > 1 else a
+            out_starts[s, 1] = k * step + a if k < m - 1 else top    # as np.linspace
             s += 1
     starts = s
     # Reference limit set: from the first stable edge of the goals at 1.5 R_min (the scene's
@@ -484,7 +490,7 @@ def _buffers(part, opt):
     ref = (np.full(opt.ref_throws + 1, -1, dtype=np.int64), np.full(opt.ref_throws + 1, np.nan),
            np.zeros(opt.ref_throws + 1), np.zeros(opt.ref_throws + 1))
     # No catch records are kept (a buffer without rows), as f_batch does.
-    return ((np.empty((0, REC_COLS)), np.zeros((3, part.n))) + work + ref
+    return ((np.empty((0, REC_COLS)), np.zeros((4, part.n))) + work + ref
             + (np.zeros(starts, dtype=np.int64), np.zeros(starts)))
 
 

@@ -131,6 +131,7 @@ class GraphVerdict:
     closure_cells: int
     transient_bound: int        # longest path (throws) from any start cell into A*
     false_top: float            # highest shadow top of a non-goal cell in A* (+ footprint)
+    closure: frozenset = frozenset()    # A*: its (edge, cell) nodes
 
 
 def cell_map(part, g, mu, knobs, h, w, dh, dw, r_top, cells=120, samples=5):
@@ -262,7 +263,7 @@ def check_graph(part, cmap, bands, flips, goal, x, footprint, r_start_top):
                         parent = stack[-1][0]
                         best[parent] = max(best[parent], stay(parent) + depth[node] + 1)
     bound = max(depth.values()) if depth else 0
-    return GraphVerdict(True, '', len(closure), int(bound), false_top)
+    return GraphVerdict(True, '', len(closure), int(bound), false_top, frozenset(closure))
 
 
 @dataclass(frozen=True)
@@ -285,11 +286,13 @@ class Robustness:
                 self.nominal_verdict.reason, 'cells': self.cells, 'samples': self.samples}
 
 
-def robust_check(part, g, mu, knobs, h, w, dh, dw, limit, cells=120, samples=5):
+def robust_check(part, g, mu, knobs, h, w, dh, dw, limit, cells=120, samples=5,
+                 with_map=False):
     """check_graph for the box (dh, dw) around the design; ``limit``: a LimitSpec."""
     cmap = cell_map(part, g, mu, knobs, h, w, dh, dw, limit.r_top, cells, samples)
-    return check_graph(part, cmap, limit.bands, limit.flips, limit.goal, limit.x,
-                       limit.footprint, limit.r_start_top)
+    verdict = check_graph(part, cmap, limit.bands, limit.flips, limit.goal, limit.x,
+                          limit.footprint, limit.r_start_top)
+    return (verdict, cmap) if with_map else verdict
 
 
 @dataclass(frozen=True)

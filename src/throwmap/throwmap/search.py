@@ -260,14 +260,13 @@ def run_catalogue(paths, ranges, n_h, n_w, fractions=(0.25,), floor=0.0, top=4, 
     single-threaded worker processes. Results come back in the order of ``paths``.
     """
     # dask is only needed here: imported on use, like matplotlib for the plots.
-    from distributed import Client, LocalCluster
+    from distributed import Client
     own = None
     if client is None:
         if scheduler:
             client = Client(scheduler)
         else:
-            own = LocalCluster(n_workers=workers, threads_per_worker=1, host='127.0.0.1',
-                               dashboard_address=None, processes=True)
+            own = local_cluster(workers)
             client = Client(own)
     try:
         futures = [client.submit(catalogue_task, p, tuple(hr), tuple(wr), n_h, n_w,
@@ -278,6 +277,13 @@ def run_catalogue(paths, ranges, n_h, n_w, fractions=(0.25,), floor=0.0, top=4, 
         if own is not None:
             client.close()
             own.close()
+
+
+def local_cluster(workers=2):
+    """A Dask LocalCluster on 127.0.0.1 only (no dashboard): ``workers`` 1-thread processes."""
+    from distributed import LocalCluster
+    return LocalCluster(n_workers=workers, threads_per_worker=1, host='127.0.0.1',
+                        dashboard_address=None, processes=True)
 
 
 def scene_paths(folder):
