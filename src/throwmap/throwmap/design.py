@@ -466,7 +466,7 @@ def check_scene(scene):
                          'design`')
 
 
-def eval_options(scene, radii_per_edge=20, throws=150, ref_throws=2000, zmax_samples=64,
+def eval_options(scene, radii_per_edge=20, throws=120, ref_throws=1500, zmax_samples=48,
                  cycle=None):
     """Return the kernel's EvalOptions for ``scene`` (its footprint, arm length, mu, cycle)."""
     for name, value, least in (('radii_per_edge', radii_per_edge, 2), ('throws', throws, 10),

@@ -37,8 +37,10 @@ from .accuracy import compiled_knobs
 from .catch import is_jog
 from .errors import InputError
 from .model import ThrowModel
+from .orbits import limit_set
 from .robustness import LimitSpec, robustness
 from .scene import load_scene
+from .sensor import sensor_design
 
 
 @dataclass
@@ -187,11 +189,25 @@ def search(scene, h_range, w_range, n_h=40, n_w=40, goals=None, fractions=(0.25,
     ok = [c for c in allc if c.robust() >= floor and c.feed() > 0
           and c.figures.get('never_ready', 1) == 0]
     chosen = max(ok, key=Candidate.feed) if ok else None
+    if chosen is not None:
+        chosen.figures['library_guarantee_radius'] = library_guarantee(scene, chosen)
+        if chosen.figures['library_guarantee_radius'] >= chosen.figures['sensor_radius']:
+            notes.append('the chosen sensor position is not beyond the guarantee radius of a '
+                         '10,000-throw limit set (throwmap.analysis): move it out before use')
     if chosen is None:
         notes.append(f'no design meets the robustness floor {floor}: lower --robust, or widen '
                      'the ranges')
     return SearchResult(res, (n_h, n_w), cands, chosen, reference, pareto_front(allc), floor,
                         refined, notes)
+
+
+def library_guarantee(scene, cand, throws=10_000):
+    """The guarantee radius of the library's own limit set (the nodes' analysis) for cand."""
+    model = ThrowModel(scene.part, cand.h, cand.w, scene.model.g, mu=scene.model.mu)
+    f = cand.figures
+    ls = limit_set(model, int(f['ref_edge']), f['ref_R'], throws)
+    return sensor_design(model, ls, cand.goal, scene.sensor_footprint,
+                         f['sensor_radius']).guarantee_radius
 
 
 def design_scene(scene, cand, name=None):
