@@ -43,7 +43,7 @@ from throwmap.sensor import sees
 from throwmap_testing import SCENES
 
 PAPER = (-0.005, 5.5851)
-SMALL = dict(radii_per_edge=8, throws=90, ref_throws=600)
+SMALL = {'radii_per_edge': 8, 'throws': 90, 'ref_throws': 600}
 
 
 @pytest.fixture(scope='module')
@@ -61,8 +61,10 @@ def test_kernel_agrees_with_the_public_api_design_by_design(triangle):
         d = dict(zip(D.D_COLS, res.design[k]))
         model = ThrowModel(part, h, w, g)
         if (h, w) == (-0.003, 6.5):
-            # Z keeps growing: the library's growth says the same (and gives up).
-            assert d['status'] == D.ST_NO_Z and not design_radii(model)['invariant']
+            # Z is not mapped into itself (it keeps growing, or a throw from it fails): the
+            # library's growth says the same.
+            assert d['status'] in (D.ST_NO_Z, D.ST_THROW_ERROR)
+            assert not design_radii(model)['invariant']
             continue
         assert d['status'] == D.ST_OK
         # Z's top: the library samples 400 radii per edge, the kernel 64 (and no bisection).
@@ -79,10 +81,9 @@ def test_kernel_agrees_with_the_public_api_design_by_design(triangle):
         bas = basin(model, e, r, opt.throws, reference=ls)
         flips = {int(x) for x in ls.pattern}
         T = opt.throws
-        in_ref = [t <= T - T // 3 and all(
-            int(bas.edges[s, q]) in flips for q in range(max(t, 1), T + 1)
-            if not is_jog(bas.edges[s, q - 1], bas.edges[s, q], bas.rotations[s, q]))
-            for s, t in enumerate(bas.transients)]
+        in_ref = [{int(bas.edges[s, q]) for q in range(T // 2 + 1, T + 1)
+                   if not is_jog(bas.edges[s, q - 1], bas.edges[s, q], bas.rotations[s, q])}
+                  == flips for s in range(len(e))]
         assert d['share'] == pytest.approx(np.mean(in_ref), abs=1e-12)
         tail = slice(opt.ref_throws // 2, opt.ref_throws + 1)
         ref = model.orbit_arrays(int(d['ref_edge']), d['ref_R'], opt.ref_throws)

@@ -207,7 +207,8 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     """
     Evaluate one design (module docstring); every buffer is the caller's (no allocation).
 
-    edge_buf: (4, n); work_*: (starts, throws + 1); ref_*: (ref_throws + 1,); labels, scratch: (starts,);
+    edge_buf: (4, n); work_*: (starts, throws + 1); ref_*: (ref_throws + 1,); labels, scratch:
+    (starts,);
     out_design: (D_COLS,); out_sensor: (goals, fractions, S_COLS); out_bands: (n, 2) R band per
     edge of the reference limit set (NaN where absent); out_starts: (starts, 2) edge and R.
     """
@@ -284,8 +285,10 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     out_design[D_FLIP_MASK] = flip_mask
     out_design[D_EDGE_MASK] = edge_mask
     tol = 0.01 * (rmax_all - rmin_all) + 1e-12
-    # Basin: label 0 = reaches the reference limit set; -1 = a throw failed; else the mask of
-    # edges its tail flips to (+ bit 62 so that a tail without flips is not 0).
+    # Basin: label 0 = reaches the reference limit set: its last half flips to exactly the
+    # edges the reference flips to (the bands, a finite orbit's estimate, only time the
+    # transient: last throw outside them, within tol); -1 = a throw failed; else the mask of
+    # edges its tail flips to (+ bit 62: a tail without flips is not 0).
     T = opt.throws
     in_ref = 0
     errors = 0
@@ -307,21 +310,16 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
                                                    <= out_bands[e, 1] + tol):
                 last_out = k
         transient = last_out + 1
-        follows = True
-        for k in range(max(transient, 1), T + 1):
+        own = 0
+        for k in range(T // 2 + 1, T + 1):
             if not _is_jog(work_e[s, k - 1], work_e[s, k], work_rot[s, k]):
-                if not (flip_mask >> work_e[s, k]) & 1:
-                    follows = False
-        if transient <= T - T // 3 and follows:
+                own |= 1 << work_e[s, k]
+        if own == flip_mask:
             labels[s] = 0
             in_ref += 1
             transient_max = max(transient_max, transient)
         else:
-            own = 1 << 62
-            for k in range(T // 2 + 1, T + 1):
-                if not _is_jog(work_e[s, k - 1], work_e[s, k], work_rot[s, k]):
-                    own |= 1 << work_e[s, k]
-            labels[s] = own
+            labels[s] = own | (1 << 62)
     # Distinct attractors: the reference (if reached) plus every other label.
     others = 0
     for s in range(starts):
@@ -428,7 +426,8 @@ def evaluate_chunk(hs, ws, g, part, knobs, opt, goals, fractions, rec, edge_buf,
     """evaluate_design over designs (hs[k], ws[k]) into out_*[k] (one thread's share)."""
     for k in range(hs.shape[0]):
         evaluate_design(hs[k], ws[k], g, part, knobs, opt, goals, fractions, rec, edge_buf,
-                        work_e, work_r, work_rot, work_t, ref_e, ref_r, ref_rot, ref_t, labels, scratch,
+                        work_e, work_r, work_rot, work_t, ref_e, ref_r, ref_rot, ref_t, labels,
+                        scratch,
                         out_design[k], out_sensor[k], out_bands[k], out_starts[k])
 
 

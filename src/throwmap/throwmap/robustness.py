@@ -38,7 +38,7 @@ import math
 import numpy as np
 
 from .base_map import throw_one
-from .design import _r_min, _sees
+from .design import _r_min
 from .jit import njit
 from .status import OK, REC_COLS
 
@@ -151,7 +151,7 @@ def cell_map(part, g, mu, knobs, h, w, dh, dw, r_top, cells=120, samples=5):
 
 def check_graph(part, cmap, bands, flips, goal, x, footprint, r_start_top):
     """
-    The graph property (module docstring) for the cell map ``cmap``.
+    Check the graph property (module docstring) on the cell map ``cmap``.
 
     ``bands``: (n, 2) nominal limit-set R band per edge (NaN: absent); ``flips``: set of (e, j)
     edge changes the nominal limit set makes; the sensor at ``x`` with half-width
