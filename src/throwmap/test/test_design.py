@@ -136,6 +136,25 @@ def test_threads_give_the_serial_results_and_bad_input_is_refused(triangle):
         D.check_scene(load_scene(str(SCENES / 'experiment.yaml')))
 
 
+def test_cycle_time_model_is_a_scene_section_with_checked_values(tmp_path):
+    text = (SCENES / 'triangle.yaml').read_text()
+    good = tmp_path / 'good.yaml'
+    good.write_text(text + 'cycle: {settle_time: 0.1, reset_time: 2}\n')
+    sc = load_scene(str(good))
+    assert D.CycleTime.from_scene(sc) == D.CycleTime(0.1, 2.0)
+    opt = D.eval_options(sc, **SMALL)
+    res = D.evaluate_grid(sc, [PAPER[0]], [PAPER[1]], options=opt, workers=1)
+    row = dict(zip(D.S_COLS, res.sensor[0, 0, 0]))
+    flight = res.design[0, D.D_FLIGHT]
+    # Per second = per throw / (flight + settle + reset): a slower reset feeds fewer parts.
+    assert row['readies_per_second'] == pytest.approx(row['readies_per_throw']
+                                                      / (flight + 2.1), rel=1e-12)
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text(text + 'cycle: {reset_time: -1}\n')
+    with pytest.raises(InputError, match='cycle.reset_time'):
+        load_scene(str(bad))
+
+
 def _limit(triangle, opt):
     res = D.evaluate_grid(triangle, [PAPER[0]], [PAPER[1]], goals=[1], options=opt, workers=1)
     cand = S.Candidate(PAPER[0], PAPER[1], 1, 0.25, S._figures(res, 0, 0, 0))

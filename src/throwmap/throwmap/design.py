@@ -95,17 +95,8 @@ class CycleTime:
 
     @classmethod
     def from_scene(cls, scene):
-        data = scene.data.get('cycle', {}) or {}
-        values = {}
-        for key in ('settle_time', 'reset_time'):
-            if key in data:
-                v = data[key]
-                if (isinstance(v, bool) or not isinstance(v, (int, float))
-                        or not math.isfinite(v) or v < 0):
-                    raise InputError(f'cycle.{key}', f'must be a number of seconds >= 0, '
-                                     f'got {v!r}', f'give e.g. {getattr(cls, key)}')
-                values[key] = float(v)
-        return cls(**values)
+        """Return the scene's model: its ``cycle`` section (checked on load) over the defaults."""
+        return cls(**scene.cycle)
 
 
 # --------------------------------------------------------------------------------- compiled
