@@ -16,6 +16,7 @@ setup(
     maintainer_email='feeder@example.com',
     description='Throw map of a dynamic parts feeder (ROS-free library and CLI)',
     license='Apache-2.0',
-    extras_require={'test': ['pytest', 'hypothesis', 'scipy']},
+    extras_require={'test': ['pytest', 'hypothesis', 'scipy'],
+                    'cluster': ['dask', 'distributed']},
     entry_points={'console_scripts': ['throwmap = throwmap.cli:main']},
 )

@@ -51,12 +51,16 @@ LAYERS = [
     ('analysis',),
     ('scene',),
     ('part_on_arm',),
+    ('design',),
+    ('robustness',),
+    ('search',),
     ('internal', 'plots'),
     ('cli',),
     ('__init__',),
 ]
 LAYER = {name: k for k, names in enumerate(LAYERS) for name in names}
-LAZY_OK = {'throwmap.plots', 'matplotlib', 'matplotlib.pyplot'}   # heavy, optional
+LAZY_OK = {'throwmap.plots', 'matplotlib', 'matplotlib.pyplot',   # heavy, optional
+           'distributed'}
 # The simulator core and the models: they run effects through hooks, never by name.
 CORE = ('ballistic', 'catch', 'base_map', 'event_sim', 'pipeline', 'compose', 'model',
         'effect_model', 'scene', 'orbits', 'basins', 'sensor', 'analysis', 'part_on_arm')

@@ -40,7 +40,7 @@ from .part import Part
 # The base model's keys; every effect adds the keys it owns (throwmap.effects, SCHEMA).
 SCHEMA = {
     '': {'name', 'description', 'part', 'arm', 'throw', 'gravity', 'plate', 'contact', 'catch',
-         'effects', 'noise', 'accuracy', 'sensor', 'start'},
+         'effects', 'noise', 'accuracy', 'sensor', 'start', 'cycle'},
     'part': {'vertices', 'vertices_cm', 'cm', 'cm_cm', 'radius_of_gyration',
              'radius_of_gyration_cm'},
     'arm': {'offset', 'offset_cm'},
@@ -52,6 +52,7 @@ SCHEMA = {
     'accuracy': set(BASE_KEYS) | set(SIMULATOR_KEYS) | set(fx.knob_defaults()),
     'sensor': {'goal_edge', 'radius', 'radius_cm', 'footprint', 'footprint_cm'},
     'start': {'edge', 'R', 'R_cm'},
+    'cycle': {'settle_time', 'reset_time'},     # s: the feed rate's cycle time (throwmap.design)
 }
 for _section, _keys in fx.owned_keys().items():
     SCHEMA[''].add(_section)
@@ -276,6 +277,7 @@ class Scene:
         self.effects = fx.compose(fx.parse_names(data.get('effects')),
                                   fx.SceneValues(data, self.plate, mu, self.arm_length))
         self.seed = _seed(data, seed)
+        self.cycle = _cycle(data)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter('always')
             if not self.effects and simulator.contact_method == 'advancement':
@@ -367,6 +369,18 @@ class Scene:
         if R is None:
             R = 1.5 * self.model.r_min(edge)
         return int(edge), float(R)
+
+
+def _cycle(data):
+    """Return the ``cycle`` section (s) as given, each value checked (>= 0, finite)."""
+    values = {}
+    for key, value in (data.get('cycle') or {}).items():
+        if (isinstance(value, bool) or not isinstance(value, (int, float))
+                or not math.isfinite(value) or value < 0):
+            raise InputError(f'cycle.{key}', f'must be a number of seconds >= 0, got {value!r}',
+                             'give e.g. settle_time: 0.25, reset_time: 0.5 (docs/design.md)')
+        values[key] = float(value)
+    return values
 
 
 def load_scene(path, seed=None):

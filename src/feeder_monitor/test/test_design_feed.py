@@ -1,0 +1,67 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A design's predicted feed rate against the monitor's verdicts, with bounded throw errors.
+
+Library level (no DDS; the graph run of issue 11 item 6 is open, docs/design.md): the part is
+thrown with every release speed and offset drawn uniformly within +-s of the design (s below
+its robustness), the sensor bit is the sensor geometry, and the monitor's ReadinessMonitor
+(the rules the node derives from the scene) judges each cycle. Readies per cycle must match
+the predicted proven readies per throw, and no ready may come while the part is on another
+edge.
+"""
+
+import pathlib
+
+from feeder_monitor.readiness import limit_set_orbit, ReadinessMonitor, rules_from_analysis
+import numpy as np
+import pytest
+from throwmap import load_scene, scene_analysis, sees
+from throwmap.model import ThrowModel
+
+TRIANGLE = pathlib.Path(__file__).resolve().parents[3] / 'scenes' / 'triangle.yaml'
+
+
+@pytest.fixture(scope='module')
+def triangle():
+    scene = load_scene(str(TRIANGLE))
+    an = scene_analysis(scene)
+    return scene, an, rules_from_analysis(scene, an, limit_set_orbit(scene, an, 3000))
+
+
+@pytest.mark.parametrize('s', [0.0, 0.004])
+def test_readies_per_cycle_match_the_prediction_and_none_is_false(triangle, s):
+    # s = 0.004: inside the paper design's joint robustness (about 0.008, docs/design.md).
+    scene, an, rules = triangle
+    monitor = ReadinessMonitor(rules)
+    part, g = scene.part, scene.model.g
+    h, w = scene.h, scene.release_speed
+    dh, dw = s * part.d_min, s * w
+    rng = np.random.default_rng(11)
+    edge, R = scene.default_start()
+    cycles, readies, false, anomalies = 4000, 0, 0, 0
+    for seq in range(cycles):
+        model = ThrowModel(part, h + dh * rng.uniform(-1, 1), w + dw * rng.uniform(-1, 1), g)
+        edge, R, _ = model.f(edge, R)
+        verdict = monitor.completed(seq, bool(sees(part, edge, R, an.sensor.radius,
+                                                   an.sensor.footprint)))
+        readies += verdict.ready
+        false += verdict.ready and edge != an.sensor.goal_edge
+        anomalies += verdict.anomaly is not None
+    predicted = an.sensor.detection_rate
+    print(f's = {s}: {readies / cycles:.4f} readies per cycle, predicted {predicted:.4f}; '
+          f'{false} false, {anomalies} anomalies')
+    assert false == 0
+    assert readies / cycles == pytest.approx(predicted, rel=0.15)
