@@ -16,7 +16,7 @@
 bag_recorder: records the feeder graph's topics to a rosbag2 MCAP directory.
 
     bag_recorder OUTPUT_DIR [--topics T ...] [--exclude REGEX] [--duration S]
-                 [--max-messages N] [--discovery-period S] [--ros-args ...]
+                 [--max-messages N] [--discovery-period S] [--flush-period S] [--ros-args ...]
 
 It subscribes to every topic it discovers (or those given, resolved in its namespace) with
 ``raw=True``, so the bytes it stores are the CDR the publishers sent, with the QoS the
@@ -24,7 +24,10 @@ publishers offer (a latched topic is subscribed transient local and recorded so)
 hash they announce. Each message is stored with its receive time (log time) and its send time
 (publish time, the DDS source timestamp), as rosbag2 does. It stops on SIGINT or SIGTERM, after
 ``--duration`` seconds or ``--max-messages`` messages, always closing the bag (metadata.yaml
-written) and printing a summary.
+written) and printing a summary. Killed (SIGKILL, a crash), it loses at most the messages of the
+last ``--flush-period`` (0.5 s): every flush puts them on disk and rewrites metadata.yaml, and
+the bag stays readable as it is (``bag_reindex`` gives its .mcap the summary a clean stop
+writes; see feeder_monitor.bag).
 """
 
 import argparse
@@ -59,13 +62,26 @@ def parse_args(argv):
                    help='stop after N messages in total')
     p.add_argument('--discovery-period', type=float, default=0.5, metavar='S',
                    help='seconds between looks for new topics (default 0.5)')
+    p.add_argument('--flush-period', type=float, default=0.5, metavar='S',
+                   help='seconds between writes to disk, at most 1: what a kill can lose '
+                   '(default 0.5)')
     args = p.parse_args(argv)
+    if args.exclude is not None:
+        try:
+            re.compile(args.exclude)
+        except re.error as exc:
+            print(f'bag_recorder: --exclude {args.exclude!r} is not a regular expression '
+                  f'({exc}); give a Python regex, e.g. --exclude "^/diagnostics$"',
+                  file=sys.stderr, flush=True)
+            raise SystemExit(2) from None
     if args.duration is not None and args.duration <= 0:
         p.error('--duration must be > 0')
     if args.max_messages is not None and args.max_messages <= 0:
         p.error('--max-messages must be > 0')
     if args.discovery_period <= 0:
         p.error('--discovery-period must be > 0')
+    if not 0 < args.flush_period <= 1:
+        p.error('--flush-period must be in (0, 1] s')
     return args
 
 
@@ -111,7 +127,7 @@ class BagRecorder(Node):
     executor_kind = 'single'
 
     def __init__(self, writer, topics=None, exclude=None, discovery_period=0.5,
-                 max_messages=None, duration=None, **kwargs):
+                 max_messages=None, duration=None, flush_period=0.5, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         self.writer = writer
         self.wanted = None if topics is None else {self.resolve_topic_name(t) for t in topics}
@@ -122,6 +138,7 @@ class BagRecorder(Node):
         self._subs = {}
         self._skipped = set()
         self.create_timer(discovery_period, self._discover)
+        self.create_timer(flush_period, writer.flush)
         if duration is not None:
             self._duration_timer = self.create_timer(duration, self._duration_over)
             self._duration_text = f'{duration} s'
@@ -190,7 +207,8 @@ def main(argv=None):
 
     def make_node(**kwargs):
         made.append(BagRecorder(writer, args.topics, args.exclude, args.discovery_period,
-                                args.max_messages, args.duration, **kwargs))
+                                args.max_messages, args.duration, args.flush_period,
+                                **kwargs))
         return made[-1]
 
     try:

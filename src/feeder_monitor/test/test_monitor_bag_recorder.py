@@ -57,3 +57,22 @@ def test_cli():
     for bad in (['out', '--duration', '0'], ['out', '--max-messages', '-1'], []):
         with pytest.raises(SystemExit):
             parse_args(bad)
+
+
+def test_a_bad_exclude_regex_is_one_line_and_exit_2(capsys):
+    """It ended in a re.error traceback when the node compiled it."""
+    with pytest.raises(SystemExit) as stop:
+        parse_args(['out', '--exclude', '('])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.splitlines() == [
+        "bag_recorder: --exclude '(' is not a regular expression (missing ), unterminated "
+        'subpattern at position 0); give a Python regex, e.g. --exclude "^/diagnostics$"']
+    assert parse_args(['out', '--exclude', '^/diagnostics$']).exclude == '^/diagnostics$'
+
+
+def test_flush_period_is_at_most_a_second():
+    assert parse_args(['out']).flush_period == 0.5
+    assert parse_args(['out', '--flush-period', '1']).flush_period == 1.0
+    for bad in ('0', '1.5', '-1'):
+        with pytest.raises(SystemExit):
+            parse_args(['out', '--flush-period', bad])
