@@ -31,11 +31,15 @@ writes; see feeder_monitor.bag).
 """
 
 import argparse
+import heapq
 import importlib
+from operator import itemgetter
 import re
 import sys
 
 from feeder_common.node import run_node
+from rclpy.callback_groups import CallbackGroup
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 import rclpy.utilities
@@ -119,15 +123,57 @@ def subscription_qos(publisher_qos):
                                   else DurabilityPolicy.VOLATILE))
 
 
+def unmatched(publisher_qos, sub_qos):
+    """Say why a publisher's QoS cannot reach the subscription's (DDS request/offer), or ''."""
+    if (sub_qos.reliability == ReliabilityPolicy.RELIABLE
+            and publisher_qos.reliability != ReliabilityPolicy.RELIABLE):
+        return 'it publishes best effort, the recorder subscribed reliable'
+    if (sub_qos.durability == DurabilityPolicy.TRANSIENT_LOCAL
+            and publisher_qos.durability != DurabilityPolicy.TRANSIENT_LOCAL):
+        return 'it publishes volatile, the recorder subscribed transient local'
+    return ''
+
+
+# No QoS event handlers on the recorder's subscriptions (see BagRecorder._check_publishers).
+NO_EVENT_HANDLERS = SubscriptionEventCallbacks(use_default_callbacks=False)
+# Seconds between takes of the waiting messages. Their log time is the DDS receive time, so
+# the period costs no timing; the subscriptions' depth (1000) holds 5 s of a 200 Hz topic.
+DRAIN_PERIOD = 0.02
+
+
+class TakenByDrain(CallbackGroup):
+    """
+    The group of the recorder's subscriptions: the executor never waits on them.
+
+    The executor spends a wait-set rebuild and a task per message it hands to a callback (for
+    the recorder at 100 Hz cycling, most of its CPU); instead the drain timer takes every
+    waiting message of every topic in one round.
+    """
+
+    def can_execute(self, entity):
+        return False
+
+    def beginning_execution(self, entity):
+        return False
+
+    def ending_execution(self, entity):
+        pass
+
+
+def _never_called(msg):
+    raise AssertionError('the drain timer takes these messages, not the executor')
+
+
 class BagRecorder(Node):
     """Subscribes (raw) to the selected topics as they appear and writes them to a bag."""
 
-    # The send time of each message comes with its MessageInfo, which rclpy 9.1's events
-    # executor cannot pass to a callback.
+    # The drain timer takes messages with their MessageInfo (send and receive times); rclpy
+    # 9.1's events executor would instead call the subscriptions' callbacks, without it.
     executor_kind = 'single'
 
     def __init__(self, writer, topics=None, exclude=None, discovery_period=0.5,
-                 max_messages=None, duration=None, flush_period=0.5, **kwargs):
+                 max_messages=None, duration=None, flush_period=0.5, drain_period=DRAIN_PERIOD,
+                 **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         self.writer = writer
         self.wanted = None if topics is None else {self.resolve_topic_name(t) for t in topics}
@@ -135,9 +181,12 @@ class BagRecorder(Node):
         self.max_messages = max_messages
         self.done = None            # why recording ended by itself
         self.exit_reason = None     # why the process stopped (the run helper's)
-        self._subs = {}
+        self._subs = {}             # topic -> (subscription, its QoS)
+        self._checked = {}          # topic -> publishers (node names) already looked at
         self._skipped = set()
         self.create_timer(discovery_period, self._discover)
+        self._taken_by_drain = TakenByDrain()
+        self.create_timer(drain_period, self._drain)
         self.create_timer(flush_period, writer.flush)
         if duration is not None:
             self._duration_timer = self.create_timer(duration, self._duration_over)
@@ -160,6 +209,7 @@ class BagRecorder(Node):
         return self.wanted is None or topic in self.wanted
 
     def _discover(self):
+        self._check_publishers()
         for topic, types in self.get_topic_names_and_types():
             if topic in self._subs or topic in self._skipped or not self._selected(topic):
                 continue
@@ -181,18 +231,66 @@ class BagRecorder(Node):
             profiles = [p.qos_profile for p in pubs]
             self.writer.add_topic(topic, msgtype, [offered_qos(q) for q in profiles],
                                   announced_hash(pubs))
-            self._subs[topic] = self.create_subscription(
-                cls, topic, lambda data, info, t=topic: self._record(t, data, info),
-                subscription_qos(profiles), raw=True)
+            sub_qos = subscription_qos(profiles)
+            self._subs[topic] = (self.create_subscription(
+                cls, topic, _never_called, sub_qos, raw=True,
+                callback_group=self._taken_by_drain, event_callbacks=NO_EVENT_HANDLERS),
+                sub_qos)
+            self._checked[topic] = {p.node_name + p.node_namespace for p in pubs}
             self.get_logger().info(f'recording {topic} ({msgtype})')
 
-    def _record(self, topic, data, info):
-        if self.done:
-            return
-        self.writer.write(topic, info['received_timestamp'], data, info['source_timestamp'],
-                          info.get('publication_sequence_number') or 0)
-        if self.max_messages is not None and self.writer.total >= self.max_messages:
-            self.done = f'{self.max_messages} messages'
+    def _check_publishers(self):
+        """
+        Warn once about a publisher that appeared later and that the subscription cannot match.
+
+        This replaces rclpy's per-subscription incompatible-QoS event handlers: each is one
+        more entity the single-threaded executor rebuilds its wait set with for every message.
+        """
+        for topic, (_, sub_qos) in self._subs.items():
+            for pub in self.get_publishers_info_by_topic(topic):
+                key = pub.node_name + pub.node_namespace
+                if key in self._checked[topic]:
+                    continue
+                self._checked[topic].add(key)
+                problem = unmatched(pub.qos_profile, sub_qos)
+                if problem:
+                    self.get_logger().warning(
+                        f'not recording {topic} from {pub.node_namespace.rstrip("/")}/'
+                        f'{pub.node_name}: {problem} (the subscription was made for the '
+                        'publishers present when the topic appeared)')
+
+    def _drain(self):
+        """
+        Take every message waiting on every subscription and write them in receive order.
+
+        Each topic keeps its delivery order (a sample resent by DDS arrives later than the next
+        one but is delivered before it); the topics are merged by receive time.
+        """
+        taken = []
+        for topic, (sub, _) in self._subs.items():
+            handle = sub.handle
+            mine = []
+            with handle:
+                while True:
+                    got = handle.take_message(sub.msg_type, True)
+                    if got is None:
+                        break
+                    data, info = got
+                    mine.append((info['received_timestamp'], topic, data, info))
+            if mine:
+                taken.append(mine)
+        for received, topic, data, info in heapq.merge(*taken, key=itemgetter(0)):
+            if self.done:
+                return
+            self.writer.write(topic, received, data, info['source_timestamp'],
+                              info.get('publication_sequence_number') or 0)
+            if self.max_messages is not None and self.writer.total >= self.max_messages:
+                self.done = f'{self.max_messages} messages'
+
+    def destroy_node(self):
+        """Take what arrived since the last drain, then destroy the node."""
+        self._drain()
+        return super().destroy_node()
 
 
 def main(argv=None):

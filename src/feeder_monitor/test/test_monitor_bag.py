@@ -259,7 +259,7 @@ def test_reindex_refuses_what_it_cannot_repair(tmp_path):
 
 
 def test_log_time_never_goes_back_so_an_unindexed_bag_reads(tmp_path):
-    """rosbags refused a killed bag whose receive times were out of order (two topics)."""
+    """A killed bag whose receive times were out of order: rosbags refused it."""
     import shutil
     w = new_bag(tmp_path / 'bag')
     ts = w.typestore
