@@ -32,8 +32,9 @@ _COLLINEAR_REL = 1e-12
 
 # Limits no real part reaches, checked before any work: the feeder's parts have a handful of
 # corners and are centimetres across. The per-edge tables the contact finder reads (U, V) grow
-# as vertices^2 (16 MB at the limit); everything else in Part is linear in the vertex count.
-MAX_VERTICES = 1000
+# as vertices^2 (64 MiB at the limit: the hard cases include a 1024-gon); everything else in
+# Part is linear in the vertex count.
+MAX_VERTICES = 2048
 MAX_COORDINATE = 1000.0         # metres from the outline's origin
 MIN_SIZE = 1e-9                 # metres across
 
