@@ -40,16 +40,14 @@ import time
 import numpy as np
 from throwmap import limit_set_from_orbit
 from throwmap.internal import carry_release_state as release_state
-from throwmap.scene import Scene
-import yaml
+from throwmap.scene import read_yaml, Scene
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 WRONG_EDGE_MM = 10.0      # a throw that ends on the wrong edge counts as a 10 mm error
 
 
 def load(name, **changes):
-    with open(ROOT / 'scenes' / f'{name}.yaml', encoding='utf-8') as fh:
-        data = yaml.safe_load(fh)
+    data = read_yaml(ROOT / 'scenes' / f'{name}.yaml')
     for key, value in changes.items():
         if value is None:
             data.pop(key, None)

@@ -37,5 +37,6 @@ setup(
     entry_points={'console_scripts': [
         'monitor_node = feeder_monitor.monitor_node:main',
         'bag_recorder = feeder_monitor.bag_recorder:main',
+        'bag_reindex = feeder_monitor.bag:reindex_main',
     ]},
 )

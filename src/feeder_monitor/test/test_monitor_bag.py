@@ -90,3 +90,185 @@ def test_infinite_durations_like_rosbag2():
     assert (t.sec, t.nsec) == (9223372036, 854775807)
     assert qos_time(1_500_000_000) == qos_time(1_500_000_000)
     assert (qos_time(1_500_000_000).sec, qos_time(1_500_000_000).nsec) == (1, 500_000_000)
+
+
+# ---------------------------------------------------------------- a writer killed at any moment
+def fill(writer, first, count):
+    """Write Int32 messages first..first+count-1 on /a (two of three) and /b (latched)."""
+    ts = writer.typestore
+    Int32 = ts.types['std_msgs/msg/Int32']
+    for k in range(first, first + count):
+        writer.write('/a' if k % 3 else '/b', 1000 + k,
+                     ts.serialize_cdr(Int32(data=k), Int32.__msgtype__), 900 + k, k)
+
+
+def new_bag(path):
+    w = BagWriter(path)
+    w.add_topic('/a', 'std_msgs/msg/Int32', [VOLATILE])
+    w.add_topic('/b', 'std_msgs/msg/Int32', [LATCHED])
+    return w
+
+
+def read_back(bag):
+    """Return the Int32 values in the bag by rosbags, the mcap library's two readers, as one."""
+    from mcap.reader import make_reader, NonSeekingReader
+    with Reader(bag) as r:
+        values = [int.from_bytes(raw[4:8], 'little') for _, _, raw in r.messages()]
+        counts = {c.topic: c.msgcount for c in r.connections}
+    mcap_file = next(bag.glob('*.mcap'))
+    with open(mcap_file, 'rb') as fh:
+        seeking = [int.from_bytes(m.data[4:8], 'little')
+                   for _, _, m in make_reader(fh).iter_messages()]
+    with open(mcap_file, 'rb') as fh:
+        streamed = [int.from_bytes(m.data[4:8], 'little') for _, _, m in
+                    NonSeekingReader(fh, validate_crcs=True).iter_messages()]
+    assert values == seeking == streamed
+    assert sum(counts.values()) == len(values)
+    return values, counts
+
+
+def has_summary(bag):
+    from mcap.reader import make_reader
+    with open(next(bag.glob('*.mcap')), 'rb') as fh:
+        return make_reader(fh).get_summary() is not None
+
+
+def test_metadata_yaml_exists_from_the_start(tmp_path):
+    w = new_bag(tmp_path / 'bag')
+    meta = yaml.safe_load((tmp_path / 'bag' / 'metadata.yaml').read_text())
+    assert meta['rosbag2_bagfile_information']['message_count'] == 0
+    w.flush()
+    assert read_back(tmp_path / 'bag') == ([], {'/a': 0, '/b': 0})
+    w.close()
+
+
+def test_what_a_kill_leaves_is_a_readable_bag_of_every_flushed_message(tmp_path):
+    """
+    After each flush the bag reads back with every message written before it.
+
+    Copying the directory while the writer runs is what SIGKILL leaves (the kernel keeps every
+    write); the graph test kills a real recorder.
+    """
+    import shutil
+    w = new_bag(tmp_path / 'bag')
+    fill(w, 1, 100)
+    shutil.copytree(tmp_path / 'bag', tmp_path / 'before_flush')
+    w.flush()
+    fill(w, 101, 50)
+    shutil.copytree(tmp_path / 'bag', tmp_path / 'killed')
+    w.flush()
+    w.flush()                               # nothing new: no write
+    fill(w, 151, 10)
+    w.close()
+    assert read_back(tmp_path / 'before_flush') == ([], {})    # topics come with a flush
+    values, counts = read_back(tmp_path / 'killed')
+    assert values == list(range(1, 101)) and counts == {'/a': 67, '/b': 33}
+    assert not has_summary(tmp_path / 'killed')
+    meta = yaml.safe_load((tmp_path / 'killed' / 'metadata.yaml').read_text())
+    assert meta['rosbag2_bagfile_information']['message_count'] == 100
+    assert read_back(tmp_path / 'bag')[0] == list(range(1, 161))
+    assert has_summary(tmp_path / 'bag')
+
+
+def test_a_big_chunk_is_written_before_the_flush(tmp_path, monkeypatch):
+    import feeder_monitor.bag as bag_module
+    monkeypatch.setattr(bag_module, 'CHUNK_BYTES', 1000)
+    w = new_bag(tmp_path / 'bag')
+    fill(w, 1, 100)                         # 34 bytes a message: a chunk every 30
+    assert len(w._log.chunk_indexes) == 3
+    w.close()
+    assert read_back(tmp_path / 'bag')[0] == list(range(1, 101))
+
+
+def test_reindex_finishes_a_killed_bag_and_rebuilds_metadata(tmp_path):
+    import shutil
+    from feeder_monitor.bag import reindex
+    w = new_bag(tmp_path / 'bag')
+    fill(w, 1, 100)
+    w.flush()
+    shutil.copytree(tmp_path / 'bag', tmp_path / 'killed')
+    w.close()
+    (tmp_path / 'killed' / 'metadata.yaml').unlink()
+    report = reindex(tmp_path / 'killed')
+    assert report == (f'{tmp_path / "killed"}: 100 messages on 2 topics; bag.mcap had no '
+                      'summary (writer killed?): summary and footer written; metadata.yaml '
+                      'rebuilt')
+    assert has_summary(tmp_path / 'killed')
+    assert read_back(tmp_path / 'killed') == read_back(tmp_path / 'bag')
+    assert reindex(tmp_path / 'killed').endswith('complete; metadata.yaml rebuilt')
+    meta = yaml.safe_load((tmp_path / 'killed' / 'metadata.yaml').read_text())
+    full = yaml.safe_load((tmp_path / 'bag' / 'metadata.yaml').read_text())
+    assert meta == full
+    assert reindex(tmp_path / 'bag').endswith('bag.mcap complete; metadata.yaml rebuilt')
+
+
+def test_reindex_copes_with_an_mcap_cut_off_anywhere(tmp_path, monkeypatch):
+    """A kill in the middle of a write: every whole chunk before the cut is recovered."""
+    import feeder_monitor.bag as bag_module
+    from mcap.reader import make_reader
+    monkeypatch.setattr(bag_module, 'CHUNK_BYTES', 400)
+    w = new_bag(tmp_path / 'full')
+    fill(w, 1, 60)
+    w.close()
+    data = (tmp_path / 'full' / 'full.mcap').read_bytes()
+    with open(tmp_path / 'full' / 'full.mcap', 'rb') as fh:
+        chunks = make_reader(fh).get_summary().chunk_indexes
+    ends = sorted((c.chunk_start_offset + c.chunk_length, c) for c in chunks)
+    header_end = 8 + 9 + int.from_bytes(data[9:17], 'little')
+    near_ends = {end + d for end, _ in ends for d in (-1, 0, 1, 9, 30)}
+    cuts = sorted((set(range(header_end, len(data), 31)) | near_ends
+                   | {len(data) - 1, len(data) - 40}) & set(range(header_end, len(data))))
+    for n, cut in enumerate(cuts):
+        bag = tmp_path / f'cut{n}'
+        bag.mkdir()
+        (bag / 'cut.mcap').write_bytes(data[:cut])
+        bag_module.reindex(bag)
+        whole = [c for end, c in ends if end <= cut]
+        values, _ = read_back(bag)
+        assert len(values) == sum(sum(len(r) for r in _message_indexes(data, c)) for c in whole)
+        assert values == list(range(1, len(values) + 1)), cut
+        assert has_summary(bag)
+
+
+def _message_indexes(data, chunk):
+    from mcap.data_stream import ReadDataStream
+    from mcap.records import MessageIndex
+    import io
+    out = []
+    for offset in chunk.message_index_offsets.values():
+        length = int.from_bytes(data[offset + 1:offset + 9], 'little')
+        out.append(MessageIndex.read(ReadDataStream(io.BytesIO(data[offset + 9:
+                                                                    offset + 9 + length]))
+                                     ).records)
+    return out
+
+
+def test_reindex_refuses_what_it_cannot_repair(tmp_path):
+    from feeder_monitor.bag import BagError, reindex, reindex_main
+    (tmp_path / 'notmcap').mkdir()
+    (tmp_path / 'notmcap' / 'x.mcap').write_bytes(b'hello world, not an mcap')
+    with pytest.raises(BagError, match='does not start with the MCAP magic bytes'):
+        reindex(tmp_path / 'notmcap')
+    (tmp_path / 'short').mkdir()
+    (tmp_path / 'short' / 'x.mcap').write_bytes(b'\x89MCAP0\r\n\x01\x30')
+    with pytest.raises(BagError, match='ends inside its header record'):
+        reindex(tmp_path / 'short')
+    with pytest.raises(BagError, match='expected one .mcap file, found 0'):
+        reindex(tmp_path)
+    assert reindex_main([str(tmp_path / 'notmcap'), str(tmp_path / 'missing')]) == 2
+
+
+def test_log_time_never_goes_back_so_an_unindexed_bag_reads(tmp_path):
+    """A killed bag whose receive times were out of order: rosbags refused it."""
+    import shutil
+    w = new_bag(tmp_path / 'bag')
+    ts = w.typestore
+    Int32 = ts.types['std_msgs/msg/Int32']
+    for k, t in enumerate([1000, 1005, 1003, 1010]):
+        w.write('/a', t, ts.serialize_cdr(Int32(data=k + 1), Int32.__msgtype__), t - 100)
+    w.flush()
+    shutil.copytree(tmp_path / 'bag', tmp_path / 'killed')
+    w.close()
+    assert read_back(tmp_path / 'killed')[0] == [1, 2, 3, 4]
+    with Reader(tmp_path / 'killed') as r:
+        assert [t for _, t, _ in r.messages()] == [1000, 1005, 1005, 1010]

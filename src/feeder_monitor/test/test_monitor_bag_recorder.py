@@ -57,3 +57,38 @@ def test_cli():
     for bad in (['out', '--duration', '0'], ['out', '--max-messages', '-1'], []):
         with pytest.raises(SystemExit):
             parse_args(bad)
+
+
+def test_a_bad_exclude_regex_is_one_line_and_exit_2(capsys):
+    """It ended in a re.error traceback when the node compiled it."""
+    with pytest.raises(SystemExit) as stop:
+        parse_args(['out', '--exclude', '('])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.splitlines() == [
+        "bag_recorder: --exclude '(' is not a regular expression (missing ), unterminated "
+        'subpattern at position 0); give a Python regex, e.g. --exclude "^/diagnostics$"']
+    assert parse_args(['out', '--exclude', '^/diagnostics$']).exclude == '^/diagnostics$'
+
+
+def test_flush_period_and_drain_stay_within_a_second():
+    assert parse_args(['out']).flush_period == 0.5
+    assert parse_args(['out', '--flush-period', '0.9']).flush_period == 0.9
+    for bad in ('0', '1', '-1'):
+        with pytest.raises(SystemExit):
+            parse_args(['out', '--flush-period', bad])
+
+
+def test_a_publisher_the_subscription_cannot_match_is_named():
+    """What rclpy's incompatible-QoS event handler said, from discovery instead."""
+    from feeder_monitor.bag_recorder import unmatched
+    reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    best_effort = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    assert unmatched(reliable, subscription_qos([reliable])) == ''
+    assert unmatched(latched, subscription_qos([reliable])) == ''
+    assert unmatched(best_effort, subscription_qos([best_effort])) == ''
+    assert unmatched(best_effort, subscription_qos([reliable])) == \
+        'it publishes best effort, the recorder subscribed reliable'
+    assert unmatched(reliable, subscription_qos([latched])) == \
+        'it publishes volatile, the recorder subscribed transient local'

@@ -30,6 +30,74 @@ from .errors import InputError
 # Relative tolerance (of the part's size) under which a vertex counts as lying on a hull edge.
 _COLLINEAR_REL = 1e-12
 
+# Limits no real part reaches, checked before any work: the feeder's parts have a handful of
+# corners and are centimetres across. The per-edge tables the contact finder reads (U, V) grow
+# as vertices^2 (64 MiB at the limit: the hard cases include a 1024-gon); everything else in
+# Part is linear in the vertex count.
+MAX_VERTICES = 2048
+MAX_COORDINATE = 1000.0         # metres from the outline's origin
+MIN_SIZE = 1e-9                 # metres across
+
+
+def check_vertex_count(count, field):
+    """Refuse an outline of more than MAX_VERTICES points (before anything reads them)."""
+    if count > MAX_VERTICES:
+        raise InputError(f'{field}.vertices', f'has {count} points; the limit is {MAX_VERTICES} '
+                         '(a part for this feeder has a handful of corners)',
+                         f'simplify the outline to at most {MAX_VERTICES} points (only its '
+                         'convex hull touches the arm)')
+
+
+def _crossing_edges(pts):
+    """
+    Return (i, j), two outline edges that cross or touch (edge k runs from point k to k+1).
+
+    None for a simple outline. Linear for a convex outline (all turns one way, turning once
+    around); otherwise every pair of edges is tested, vectorised per edge.
+    """
+    n = len(pts)
+    a = pts
+    b = np.roll(pts, -1, axis=0)
+    ein = b - a
+    eout = np.roll(ein, -1, axis=0)     # edge k+1
+    turn = ein[:, 0] * eout[:, 1] - ein[:, 1] * eout[:, 0]
+    folds = np.flatnonzero((turn == 0) & ((ein * eout).sum(axis=1) < 0))
+    if folds.size:
+        k = int(folds[0])
+        return k, (k + 1) % n
+    turning = np.arctan2(turn, (ein * eout).sum(axis=1)).sum()
+    if (np.all(turn > 0) or np.all(turn < 0)) and abs(abs(turning) - 2 * math.pi) < 1e-6:
+        return None
+
+    def orient(p, q, r):
+        return np.sign((q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1])
+                       - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0]))
+
+    def within(p, q, r):
+        """Whether r (collinear with p-q) lies within the segment's bounding box."""
+        return ((np.minimum(p[..., 0], q[..., 0]) <= r[..., 0])
+                & (r[..., 0] <= np.maximum(p[..., 0], q[..., 0]))
+                & (np.minimum(p[..., 1], q[..., 1]) <= r[..., 1])
+                & (r[..., 1] <= np.maximum(p[..., 1], q[..., 1])))
+
+    idx = np.arange(n)
+    for start in range(0, n, 64):              # 64 edges against all: O(n) memory per block
+        i = idx[start:start + 64, None]
+        p, q = a[i], b[i]                      # (rows, 1, 2) against (n, 2)
+        o1, o2 = orient(p, q, a), orient(p, q, b)
+        o3, o4 = orient(a, b, p), orient(a, b, q)
+        hit = (o1 * o2 < 0) & (o3 * o4 < 0)
+        hit |= (o1 == 0) & within(p, q, a)
+        hit |= (o2 == 0) & within(p, q, b)
+        hit |= (o3 == 0) & within(a, b, p)
+        hit |= (o4 == 0) & within(a, b, q)
+        # Only edges that share no point with edge i: j >= i + 2, and not the closing pair.
+        hit &= (idx[None, :] >= i + 2) & ~((i == 0) & (idx[None, :] == n - 1))
+        if hit.any():
+            row, col = np.argwhere(hit)[0]
+            return int(i[row, 0]), int(col)
+    return None
+
 
 def _signed_area_and_centroid(pts):
     x, y = pts[:, 0], pts[:, 1]
@@ -130,8 +198,25 @@ class Part:
     def __init__(self, vertices, cm=None, radius_of_gyration=None, field='part'):
         self.field = field
         pts = self._validate_points(vertices, field)
-        area, centroid, j_cm = _signed_area_and_centroid(pts)
         scale = float(np.ptp(pts, axis=0).max())
+        if scale < MIN_SIZE:
+            raise InputError(f'{field}.vertices', f'the outline is {scale:.3g} m across; the '
+                             f'smallest part allowed is {MIN_SIZE:g} m', 'give the vertices in '
+                             'metres (a part for this feeder is centimetres across)')
+        far = pts[np.argmax(((pts - pts[0]) ** 2).sum(axis=1))] - pts[0]
+        off_line = np.abs(far[0] * (pts[:, 1] - pts[0, 1]) - far[1] * (pts[:, 0] - pts[0, 0]))
+        if off_line.max() <= 1e-12 * scale * scale:
+            raise InputError(f'{field}.vertices', 'the outline has zero area (all points on one '
+                             'line)', 'give at least 3 points that are not collinear')
+        crossing = _crossing_edges(pts)
+        if crossing is not None:
+            i, j = crossing
+            n = len(pts)
+            raise InputError(f'{field}.vertices', f'the outline crosses itself: its edge from '
+                             f'point {i} to {(i + 1) % n} meets its edge from point {j} to '
+                             f'{(j + 1) % n}', 'list the points in order around the part, '
+                             'counterclockwise, so that no two edges cross or touch')
+        area, centroid, j_cm = _signed_area_and_centroid(pts)
         if abs(area) <= 1e-12 * scale * scale:
             raise InputError(f'{field}.vertices', 'the outline has zero area (all points on one '
                              'line)', 'give at least 3 points that are not collinear')
@@ -173,6 +258,8 @@ class Part:
 
     @staticmethod
     def _validate_points(vertices, field):
+        if hasattr(vertices, '__len__') and not isinstance(vertices, (str, bytes)):
+            check_vertex_count(len(vertices), field)
         try:
             pts = np.asarray(vertices, dtype=float)
         except (TypeError, ValueError):
@@ -184,6 +271,14 @@ class Part:
         if not np.all(np.isfinite(pts)):
             raise InputError(f'{field}.vertices', 'contains NaN or infinity',
                              'give finite coordinates in metres')
+        check_vertex_count(len(pts), field)
+        far = np.abs(pts).max()
+        if far > MAX_COORDINATE:
+            k = int(np.argmax(np.abs(pts).max(axis=1)))
+            raise InputError(f'{field}.vertices', f'point {k} {pts[k].tolist()} is out of range: '
+                             f'coordinates are limited to +-{MAX_COORDINATE:g} m',
+                             'give the vertices in metres (a part for this feeder is '
+                             'centimetres across)')
         distinct = {tuple(p) for p in pts.tolist()}
         if len(distinct) < 3:
             raise InputError(f'{field}.vertices',
@@ -240,10 +335,11 @@ class Part:
         self.alpha_ccw_end = np.arctan2(-self.V[idx - 1, idx], -self.U[idx - 1, idx])
         # Impulse ratio omega+/omega- for a sticking impact at the next vertex while rolling
         # about V^p (from conservation of angular momentum about the new contact).
-        dots = rel @ rel.T
-        nxt_i, prv_i = (idx + 1) % n, (idx - 1) % n
-        self.k_cw = (self.rho2 + dots[idx, nxt_i]) / (self.rho2 + dots[nxt_i, nxt_i])
-        self.k_ccw = (self.rho2 + dots[idx, prv_i]) / (self.rho2 + dots[prv_i, prv_i])
+        rel_nxt, rel_prv = np.roll(rel, -1, axis=0), np.roll(rel, 1, axis=0)
+        self.k_cw = ((self.rho2 + (rel * rel_nxt).sum(axis=1))
+                     / (self.rho2 + (rel_nxt * rel_nxt).sum(axis=1)))
+        self.k_ccw = ((self.rho2 + (rel * rel_prv).sum(axis=1))
+                      / (self.rho2 + (rel_prv * rel_prv).sum(axis=1)))
 
     @property
     def arrays(self):

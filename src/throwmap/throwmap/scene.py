@@ -35,7 +35,7 @@ from .accuracy import (Accuracy, BASE_KEYS, check_knob, SETTLE_RULES, SIMULATOR_
 from .effect_model import EffectModel
 from .errors import InputError
 from .model import ThrowModel
-from .part import Part
+from .part import MAX_VERTICES, Part
 
 # The base model's keys; every effect adds the keys it owns (throwmap.effects, SCHEMA).
 SCHEMA = {
@@ -193,8 +193,73 @@ class _DuplicateKey(yaml.YAMLError):
         super().__init__(f'{key!r} given twice (lines {first} and {second})')
 
 
+# Limits no scene reaches (triangle.yaml: 600 bytes, 4 levels, no aliases, 40 values), checked
+# while the file is read, before any work on its contents: a file past them is not a scene.
+MAX_SCENE_BYTES = 1 << 18
+MAX_DEPTH = 20                  # nested mappings/lists
+MAX_ALIASES = 100               # *name references
+MAX_VALUES = 20_000             # scalars, lists and mappings, every alias expanded
+
+
+class _LimitExceeded(yaml.YAMLError):
+    """The YAML document passes one of the limits above."""
+
+    def __init__(self, problem, fix, mark):
+        self.problem, self.fix = problem, fix
+        self.line = mark.line + 1 if mark is not None else None
+        super().__init__(problem)
+
+
 class _StrictLoader(yaml.SafeLoader):
-    """yaml.SafeLoader that refuses a key given twice in one mapping (PyYAML keeps the last)."""
+    """
+    yaml.SafeLoader that refuses a key given twice in one mapping (PyYAML keeps the last).
+
+    It also enforces the limits above as it composes the document (so a "billion laughs" file
+    stops after MAX_VALUES values, not after gigabytes, and deep nesting never reaches Python's
+    recursion limit), and reads floats as YAML 1.2 does (1e308, 1E-3: YAML 1.1 wants a dot and a
+    signed exponent and would give the strings '1e308', '1E-3').
+    """
+
+    def __init__(self, stream):
+        super().__init__(stream)
+        self._depth = 0
+        self._aliases = 0
+        self._values = 0
+        self._anchor_values = {}        # anchor -> values in its node, aliases expanded
+
+    def _count(self, values, mark):
+        self._values += values
+        if self._values > MAX_VALUES:
+            raise _LimitExceeded(
+                f'holds more than {MAX_VALUES} values (aliases expanded)',
+                f'a scene has a few hundred and a part outline at most {MAX_VERTICES} points; '
+                'shorten the outline, and do not alias big lists again and again', mark)
+
+    def compose_node(self, parent, index):
+        event = self.peek_event()
+        if isinstance(event, yaml.AliasEvent):
+            self._aliases += 1
+            if self._aliases > MAX_ALIASES:
+                raise _LimitExceeded(f'uses more than {MAX_ALIASES} aliases (*name)',
+                                     'write the values out', event.start_mark)
+            if event.anchor in self.anchors and event.anchor not in self._anchor_values:
+                raise _LimitExceeded(f'alias *{event.anchor} refers to the node that contains '
+                                     'it (a value that holds itself)',
+                                     'write the value out', event.start_mark)
+            self._count(self._anchor_values.get(event.anchor, 0), event.start_mark)
+            return super().compose_node(parent, index)
+        self._depth += 1
+        if self._depth > MAX_DEPTH:
+            raise _LimitExceeded(f'nests lists/mappings more than {MAX_DEPTH} levels deep',
+                                 'a scene needs 4 or 5 levels; check the brackets',
+                                 event.start_mark)
+        before = self._values
+        self._count(1, event.start_mark)
+        node = super().compose_node(parent, index)
+        self._depth -= 1
+        if event.anchor is not None:
+            self._anchor_values[event.anchor] = self._values - before
+        return node
 
 
 def _mapping_without_repeats(loader, node, deep=False):
@@ -214,6 +279,55 @@ def _mapping_without_repeats(loader, node, deep=False):
 
 _StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
                               _mapping_without_repeats)
+# YAML 1.2 core-schema floats that YAML 1.1's pattern misses (no dot, or an unsigned exponent);
+# the 1.1 pattern is tried first, a real string ('1e3x', 'e5') still matches neither.
+_StrictLoader.add_implicit_resolver(
+    'tag:yaml.org,2002:float',
+    re.compile(r'^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$'),
+    list('-+0123456789.'))
+
+
+def read_yaml(path, what='scene'):
+    """
+    Read a YAML file as the scene loader does: strict (no repeated keys), within the limits.
+
+    Every entry point (CLI, nodes, API, benches) reads scene YAML through here, so every user
+    meets the same limits; errors are InputErrors naming the file, the limit and the fix.
+    """
+    if not os.path.exists(path):
+        raise InputError(what, f'no such file: {path}',
+                         'give the path of a scene YAML (e.g. scenes/triangle.yaml)')
+    if os.path.isdir(path):
+        raise InputError(what, f'{path} is a directory, not a file',
+                         'give the path of a scene YAML (e.g. scenes/triangle.yaml)')
+    try:
+        with open(path, 'rb') as fh:
+            raw = fh.read(MAX_SCENE_BYTES + 1)     # a FIFO or /dev/zero stops here too
+    except OSError as exc:
+        raise InputError(f'{path}', f'cannot be read ({exc.strerror})',
+                         'check the path and its permissions') from None
+    if len(raw) > MAX_SCENE_BYTES:
+        raise InputError(f'{path}', f'is larger than {MAX_SCENE_BYTES} bytes, the limit (a '
+                         'scene is a few KB)', 'give a scene file; a part outline has at most '
+                         f'{MAX_VERTICES} points')
+    try:
+        return yaml.load(raw.decode('utf-8'), Loader=_StrictLoader)
+    except _LimitExceeded as exc:
+        at = f' (line {exc.line})' if exc.line else ''
+        raise InputError(f'{path}', f'{exc.problem}{at}; the limit is there because no scene '
+                         'comes near it', exc.fix) from None
+    except _DuplicateKey as exc:
+        raise InputError(f'{path}', f'gives {exc.key!r} twice in one mapping (lines '
+                         f'{exc.first} and {exc.second}); YAML would keep the last silently',
+                         'keep one of them') from None
+    except yaml.YAMLError as exc:
+        raise InputError(f'{path}', f'is not valid YAML ({exc})', 'fix the syntax') from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f'{path}', f'is not UTF-8 text (byte {exc.start}: {exc.reason})',
+                         'save the scene as UTF-8 YAML') from None
+    except ValueError as exc:   # a scalar Python refuses to convert, e.g. a 5000-digit integer
+        raise InputError(f'{path}', f'holds a value that cannot be converted ({exc})',
+                         'give ordinary numbers') from None
 
 
 class Scene:
@@ -389,27 +503,7 @@ def load_scene(path, seed=None):
 
     ``seed`` overrides the scene's noise.seed.
     """
-    if not os.path.exists(path):
-        raise InputError('scene', f'no such file: {path}',
-                         'give the path of a scene YAML (e.g. scenes/triangle.yaml)')
-    if os.path.isdir(path):
-        raise InputError('scene', f'{path} is a directory, not a file',
-                         'give the path of a scene YAML (e.g. scenes/triangle.yaml)')
-    try:
-        with open(path, encoding='utf-8') as fh:
-            data = yaml.load(fh, Loader=_StrictLoader)
-    except _DuplicateKey as exc:
-        raise InputError(f'{path}', f'gives {exc.key!r} twice in one mapping (lines '
-                         f'{exc.first} and {exc.second}); YAML would keep the last silently',
-                         'keep one of them') from None
-    except yaml.YAMLError as exc:
-        raise InputError(f'{path}', f'is not valid YAML ({exc})', 'fix the syntax') from None
-    except UnicodeDecodeError as exc:
-        raise InputError(f'{path}', f'is not UTF-8 text (byte {exc.start}: {exc.reason})',
-                         'save the scene as UTF-8 YAML') from None
-    except OSError as exc:
-        raise InputError(f'{path}', f'cannot be read ({exc.strerror})',
-                         'check the path and its permissions') from None
+    data = read_yaml(path)
     if data is None:
         raise InputError(f'{path}', 'is empty', 'see scenes/triangle.yaml for a scene')
     try:
