@@ -31,6 +31,7 @@ Asserts nothing. Usage (after ``. scripts/setup.sh``):
 """
 
 import argparse
+import bisect
 import os
 import pathlib
 import shutil
@@ -61,6 +62,20 @@ def cpu_seconds(pid):
     return (int(fields[11]) + int(fields[12])) / CLK_TCK
 
 
+def _seq(msg):
+    for kv in msg.values:
+        if kv.key == 'seq':
+            return int(kv.value)
+    return None
+
+
+def _ready_of(readies, verdict_info):
+    """The last edge1_ready the monitor sent before (or with) this verdict."""
+    sent = [r['source_timestamp'] for r in readies]
+    k = bisect.bisect_right(sent, verdict_info['source_timestamp']) - 1
+    return readies[k] if k >= 0 else None
+
+
 class Probe:
     """The benchmark's node: subscriptions with receive timestamps, service calls."""
 
@@ -74,13 +89,17 @@ class Probe:
         reliable = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE)
         latched = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        self.prox, self.ready, self.status = [], [], []
+        self.prox, self.ready, self.status, self.verdicts = [], [], [], []
         self.node.create_subscription(Range, '/feeder/proximity',
                                       lambda m, i: self.prox.append(i), reliable)
         self.node.create_subscription(Bool, '/feeder/edge1_ready',
                                       lambda m, i: self.ready.append(i), latched)
         self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
-                                      lambda m, i: self.status.append(i), reliable)
+                                      lambda m, i: self.status.append((_seq(m), i)), reliable)
+        # The monitor publishes edge1_ready, then the cycle's edge1_verdict (with its seq); it
+        # also republishes edge1_ready while idle, so cycles are matched through the verdicts.
+        self.node.create_subscription(DiagnosticStatus, '/feeder/edge1_verdict',
+                                      lambda m, i: self.verdicts.append((_seq(m), i)), reliable)
 
     def spin_until(self, cond, timeout, what):
         end = time.monotonic() + timeout
@@ -107,6 +126,7 @@ class Probe:
         self.prox.clear()
         self.ready.clear()
         self.status.clear()
+        self.verdicts.clear()
 
     def close(self):
         self.node.destroy_node()
@@ -146,19 +166,23 @@ def latency(rclpy, log_dir, cycles, period=0.01):
     try:
         start(procs, ('sim', 'monitor'), period)
         wait_graph(probe, ('sim', 'monitor'))
-        base = len(probe.ready)
+        probe.clear()
         probe.enable(True)
         probe.spin_until(lambda: len(probe.status) >= cycles, 30 + 3 * cycles * period,
                          'cycles')
         probe.enable(False)
         probe.spin_for(1.0)
-        # Cycle k: proximity k, cycle_status k, verdict k (the monitor may have missed the
-        # first cycles while discovery finished: align at the end).
-        verdicts = probe.ready[base:]
-        off = len(probe.prox) - len(verdicts)
-        pairs = [(probe.prox[j + off], probe.status[j + off], verdicts[j])
-                 for j in range(max(0, -off), len(verdicts))
-                 if j + off < min(len(probe.prox), len(probe.status))]
+        # The sim publishes proximity k then cycle_status k (align them at the end: the probe
+        # may have missed the first while discovery finished); verdicts name their seq.
+        off = len(probe.prox) - len(probe.status)
+        by_seq = {seq: (probe.prox[j + off], info) for j, (seq, info) in enumerate(probe.status)
+                  if 0 <= j + off < len(probe.prox)}
+        readies = sorted(probe.ready, key=lambda r: r['source_timestamp'])
+        pairs = []
+        for seq, v in probe.verdicts:
+            r = _ready_of(readies, v)
+            if seq in by_seq and r is not None:
+                pairs.append((*by_seq[seq], r))
 
         def ms(xs):
             return [x * 1e-6 for x in xs]
