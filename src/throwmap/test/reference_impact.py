@@ -42,6 +42,7 @@ except ImportError:  # pragma: no cover
 
 @njit(cache=True)
 def _routh_steps(rx, ry, vx, vy, om, rho2, e, mu, steps):
+    """Step the impact in ``steps`` equal increments of its impulse scale (see routh_impact)."""
     """Step the impact in ``steps`` equal normal-impulse increments of its impulse scale."""
     inv = 1.0 / rho2
     ktt = 1.0 + ry * ry * inv
