@@ -37,12 +37,12 @@ try:
     from numba import njit
 except ImportError:  # pragma: no cover
     def njit(fn):
+        """Run as plain Python when numba is absent."""
         return fn
 
 
 @njit(cache=True)
 def _routh_steps(rx, ry, vx, vy, om, rho2, e, mu, steps):
-    """Step the impact in ``steps`` equal increments of its impulse scale (see routh_impact)."""
     """Step the impact in ``steps`` equal normal-impulse increments of its impulse scale."""
     inv = 1.0 / rho2
     ktt = 1.0 + ry * ry * inv
