@@ -39,7 +39,7 @@ import time
 
 import numpy as np
 from throwmap import limit_set_from_orbit
-from throwmap.closed import release_state
+from throwmap.internal import carry_release_state as release_state
 from throwmap.scene import Scene
 import yaml
 
@@ -64,7 +64,7 @@ def random_states(model, count, seed=0, r_hi=0.3):
     rng = np.random.default_rng(seed)
     part = model.part
     edges = rng.choice(part.stable_edges, count)
-    lo = np.array([max(model.r_grasp[e], -part.u_l[e]) * 1.01 for e in edges])
+    lo = np.array([model.r_min(e) * 1.01 for e in edges])
     return edges, lo + rng.uniform(0, 1, count) * (r_hi - lo)
 
 
@@ -297,36 +297,62 @@ def main():
           'tol 1e-15 s)')
     rows += base_rows
 
-    # --- effects: what each one costs at the default knobs (triangle; no effect = base)
-    eff_rows = []
+    # --- effects: what each one costs at the default knobs (triangle; no effect = base), and
+    # the same set with the effect at zero strength (its limit case)
+    plate = {'inclination_deg': 80, 'g0': 9.81}
+    air = {'drag_coefficient': 1.2, 'frontal_area_cm2': 4, 'mass_g': 20}
+    all_on = {'effects': ['backplate_friction', 'air_drag', 'impact_restitution',
+                          'finite_carry', 'finite_arm', 'release_noise', 'sensor_noise'],
+              'gravity': None, 'plate': dict(plate, mu=0.1), 'air': air,
+              'contact': {'mu': 0.8, 'restitution': 0.2},
+              'throw': {'carry': {'release_angle_deg': 3}}, 'arm': {'length_cm': 40},
+              'noise': {'release_speed_sd_deg': 2}, 'sensor': {'false_positive': 0.01}}
+    all_zero = dict(all_on, plate=dict(plate, mu=0.0), air=dict(air, drag_coefficient=0.0),
+                    contact={'mu': 1e9, 'restitution': 0.0},
+                    throw={'carry': {'release_angle': 1e-8}}, arm={'length': 1e3},
+                    noise={'release_speed_sd': 0.0},
+                    sensor={'false_positive': 0.0, 'false_negative': 0.0})
     effect_sets = [
         ('none (base ThrowModel)', {}),
         ('sensor_noise', {'effects': ['sensor_noise'], 'sensor': {'false_positive': 0.01}}),
+        ('sensor_noise at 0 (rates 0)', {'effects': ['sensor_noise'],
+                                         'sensor': {'false_positive': 0.0}}),
         ('finite_arm', {'effects': ['finite_arm'], 'arm': {'length_cm': 40}}),
+        ('finite_arm at 0 (L = 1 km)', {'effects': ['finite_arm'], 'arm': {'length': 1e3}}),
         ('release_noise', {'effects': ['release_noise'],
                            'noise': {'release_speed_sd_deg': 2}}),
+        ('release_noise at 0 (sd 0)', {'effects': ['release_noise'],
+                                       'noise': {'release_speed_sd': 0.0}}),
         ('finite_carry', {'effects': ['finite_carry'], 'contact': {'mu': 0.8},
                           'throw': {'carry': {'release_angle_deg': 3}}}),
-        ('impact_restitution (e=0, mu=inf)', {'effects': ['impact_restitution'],
-                                              'contact': {'restitution': 0.0}}),
+        ('finite_carry at 0 (theta_r 1e-8 rad)', {'effects': ['finite_carry'],
+                                                  'contact': {'mu': 0.8},
+                                                  'throw': {'carry': {'release_angle': 1e-8}}}),
+        ('impact_restitution (e=0.2, mu=0.8)', {'effects': ['impact_restitution'],
+                                                'contact': {'restitution': 0.2, 'mu': 0.8}}),
+        ('impact_restitution at 0 (e=0, mu=inf)', {'effects': ['impact_restitution'],
+                                                   'contact': {'restitution': 0.0}}),
         ('backplate_friction', {'effects': ['backplate_friction'], 'gravity': None,
-                                'plate': {'inclination_deg': 80, 'g0': 9.81, 'mu': 0.1}}),
-        ('all six', {'effects': ['backplate_friction', 'impact_restitution', 'finite_carry',
-                                 'finite_arm', 'release_noise', 'sensor_noise'],
-                     'gravity': None, 'plate': {'inclination_deg': 80, 'g0': 9.81, 'mu': 0.1},
-                     'contact': {'mu': 0.8, 'restitution': 0.2},
-                     'throw': {'carry': {'release_angle_deg': 3}}, 'arm': {'length_cm': 40},
-                     'noise': {'release_speed_sd_deg': 2},
-                     'sensor': {'false_positive': 0.01}}),
+                                'plate': dict(plate, mu=0.1)}),
+        ('backplate_friction at 0 (mu_p 0)', {'effects': ['backplate_friction'],
+                                              'gravity': None, 'plate': dict(plate, mu=0.0)}),
+        ('air_drag', {'effects': ['air_drag'], 'air': air}),
+        ('air_drag at 0 (C_d 0)', {'effects': ['air_drag'],
+                                   'air': dict(air, drag_coefficient=0.0)}),
+        ('all seven', all_on),
+        ('all seven at 0', all_zero),
     ]
     print('\n### Effects: time per throw at the default knobs (triangle)\n')
-    print('| effects | model | time/throw (us) | f(i, R) one call (us) |')
-    print('|---|---|---:|---:|')
+    print('| effects | model | compiled hooks | time/throw (us) | f(i, R) one call (us) |')
+    print('|---|---|---|---:|---:|')
     for label, changes in effect_sets:
         s = load('triangle', **copy.deepcopy(changes))
         m = s.model
-        st = random_states(m, n_states if not m.__class__.__name__ == 'EffectModel'
-                           or not getattr(m.effects, 'general', False) else n_states // 2)
+        slots = getattr(m, 'slots', None)
+        hooks = '-' if slots is None else (', '.join(
+            f'{n}: {"+".join(v)}' for n, v in slots.items()) or 'none (pipeline defaults)')
+        general = bool(getattr(getattr(m, 'effects', None), 'general', False))
+        st = random_states(m, n_states // 2 if general else n_states)
         ok = np.array([m.domain_error(int(e), float(r)) is None for e, r in zip(*st)])
         st = (st[0][ok], st[1][ok])
         _, us = timed_batch(m, *st)
@@ -338,8 +364,7 @@ def main():
             except ValueError:
                 pass
         one = (time.perf_counter() - t0) / min(200, len(st[0])) * 1e6
-        print(f'| {label} | {type(m).__name__} | {us:.1f} | {one:.1f} |')
-        eff_rows.append((label, us))
+        print(f'| {label} | {type(m).__name__} | {hooks} | {us:.1f} | {one:.1f} |')
 
     # --- backplate_friction knobs (experiment scene)
     exp_ref_knobs = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'plate_quadrature': 8,

@@ -33,11 +33,12 @@ import tempfile
 import time
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / 'src' / 'feeder_driver'))
+sys.path[:0] = [str(REPO / 'src' / 'feeder_driver'), str(REPO / 'src' / 'feeder_common'),
+                str(REPO / 'tests')]
 
 from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
 from feeder_driver.driver_node import DriverNode  # noqa: E402
-from feeder_driver.testing import EmulatorThread, reserve_domain_id  # noqa: E402
+from feeder_testing import EmulatorThread, reserve_domain_id  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.context import Context  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402

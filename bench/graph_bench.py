@@ -42,7 +42,8 @@ import time
 REPO = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / 'scripts'))
 
-from demo_graph import free_domain, Processes  # noqa: E402
+from demo_graph import Processes  # noqa: E402
+from feeder_testing import claim_domain_id  # noqa: E402
 
 SCENE = str(REPO / 'scenes' / 'triangle.yaml')
 CLK_TCK = os.sysconf('SC_CLK_TCK')
@@ -279,8 +280,18 @@ def main():
     ap.add_argument('--only', choices=('latency', 'rate', 'cpu'), default=None)
     ap.add_argument('--rate-seconds', type=float, default=5.0)
     ap.add_argument('--cpu-seconds', type=float, default=20.0)
+    ap.add_argument('--install', type=pathlib.Path, default=None,
+                    help='colcon install space to run the nodes from (default ros2_ws/install; '
+                    'e.g. a build of another commit, to compare before/after)')
+    ap.add_argument('--executor', choices=('events', 'single'), default=None,
+                    help="the nodes' executor (FEEDER_EXECUTOR; default: the nodes' own)")
     args = ap.parse_args()
-    domain, lock = free_domain()
+    if args.install is not None:
+        import demo_graph
+        demo_graph.INSTALL = args.install.resolve()
+    if args.executor:
+        os.environ['FEEDER_EXECUTOR'] = args.executor
+    domain, lock = claim_domain_id()
     os.environ['ROS_DOMAIN_ID'] = str(domain)
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     import rclpy
@@ -294,9 +305,11 @@ def main():
 
     try:
         load = ', '.join(f'{x:.1f}' for x in os.getloadavg())
+        import demo_graph
+        executor = os.environ.get('FEEDER_EXECUTOR', "the nodes' default")
         print(f'graph_bench: ROS_DOMAIN_ID={domain} (loopback), {os.cpu_count()} cores, load '
-              f'average {load} (other work on the machine skews latency), logs in {log_dir}',
-              flush=True)
+              f'average {load} (other work on the machine skews latency), logs in {log_dir}; '
+              f'nodes from {demo_graph.INSTALL}, executor: {executor}', flush=True)
         if args.only in (None, 'latency'):
             series = latency(rclpy, log_dir, args.latency_cycles, args.latency_period)
             for k, (label, xs) in enumerate(series.items()):

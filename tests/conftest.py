@@ -42,10 +42,9 @@ INSTALL = REPO / 'ros2_ws' / 'install'
 # Before anything in this process calls rclpy.init: discovery stays on this machine.
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
-# The domain picker and the process environment are feeder_driver.testing's (one
-# implementation for the tests, the demo and the benchmarks); taken from the source tree.
-sys.path.insert(0, str(REPO / 'src' / 'feeder_driver'))
-from feeder_driver.testing import claim_domain_id, install_env  # noqa: E402, I100
+# The domain picker and the process environment are feeder_testing's (beside this file; one
+# implementation for the tests, the demo and the benchmarks).
+from feeder_testing import claim_domain_id, install_env  # noqa: E402, I100, I202
 
 
 @pytest.fixture(autouse=True)

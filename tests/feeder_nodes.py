@@ -45,6 +45,14 @@ def sim_as_hardware(graph, *params, scene=TRIANGLE, ns='/feeder'):
     return graph.start('feeder_sim', 'sim_node', *args, name='sim_hw')
 
 
+def predictor(graph, *params, scene=TRIANGLE, ns='/feeder'):
+    """sim_node in predictor mode (/feeder/feeder_sim) beside the hardware, same namespace."""
+    args = ['--ros-args', '-r', f'__ns:={ns}', '-p', f'scene:={scene}']
+    for p in params:
+        args += ['-p', p]
+    return graph.start('feeder_sim', 'sim_node', *args, name='predictor')
+
+
 def monitor(graph, *params, scene=TRIANGLE, ns='/feeder'):
     args = ['--ros-args', '-r', f'__ns:={ns}', '-p', f'scene:={scene}']
     for p in params:
@@ -97,6 +105,11 @@ def wait_for_readers(ros, topic, count):
                    f'{count} readers of {topic}')
 
 
+def wait_for_publishers(ros, topic, count):
+    ros.spin_until(lambda: ros.node.count_publishers(topic) >= count, STARTUP_TIMEOUT,
+                   f'{count} publishers of {topic}')
+
+
 def run_cycles(ros, cycles, statuses, period):
     """Enable cycling until ``statuses`` holds ``cycles`` messages, then disable it."""
     res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True))
@@ -109,14 +122,16 @@ def run_cycles(ros, cycles, statuses, period):
 
 def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
     """
-    Run the sim as hardware and the monitor on ``scene``; check every edge1_ready verdict.
+    Run the sim as hardware, a predictor and the monitor on ``scene``; check every verdict.
 
     Every cycle completes once, with one proximity and one prediction; the sensor bit is the
-    sensor geometry of the predicted state; edge1_ready is true exactly for the cycles whose
-    part is seen on the goal edge after the warm-up (at least ``min_ready`` of them); the
-    monitor reports no anomaly and counts the same.
+    sensor geometry of the predicted state (the scene is deterministic: the predictor's state is
+    the simulated part's); edge1_ready is true exactly for the cycles whose part is seen on the
+    goal edge after the warm-up (at least ``min_ready`` of them); the monitor reports no anomaly
+    and counts the same.
     """
     sim = sim_as_hardware(graph, f'cycle_period:={period}', scene=scene)
+    pred = predictor(graph, scene=scene)
     mon = monitor(graph, scene=scene)
     sc = load_scene(scene)
     an = analyse(sc)
@@ -130,11 +145,13 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
     radii = Collector(ros, Float64, '/feeder/predicted/radius')
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
-    for topic in ('/feeder/cycle_status', '/feeder/proximity'):
-        wait_for_readers(ros, topic, 2)         # the monitor's and ours
+    wait_for_readers(ros, '/feeder/cycle_status', 3)     # the monitor's, the predictor's, ours
+    wait_for_readers(ros, '/feeder/proximity', 2)        # the monitor's and ours
+    wait_for_publishers(ros, '/feeder/predicted/edge', 1)
     ros.spin_for(0.5)
 
     run_cycles(ros, cycles, statuses, period)
+    ros.spin_until(lambda: len(edges) >= len(statuses), 10.0, 'the predictor')
     ros.spin_for(1.5)                           # let the monitor finish the last cycles
     n = len(statuses)
     assert n >= cycles
@@ -179,4 +196,4 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
     last = diags.values(diags.by_name[name][-1])
     assert int(last['ready']) == on_goal and int(last['anomalies']) == 0
     assert int(last['completed']) == len(verdicts)
-    assert sim.poll() is None and mon.poll() is None
+    assert sim.poll() is None and mon.poll() is None and pred.poll() is None

@@ -19,8 +19,9 @@ import math
 import signal
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from feeder_nodes import (Collector, LATCHED, monitor, sim_as_hardware, STARTUP_TIMEOUT,
-                          status_values, TRIANGLE, wait_for_monitor)
+from feeder_nodes import (Collector, LATCHED, monitor, predictor, sim_as_hardware,
+                          STARTUP_TIMEOUT, status_values, TRIANGLE, wait_for_monitor,
+                          wait_for_publishers)
 from geometry_msgs.msg import PoseStamped
 import pytest
 from rclpy.serialization import deserialize_message
@@ -58,6 +59,58 @@ def type_name(cls):
     return f'{module[0]}/{module[1]}/{cls.__name__}'
 
 
+def check_mcap_as_rosbag2_writes_it(path, meta):
+    """
+    Read the MCAP file with the mcap library (not with our writer's code) and check it.
+
+    Channels carry offered_qos_profiles and topic_type_hash (the RIHS01 hash of the type:
+    the one in the .json type description that ships with the message package); messages
+    have publish_time = the publisher's send time, before log_time = receive time (a latched
+    message reaches a late subscriber long after it was sent: only volatile ones are bounded).
+    """
+    from mcap.reader import make_reader
+    with open(path, 'rb') as fh:
+        reader = make_reader(fh)
+        header = reader.get_header()
+        summary = reader.get_summary()
+        assert header.profile == 'ros2'
+        channels = summary.channels
+        by_topic = {c.topic: c for c in channels.values()}
+        for topic, (cls, _) in EXPECTED.items():
+            ch = by_topic[topic]
+            assert ch.message_encoding == 'cdr'
+            assert summary.schemas[ch.schema_id].encoding == 'ros2msg'
+            assert summary.schemas[ch.schema_id].name == type_name(cls)
+            assert 'offered_qos_profiles' in ch.metadata
+            assert ch.metadata['topic_type_hash'] == shipped_type_hash(cls), topic
+        metas = list(reader.iter_metadata())
+        assert [m.name for m in metas] == ['rosbag2']
+        inner = yaml.safe_load(metas[0].metadata['serialized_metadata'])
+        assert inner['ros_distro'] == 'kilted' and inner['message_count'] == \
+            meta['message_count']
+        delays = {'/feeder/proximity': [], '/feeder/edge1_ready': []}
+        for _, channel, message in reader.iter_messages():
+            if channel.topic in delays:
+                delays[channel.topic].append(message.log_time - message.publish_time)
+        assert all(delays.values())
+        assert all(0 < d < 5e9 for d in delays['/feeder/proximity'])
+        assert all(d > 0 for d in delays['/feeder/edge1_ready']), \
+            'publish_time must be the send time, not log_time'
+
+
+def shipped_type_hash(cls):
+    """RIHS01 hash from the type description (.json) installed with the message package."""
+    import json
+    import pathlib
+    import sys
+    pkg, kind = cls.__module__.split('.')[:2]
+    path = pathlib.Path(sys.prefix) / 'share' / pkg / kind / f'{cls.__name__}.json'
+    if not path.is_file():      # a ROS install rather than the wheels: look it up there
+        from ament_index_python.packages import get_package_share_directory
+        path = pathlib.Path(get_package_share_directory(pkg)) / kind / f'{cls.__name__}.json'
+    return json.loads(path.read_text())['type_hashes'][0]['hash_string']
+
+
 def recorder_subscribed(ros, topic, name='feeder_bag_recorder'):
     return any(i.node_name == name for i in ros.node.get_subscriptions_info_by_topic(topic))
 
@@ -65,10 +118,12 @@ def recorder_subscribed(ros, topic, name='feeder_bag_recorder'):
 def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     bag = tmp_path / 'run'
     sim_as_hardware(graph)
+    predictor(graph)
     monitor(graph)
     ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     wait_for_monitor(ros, ready)
+    wait_for_publishers(ros, '/feeder/predicted/edge', 1)
     rec = graph.start('feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
                       '__ns:=/feeder', name='recorder')
     # Two more: selected topics until 10 messages; everything but /diagnostics for 6 s.
@@ -93,9 +148,10 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     ros.spin_for(1.2)       # and /diagnostics once more
     rec.send_signal(signal.SIGTERM)     # (the demo stops its recorder with SIGINT)
     assert rec.wait(timeout=10) == 0
-    assert f'in {bag}' in graph.log(rec) and 'stopped (SIGTERM)' in graph.log(rec)
-    assert few.wait(timeout=10) == 0 and '(10 messages)' in graph.log(few)
-    assert timed.wait(timeout=20) == 0 and '(6.0 s)' in graph.log(timed)
+    assert f'in {bag}' in graph.log(rec)
+    assert 'stopped: interrupted (SIGTERM)' in graph.log(rec)
+    assert few.wait(timeout=10) == 0 and 'stopped: 10 messages;' in graph.log(few)
+    assert timed.wait(timeout=20) == 0 and 'stopped: 6.0 s;' in graph.log(timed)
     with Reader(tmp_path / 'few') as reader:
         assert {c.topic: c.msgcount for c in reader.connections} == {
             '/feeder/proximity': 5, '/feeder/cycle_status': 5}
@@ -105,7 +161,9 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
 
     meta = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
     assert meta['storage_identifier'] == 'mcap' and meta['version'] == 9
+    assert meta['ros_distro'] == 'kilted'
     assert [f['path'] for f in meta['files']] == ['run.mcap']
+    check_mcap_as_rosbag2_writes_it(bag / 'run.mcap', meta)
 
     with Reader(bag) as reader:
         conns = {c.topic: c for c in reader.connections}
@@ -158,13 +216,15 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     markers = msgs['/feeder/markers'][-1].markers
     assert {'arm', 'part', 'sensor', 'limit_set'} <= {m.ns for m in markers}
     assert all(m.header.frame_id == 'feeder_base' and m.color.a > 0 for m in markers)
-    # The last markers show the last predicted state.
+    # The last markers show the last predicted state, upright in feeder_base (REP 103: the
+    # library's plane x-y is x-z).
     outline = next(m for m in markers if (m.ns, m.id) == ('part', 0))
     edge, R = msgs['/feeder/predicted/edge'][-1].data, msgs['/feeder/predicted/radius'][-1].data
     scene = load_scene(TRIANGLE)
     expected = scene.part.pose_vertices(edge, R, scene.h)
-    got = [c for p in outline.points[:-1] for c in (p.x, p.y)]
+    got = [c for p in outline.points[:-1] for c in (p.x, p.z)]
     assert got == pytest.approx(expected.ravel().tolist())
+    assert all(p.y == 0.0 for p in outline.points)
     poses = msgs['/feeder/predicted/part_pose']
     assert [p.pose.position.x for p in poses] == [r.data for r in msgs['/feeder/predicted/radius']]
     names = {s.name for a in msgs['/diagnostics'] for s in a.status}

@@ -16,8 +16,9 @@
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_nodes import (check_ready_correctness, Collector, Diagnostics, EXPERIMENT, LATCHED,
-                          monitor, REPO, run_cycles, SHORT_ARM, sim_as_hardware,
-                          STARTUP_TIMEOUT, status_values, wait_for_monitor, wait_for_readers)
+                          monitor, predictor, REPO, run_cycles, SHORT_ARM, sim_as_hardware,
+                          status_values, wait_for_monitor, wait_for_publishers,
+                          wait_for_readers)
 from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import Range
 from std_msgs.msg import Bool, Float64, Int32, String
@@ -26,7 +27,7 @@ from throwmap import load_scene
 
 PERIOD = 0.01
 HW = '/feeder/feeder_driver'
-PRED = '/feeder/predictor/feeder_sim'
+PRED = '/feeder/feeder_sim'
 LOST_MESSAGE = "part lost off the arm's end at cycle {}"
 
 
@@ -67,43 +68,39 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     """
     The part starts near the end of the 33 cm arm and falls off at the first throw.
 
-    Sim as hardware and a predictor-mode sim report it (edge -1 and kind lost on every cycle
-    from then on, no radius, no pose; ERROR in /diagnostics naming the cycle); the monitor sees
-    a silence the limit set cannot produce; ~/place_part and the start parameters put a part
-    back.
+    The hardware stand-in reports it in /diagnostics (its simulated part) and on the sensor
+    (nothing seen); the predictor on topics (edge -1 and kind lost on every cycle from then
+    on, no radius, no pose) and in /diagnostics; the monitor sees a silence the limit set
+    cannot produce. The start parameters put a part back on the stand-in's arm; ~/place_part
+    tells the predictor.
     """
     start = ('start_radius:=0.32', 'diagnostics_period:=0.2')
     sim_as_hardware(graph, f'cycle_period:={PERIOD}', *start, scene=SHORT_ARM)
-    graph.start('feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder/predictor', '-r',
-                'cycle_status:=/feeder/cycle_status', '-p', f'scene:={SHORT_ARM}',
-                *[a for p in start for a in ('-p', p)], name='predictor')
+    predictor(graph, *start, scene=SHORT_ARM)
     monitor(graph, 'settle_cycles:=0', 'diagnostics_period:=0.2', scene=SHORT_ARM)
     ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     prox = Collector(ros, Range, '/feeder/proximity')
-    hw = Predictions(ros, '/feeder')
-    pred = Predictions(ros, '/feeder/predictor')
+    pred = Predictions(ros, '/feeder')
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
     wait_for_readers(ros, '/feeder/cycle_status', 3)     # predictor, monitor, us
     wait_for_readers(ros, '/feeder/proximity', 2)
-    ros.spin_until(lambda: ros.node.count_publishers('/feeder/predictor/predicted/edge') >= 1,
-                   STARTUP_TIMEOUT, 'the predictor active')
+    wait_for_publishers(ros, '/feeder/predicted/edge', 1)
     ros.spin_for(0.5)
 
     # 40 cycles: the part is lost in the first; the arm keeps cycling empty.
     cycles = 40
     run_cycles(ros, cycles, statuses, PERIOD)
-    ros.spin_until(lambda: len(hw) == len(pred) == len(statuses) and len(ready) > len(statuses),
+    ros.spin_until(lambda: len(pred) == len(statuses) and len(ready) > len(statuses),
                    10.0, 'the predictor and the monitor to follow')
     n = len(statuses)
     assert [status_values(s)['sensor'] for s in statuses.msgs] == ['0'] * n
     assert all(s.level == DiagnosticStatus.OK and s.message == 'completed'
                for s in statuses.msgs)
     assert len(prox) == n and all(p.range == float('inf') for p in prox.msgs)
-    for side in (hw, pred):
-        assert side.last(n) == ([-1] * n, ['lost'] * n)
-        assert len(side.radius) == 0 and len(side.pose) == 0    # no NaN, no made-up pose
+    assert pred.last(n) == ([-1] * n, ['lost'] * n)
+    assert len(pred.radius) == 0 and len(pred.pose) == 0    # no NaN, no made-up pose
     for node in ('feeder_driver', 'feeder_sim'):
         wait_for_prediction_status(ros, diags, node, DiagnosticStatus.ERROR,
                                    LOST_MESSAGE.format(1))
@@ -117,14 +114,14 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     assert 'no detection for' in error.message and "fallen off the arm's end" in error.message
     assert not any(m.data for m in ready.msgs)
 
-    # ~/place_part puts a part at the start state (near the end again): lost at once.
-    for node in (HW, PRED):
-        res = ros.call(Trigger, f'{node}/place_part', Trigger.Request())
-        assert res.success and res.message == 'part placed on edge 1 at R 0.3200 m', res.message
+    # A part back at the start state (near the end again): lost at once.
+    assert ros.set_parameters(HW, {'start_radius': 0.32})['start_radius'].successful
+    res = ros.call(Trigger, f'{PRED}/place_part', Trigger.Request())
+    assert res.success and res.message == 'part placed on edge 1 at R 0.3200 m', res.message
     res = ros.call(Trigger, f'{HW}/trigger_cycle', Trigger.Request())
     assert res.success and res.message == f'fired cycle seq {n + 1}', res.message
-    ros.spin_until(lambda: len(hw) == len(pred) == n + 1, 10.0, 'cycle n + 1')
-    assert hw.last(1) == pred.last(1) == ([-1], ['lost'])
+    ros.spin_until(lambda: len(pred) == n + 1, 10.0, 'cycle n + 1')
+    assert pred.last(1) == ([-1], ['lost'])
     for node in ('feeder_driver', 'feeder_sim'):
         wait_for_prediction_status(ros, diags, node, DiagnosticStatus.ERROR,
                                    LOST_MESSAGE.format(n + 1))
@@ -133,12 +130,10 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     for node in (HW, PRED):
         assert ros.set_parameters(node, {'start_radius': 0.12})['start_radius'].successful
     ros.call(Trigger, f'{HW}/trigger_cycle', Trigger.Request())
-    ros.spin_until(lambda: len(hw) == len(pred) == n + 2 and len(hw.radius) == len(pred.radius)
-                   == len(hw.pose) == len(pred.pose) == 1, 10.0, 'cycle n + 2')
+    ros.spin_until(lambda: len(pred) == n + 2 and len(pred.radius) == len(pred.pose) == 1,
+                   10.0, 'cycle n + 2')
     edge, R, kind = load_scene(SHORT_ARM).model.f(1, 0.12)
-    for side in (hw, pred):
-        assert side.last(1) == ([edge], [kind]) and side.radius.msgs[0].data == R
-        assert len(side.pose) == 1
+    assert pred.last(1) == ([edge], [kind]) and pred.radius.msgs[0].data == R
     for node in ('feeder_driver', 'feeder_sim'):
         wait_for_prediction_status(
             ros, diags, node, DiagnosticStatus.OK, f'edge {edge}, R {100 * R:.2f} cm after 1 '

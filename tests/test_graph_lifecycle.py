@@ -14,10 +14,11 @@
 
 """The sim's lifecycle with autostart:=false: services refuse until it is active."""
 
-from feeder_nodes import Collector, LATCHED, STARTUP_TIMEOUT, TRIANGLE
+from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_nodes import Collector, TRIANGLE
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
-from std_msgs.msg import Float64MultiArray, Int32
+from sensor_msgs.msg import Range
 from std_srvs.srv import SetBool, Trigger
 
 NODE = '/feeder/feeder_driver'
@@ -36,8 +37,8 @@ def test_services_follow_the_lifecycle(graph, ros):
     graph.start('feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
                 '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p', 'autostart:=false',
                 '-p', f'scene:={TRIANGLE}', '-p', 'cycle_period:=0.05')
-    limit_set = Collector(ros, Float64MultiArray, '/feeder/predicted/limit_set', LATCHED)
-    edges = Collector(ros, Int32, '/feeder/predicted/edge')
+    edges = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    prox = Collector(ros, Range, '/feeder/proximity')
     assert state(ros) == 'unconfigured'
     res = ros.call(Trigger, f'{NODE}/trigger_cycle', Trigger.Request())
     assert not res.success and 'unconfigured' in res.message
@@ -45,13 +46,12 @@ def test_services_follow_the_lifecycle(graph, ros):
     assert state(ros) == 'inactive'
     res = ros.call(SetBool, f'{NODE}/enable', SetBool.Request(data=True))
     assert not res.success and 'inactive' in res.message
-    assert not limit_set.msgs           # lifecycle publishers stay silent while inactive
+    assert not edges.msgs and not prox.msgs
     assert change(ros, Transition.TRANSITION_ACTIVATE)
     assert state(ros) == 'active'
-    ros.spin_until(lambda: len(limit_set) == 1, STARTUP_TIMEOUT, 'the latched limit set')
     res = ros.call(Trigger, f'{NODE}/trigger_cycle', Trigger.Request())
     assert res.success and res.message == 'fired cycle seq 1'
-    ros.spin_until(lambda: len(edges) == 1, 10.0, 'the prediction')
+    ros.spin_until(lambda: len(edges) == 1 and len(prox) == 1, 10.0, 'the first cycle')
     res = ros.call(SetBool, f'{NODE}/enable', SetBool.Request(data=True))
     assert res.success
     ros.spin_until(lambda: len(edges) >= 4, 10.0, 'cycling')

@@ -14,13 +14,15 @@
 
 """(d) Bad parameters are rejected with a reason, through the parameter services."""
 
-from feeder_nodes import (Collector, LATCHED, monitor, sim_as_hardware, TRIANGLE,
-                          wait_for_monitor)
+from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_nodes import (Collector, LATCHED, monitor, predictor, sim_as_hardware,
+                          status_values, TRIANGLE, wait_for_monitor, wait_for_publishers)
 from std_msgs.msg import Bool, Float64, Int32
 from std_srvs.srv import Trigger
-from throwmap import load_scene
+from throwmap import analyse, load_scene, sees
 
 SIM = '/feeder/feeder_driver'
+PRED = '/feeder/feeder_sim'
 MON = '/feeder/feeder_monitor'
 
 
@@ -33,11 +35,14 @@ def rejected(result, *words):
 
 def test_bad_values_are_rejected_and_good_ones_applied(graph, ros):
     sim_as_hardware(graph)
+    predictor(graph)
     monitor(graph)
     ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
     edges = Collector(ros, Int32, '/feeder/predicted/edge')
     radii = Collector(ros, Float64, '/feeder/predicted/radius')
+    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     wait_for_monitor(ros, ready)
+    wait_for_publishers(ros, '/feeder/predicted/edge', 1)
 
     # sim: domain of f, ranges, read-only, types
     r = ros.set_parameters(SIM, {'start_radius': 0.001, 'start_edge': 7, 'cycle_period': 0.001,
@@ -53,13 +58,22 @@ def test_bad_values_are_rejected_and_good_ones_applied(graph, ros):
     assert ros.get_parameters(SIM, ['start_edge', 'start_radius', 'cycle_period']) == \
         {'start_edge': 1, 'start_radius': 0.12, 'cycle_period': 1.0}
 
-    # A good start state is applied: the next throw starts from it.
+    # A good start state is applied: the next throw starts from it, on the stand-in's arm (its
+    # sensor bit) and in the predictor (integers for doubles are taken as doubles).
     assert ros.set_parameters(SIM, {'start_radius': 0.15})['start_radius'].successful
+    assert ros.set_parameters(PRED, {'start_radius': 0.15})['start_radius'].successful
+    assert ros.set_parameters(SIM, {'cycle_period': 2})['cycle_period'].successful
+    assert ros.get_parameters(SIM, ['cycle_period']) == {'cycle_period': 2.0}
     res = ros.call(Trigger, f'{SIM}/trigger_cycle', Trigger.Request())
     assert res.success, res.message
-    ros.spin_until(lambda: len(edges) == 1 and len(radii) == 1, 10.0, 'the prediction')
-    edge, R, _ = load_scene(TRIANGLE).model.f(1, 0.15)
+    ros.spin_until(lambda: len(edges) == 1 and len(radii) == 1 and len(statuses) == 1, 10.0,
+                   'the prediction')
+    scene = load_scene(TRIANGLE)
+    edge, R, _ = scene.model.f(1, 0.15)
     assert (edges.msgs[0].data, radii.msgs[0].data) == (edge, R)
+    sensor = analyse(scene).sensor
+    assert (status_values(statuses.msgs[0])['sensor'] == '1') == \
+        bool(sees(scene.part, edge, R, sensor.radius, sensor.footprint))
 
     # monitor: the proven warm-up, ranges, read-only
     r = ros.set_parameters(MON, {'warmup_cycles': 0, 'silence_margin': 0.5,

@@ -12,47 +12,71 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Predictor mode: a second sim follows the sim-as-hardware through cycle_status alone."""
+"""
+Predictor mode: a sim follows the sim-as-hardware through cycle_status alone, in its namespace.
+
+The hardware stand-in offers only the driver's interface, so the predictor runs beside it in
+/feeder without a collision; its predictions are checked against the throw map itself and the
+sensor bits the hardware sent.
+"""
+
+import math
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_nodes import (Collector, Diagnostics, sim_as_hardware, STARTUP_TIMEOUT, TRIANGLE,
-                          wait_for_readers)
+from feeder_nodes import (Collector, Diagnostics, predictor, sim_as_hardware, status_values,
+                          TRIANGLE, wait_for_publishers, wait_for_readers)
 from geometry_msgs.msg import PoseStamped
+import pytest
 from std_msgs.msg import Float64, Int32, String
 from std_srvs.srv import Trigger
+from throwmap import analyse, load_scene, sees
 
 N = 40
-PRED = '/feeder/predictor'
 
 
 def test_predictor_follows_the_hardware(graph, ros):
-    sim_as_hardware(graph)
-    graph.start('feeder_sim', 'sim_node', '--ros-args', '-r', f'__ns:={PRED}', '-r',
-                'cycle_status:=/feeder/cycle_status', '-p', f'scene:={TRIANGLE}',
-                '-p', 'diagnostics_period:=0.2', name='predictor')
-    hw = {n: Collector(ros, t, f'/feeder/predicted/{n}') for n, t in
-          (('edge', Int32), ('radius', Float64), ('throw_kind', String),
-           ('part_pose', PoseStamped))}
-    pr = {n: Collector(ros, t, f'{PRED}/predicted/{n}') for n, t in
+    sim_as_hardware(graph, 'diagnostics_period:=0.2')
+    predictor(graph, 'diagnostics_period:=0.2')
+    pr = {n: Collector(ros, t, f'/feeder/predicted/{n}') for n, t in
           (('edge', Int32), ('radius', Float64), ('throw_kind', String),
            ('part_pose', PoseStamped))}
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     diags = Diagnostics(ros)
     wait_for_readers(ros, '/feeder/cycle_status', 2)        # the predictor's and ours
-    ros.spin_until(lambda: ros.node.count_publishers(f'{PRED}/predicted/edge') >= 1,
-                   STARTUP_TIMEOUT, 'the predictor active')
+    wait_for_publishers(ros, '/feeder/predicted/edge', 1)
+    # Exactly one publisher: the predictor; the hardware stand-in publishes no predictions.
+    assert ros.node.count_publishers('/feeder/predicted/edge') == 1
     ros.spin_for(0.5)
     for _ in range(N):
         assert ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request()).success
-    ros.spin_until(lambda: all(len(c) == N for c in [*hw.values(), *pr.values(), statuses]),
-                   20.0, f'{N} predictions from both')
-    for name in ('edge', 'radius', 'throw_kind'):
-        assert [m.data for m in pr[name].msgs] == [m.data for m in hw[name].msgs], name
-    assert [p.pose for p in pr['part_pose'].msgs] == [p.pose for p in hw['part_pose'].msgs]
-    # Stamped like the hardware's samples.
-    assert [p.header.stamp for p in pr['part_pose'].msgs] == \
-        [p.header.stamp for p in hw['part_pose'].msgs]
-    assert len({m.data for m in hw['edge'].msgs}) >= 2       # it did flip
+    ros.spin_until(lambda: all(len(c) == N for c in [*pr.values(), statuses]), 20.0,
+                   f'{N} predictions')
+
+    # The throw map itself, from the scene's start.
+    scene = load_scene(TRIANGLE)
+    an = analyse(scene)
+    state, expected = scene.default_start(), []
+    for _ in range(N):
+        state = scene.model.f(*state)
+        expected.append(state)
+        state = state[:2]
+    assert [m.data for m in pr['edge'].msgs] == [e for e, _, _ in expected]
+    assert [m.data for m in pr['radius'].msgs] == [r for _, r, _ in expected]
+    assert [m.data for m in pr['throw_kind'].msgs] == [k for _, _, k in expected]
+    assert len({e for e, _, _ in expected}) >= 2         # it did flip
+    # The hardware's sensor bits are what the sensor sees of that state.
+    bits = [status_values(s)['sensor'] == '1' for s in statuses.msgs]
+    assert bits == [bool(sees(scene.part, e, r, an.sensor.radius, an.sensor.footprint))
+                    for e, r, _ in expected]
+    # Poses in feeder_base (REP 103: z up), stamped like the hardware's samples.
+    for pose, (e, r, _), status in zip(pr['part_pose'].msgs, expected, statuses.msgs):
+        assert pose.header.frame_id == 'feeder_base'
+        assert pose.pose.position.x == r and pose.pose.position.y == 0.0
+        assert pose.pose.position.z == pytest.approx(scene.h + scene.part.d[e])
+        q = pose.pose.orientation
+        assert q.x == 0.0 and q.z == 0.0 and math.isclose(q.y ** 2 + q.w ** 2, 1.0)
+        stamp = f'{pose.header.stamp.sec}.{pose.header.stamp.nanosec:09d}'
+        assert stamp == status_values(status)['stamp']
 
     name = 'feeder_sim: sensor agreement'
 
@@ -65,3 +89,11 @@ def test_predictor_follows_the_hardware(graph, ros):
     assert (last['agree'], last['disagree'], last['missed'], last['failed']) == \
         (str(N), '0', '0', '0')
     assert diags.by_name[name][-1].level == DiagnosticStatus.OK
+    # The stand-in's simulated part and the prediction end in the same state.
+    ros.spin_until(lambda: Diagnostics.values(
+        diags.by_name['feeder_driver: prediction'][-1])['throws'] == str(N), 5.0,
+        'the stand-in diagnostics')
+    hw = Diagnostics.values(diags.by_name['feeder_driver: prediction'][-1])
+    pr_state = Diagnostics.values(diags.by_name['feeder_sim: prediction'][-1])
+    assert (hw['edge'], hw['R']) == (pr_state['edge'], pr_state['R']) == \
+        (str(expected[-1][0]), f'{expected[-1][1]:.6f}')

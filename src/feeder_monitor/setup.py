@@ -27,7 +27,7 @@ setup(
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob('config/*.yaml')),
     ],
-    install_requires=['setuptools', 'rosbags'],
+    install_requires=['setuptools', 'rosbags', 'mcap'],
     zip_safe=True,
     maintainer='feeder team',
     maintainer_email='feeder@example.com',

@@ -17,43 +17,38 @@ Lifecycle driver node of the feeder controller (docs/driver.md, docs/interfaces.
 
 Thin ROS glue around :mod:`feeder_driver.core` (link and cycle state machine),
 :mod:`feeder_driver.serial_link` (pyserial port and reader thread) and
-:mod:`feeder_driver.protocol`. The reader thread queues decoded events and wakes the
-executor through a guard condition; everything else (writes, timeouts, publishing) runs on
-the executor thread, and no callback blocks longer than one serial write.
+:mod:`feeder_driver.protocol`; the contract (QoS, message builders, parameters, diagnostics,
+the run helper) is feeder_common's. The reader thread queues decoded events and hands the
+executor a task to drain them (thread-safe in every executor); everything else (writes,
+timeouts, publishing) runs on the executor thread, and no callback blocks longer than one
+serial write.
 """
 
-import math
 import queue
 import sys
 import time
 
-from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
-from rcl_interfaces.msg import SetParametersResult
-import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
-from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rclpy.time import Time
+from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_common import qos
+from feeder_common.diagnostics import Updater
+from feeder_common.messages import cycle_status, joint_state, proximity
+from feeder_common.node import FeederLifecycleNode, run_node
+from feeder_common.parameters import ParameterGate
+from rclpy.lifecycle import TransitionCallbackReturn
 from sensor_msgs.msg import JointState, Range
 from std_srvs.srv import SetBool, Trigger
 
 from . import core as c
 from . import params
 from . import protocol
-from .diagnostics import Updater
 from .serial_link import LinkError, SerialLink
 
-JOINT_NAME = 'feeder_arm_joint'
 # Timeouts and continuous cycling are checked on a timer: 50 Hz, faster for short periods.
 TICK_PERIOD_S = 0.02
 MIN_TICK_PERIOD_S = 0.005
 
 
-class ParameterError(Exception):
-    """A start-up parameter is invalid; the text names it and the fix."""
-
-
-class DriverNode(LifecycleNode):
+class DriverNode(FeederLifecycleNode):
     """Owns the serial link to the feeder controller and runs throw-catch cycles."""
 
     def __init__(self, node_name='feeder_driver', **kwargs):
@@ -62,26 +57,17 @@ class DriverNode(LifecycleNode):
         self._tick_timer = None
         self._pub_prox = self._pub_status = self._pub_joint = None
         super().__init__(node_name, **kwargs)
-        self._lifecycle = 'unconfigured'
-        descs = params.descriptors()
-        for spec in params.SPECS:
-            try:
-                self.declare_parameter(spec.name, spec.default, descs[spec.name])
-            except Exception as exc:    # noqa: B902 - rclpy raises several types here
-                given = getattr(self, '_parameter_overrides', {}).get(spec.name)
-                reason = params.check(spec.name, given.value) if given is not None else None
-                raise ParameterError(f'parameter {reason or f"{spec.name}: {exc}"}') from None
-        values = {s.name: self.get_parameter(s.name).value for s in params.SPECS}
-        reason = params.validate(values, values)
-        if reason:
-            raise ParameterError(f'parameter {reason}')
-        self._p = values
-        self.add_on_set_parameters_callback(self._validate_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
+        self._params = ParameterGate(self, params.SPECS, params.validate,
+                                     self._apply_parameters)
+        self._params.declare_all()
+        self._params.check_startup()
+        self._p = self._params.values
+        for name in self._params.unknown_given():
+            self.get_logger().warning(f'parameter {name} is not a parameter of driver_node; '
+                                      'ignored (docs/driver.md lists them)')
 
         self.core = c.DriverCore(self._core_config(), log=self._core_log)
         self._events = queue.SimpleQueue()
-        self._guard = self.create_guard_condition(self._drain)
 
         self.diagnostics = Updater(self, self._p['diagnostic_updater.period'],
                                    hardware_id=self._p['port'])
@@ -102,14 +88,7 @@ class DriverNode(LifecycleNode):
                             reconnect_max_s=p['reconnect_max_s'],
                             cycle_period=p['cycle_period'])
 
-    def _validate_parameters(self, parameters):
-        new = {prm.name: prm.value for prm in parameters if prm.name in params.BY_NAME}
-        reason = params.validate(new, self._p)
-        return SetParametersResult(successful=reason is None, reason=reason or '')
-
-    def _apply_parameters(self, parameters):
-        changed = {prm.name: prm.value for prm in parameters if prm.name in params.BY_NAME}
-        self._p.update(changed)
+    def _apply_parameters(self, changed):
         self.core.reconfigure(self._core_config())
         if 'diagnostic_updater.period' in changed:
             self.diagnostics.set_period(self._p['diagnostic_updater.period'])
@@ -124,51 +103,45 @@ class DriverNode(LifecycleNode):
 
     def on_configure(self, state):
         try:
-            self._pub_prox = self.create_lifecycle_publisher(Range, 'proximity',
-                                                             QoSProfile(depth=10))
-            self._pub_status = self.create_lifecycle_publisher(
-                DiagnosticStatus, 'cycle_status',
-                QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+            self._pub_prox = self.create_lifecycle_publisher(Range, 'proximity', qos.PROXIMITY)
+            self._pub_status = self.create_lifecycle_publisher(DiagnosticStatus, 'cycle_status',
+                                                               qos.CYCLE_STATUS)
             self._pub_joint = self.create_lifecycle_publisher(JointState, 'joint_states',
-                                                              QoSProfile(depth=10))
+                                                              qos.JOINT_STATES)
             self.link = SerialLink(self._p['port'], self._p['baud_rate'], self._on_rx,
                                    self._on_lost)
             self._tick_timer = self.create_timer(self._tick_period(), self._tick)
             self._apply(self.core.start(time.monotonic()))
         except Exception as exc:    # noqa: B902 - report, then let lifecycle fail cleanly
             self.get_logger().error(f'configure failed: {exc!r}')
+            self.configure_error = f'configure failed: {exc!r}'
             self._teardown()
             return TransitionCallbackReturn.FAILURE
-        self._lifecycle = 'inactive'
         self.get_logger().info(f'configured: port {self._p["port"]} at '
                                f'{self._p["baud_rate"]} baud')
         return super().on_configure(state)
 
     def on_activate(self, state):
         self._apply(self.core.set_active(True, time.monotonic(), self._stamp()))
-        self._lifecycle = 'active'
         return super().on_activate(state)
 
     def on_deactivate(self, state):
         # Abort and report before the lifecycle publishers switch off.
         self._apply(self.core.set_active(False, time.monotonic(), self._stamp(),
                                          'node deactivated'))
-        self._lifecycle = 'inactive'
         return super().on_deactivate(state)
 
     def on_cleanup(self, state):
         self._teardown('node cleaned up')
-        self._lifecycle = 'unconfigured'
         return super().on_cleanup(state)
 
     def on_shutdown(self, state):
-        self._teardown('node shutting down')
-        self._lifecycle = 'finalized'
+        # exit_reason: the run helper's (e.g. 'interrupted (SIGINT)'), else ros2 lifecycle's.
+        self._teardown(self.exit_reason or 'node shutting down')
         return super().on_shutdown(state)
 
     def on_error(self, state):
         self._teardown('lifecycle error')
-        self._lifecycle = 'unconfigured'
         return TransitionCallbackReturn.SUCCESS
 
     def _teardown(self, reason='stopped'):
@@ -197,11 +170,12 @@ class DriverNode(LifecycleNode):
     # ---- services ------------------------------------------------------------------------
 
     def _not_active(self):
-        return (f'refused: driver is {self._lifecycle}, not active (activate it through '
-                '~/change_state, or start it with autostart:=true)')
+        return (f'refused: driver is {self.lifecycle_state}, not active (ros2 lifecycle set '
+                f'{self.get_fully_qualified_name()} activate, or start it with '
+                'autostart:=true)')
 
     def _srv_trigger(self, request, response):
-        if self._lifecycle != 'active':
+        if self.lifecycle_state != 'active':
             response.success, response.message = False, self._not_active()
             return response
         ok, message, effects = self.core.trigger(time.monotonic())
@@ -214,7 +188,7 @@ class DriverNode(LifecycleNode):
         return response
 
     def _srv_enable(self, request, response):
-        if request.data and self._lifecycle != 'active':
+        if request.data and self.lifecycle_state != 'active':
             response.success, response.message = False, self._not_active()
             return response
         ok, message, effects = self.core.enable(bool(request.data), time.monotonic())
@@ -237,26 +211,13 @@ class DriverNode(LifecycleNode):
         self._wake()
 
     def _wake(self):
+        executor = self.executor
+        if executor is None:
+            return      # not spun (yet, or any more): the events wait in the queue
         try:
-            self._guard.trigger()
-        except Exception:   # noqa: B902 - context already shut down; nothing left to wake
+            executor.create_task(self._drain)
+        except Exception:   # noqa: B902 - executor already shut down; nothing left to wake
             pass
-
-    def stop_link(self, reason):
-        """Abort a cycle in flight (STOP, reported on cycle_status) and close the port."""
-        self._teardown(reason)
-
-    def close_on_exit(self):
-        """Last resort after the context is gone: STOP a cycle in flight, close the port."""
-        if self.link is None or self.core is None:
-            return
-        if self.core.pending is not None:
-            try:
-                self.link.write(protocol.encode(protocol.Stop()))
-            except LinkError:
-                pass
-        self.link.close()
-        self.link = None
 
     def _drain(self):
         while True:
@@ -309,25 +270,17 @@ class DriverNode(LifecycleNode):
             self.get_logger().error(f'cycle seq {result.seq} ended while unconfigured: '
                                     f'{result.reason} (not published)')
             return
-        status = DiagnosticStatus(name='cycle', hardware_id=self._p['port'])
-        status.level = DiagnosticStatus.OK if result.ok else DiagnosticStatus.ERROR
-        status.message = 'completed' if result.ok else result.reason
-        status.values = [KeyValue(key='seq', value=str(result.seq)),
-                         KeyValue(key='sensor', value=('none' if result.sensor is None
-                                                       else str(result.sensor))),
-                         KeyValue(key='stamp', value=f'{result.stamp // 10 ** 9}.'
-                                                     f'{result.stamp % 10 ** 9:09d}')]
-        if result.ok:
-            rng = Range()
-            rng.header.stamp = Time(nanoseconds=result.stamp).to_msg()
-            rng.header.frame_id = self._p['frame_id']
-            rng.radiation_type = Range.INFRARED
-            rng.field_of_view = 0.0
-            rng.min_range = rng.max_range = float(self._p['sensor_range_m'])
-            rng.range = -math.inf if result.sensor else math.inf
-            self._publish(self._pub_prox, rng)
+        ok = result.ok
+        if ok:
+            self._publish(self._pub_prox, proximity(result.stamp, bool(result.sensor),
+                                                    self._p['sensor_range_m'],
+                                                    self._p['frame_id']))
+        self._publish(self._pub_status, cycle_status(
+            result.seq, ok, 'completed' if ok else result.reason,
+            None if result.sensor is None else bool(result.sensor), result.stamp,
+            self._p['port']))
+        if ok:
             self._publish_joint(result.stamp, 0.0)
-        self._publish(self._pub_status, status)
 
     def _publish(self, pub, msg):
         try:
@@ -337,15 +290,8 @@ class DriverNode(LifecycleNode):
                   file=sys.stderr)
 
     def _publish_joint(self, stamp, velocity):
-        if self._pub_joint is None:
-            return
-        js = JointState()
-        js.header.stamp = Time(nanoseconds=stamp).to_msg()
-        js.name = [JOINT_NAME]
-        js.position = [0.0]
-        js.velocity = [float(velocity)]
-        js.effort = []
-        self._publish(self._pub_joint, js)
+        if self._pub_joint is not None:
+            self._publish(self._pub_joint, joint_state(stamp, 0.0, velocity))
 
     # ---- diagnostics ---------------------------------------------------------------------
 
@@ -363,15 +309,16 @@ class DriverNode(LifecycleNode):
 
     def _diag_link(self, stat):
         core = self.core
-        if self._lifecycle in ('unconfigured', 'finalized'):
-            stat.summary(DiagnosticStatus.WARN, f'{self._lifecycle}: port closed')
+        state = self.lifecycle_state
+        if state in ('unconfigured', 'finalized'):
+            stat.summary(DiagnosticStatus.WARN, f'{state}: port closed')
         elif core.link == c.CONNECTED:
             stat.summary(DiagnosticStatus.OK, 'connected')
         elif core.link == c.HANDSHAKE:
             stat.summary(DiagnosticStatus.WARN, 'port open, waiting for the controller')
         else:
             stat.summary(DiagnosticStatus.ERROR, f'disconnected: {core.last_link_error}')
-        stat.add('lifecycle', self._lifecycle)
+        stat.add('lifecycle', state)
         stat.add('port', self._p['port'])
         stat.add('baud_rate', self._p['baud_rate'])
         stat.add('link', core.link)
@@ -418,33 +365,7 @@ class DriverNode(LifecycleNode):
 
 def main(args=None):
     """Entry point of ``driver_node`` (see docs/driver.md for parameters)."""
-    node = None
-    try:
-        with rclpy.init(args=args):
-            try:
-                node = DriverNode()
-            except ParameterError as exc:
-                print(f'driver_node: error: {exc}', file=sys.stderr)
-                return 2
-            if node.get_parameter('autostart').value:
-                if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
-                    print('driver_node: error: configure failed (see the log above)',
-                          file=sys.stderr)
-                    return 1
-                node.trigger_activate()
-            executor = SingleThreadedExecutor()
-            executor.add_node(node)
-            try:
-                executor.spin()
-            except KeyboardInterrupt:
-                # The context is still valid: abort a cycle in flight and report it.
-                node.stop_link('interrupted (SIGINT)')
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.close_on_exit()
-    return 0
+    return run_node(DriverNode, 'driver_node', args)
 
 
 if __name__ == '__main__':

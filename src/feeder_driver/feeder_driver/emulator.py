@@ -528,7 +528,7 @@ def from_scene(scene_path, sensor_radius=None, seed=None, **kwargs):
     """
     import math
     import numpy as np
-    from throwmap import analyse, InputError, load_scene, sees, ThrowmapError
+    from throwmap import analyse, InputError, load_scene, PartOnArm, ThrowmapError
     try:
         scene = load_scene(scene_path)
     except InputError as exc:
@@ -559,43 +559,41 @@ def from_scene(scene_path, sensor_radius=None, seed=None, **kwargs):
     except ThrowmapError:
         pass
     seed = scene.seed if seed is None else int(seed)
-    if hasattr(model, 'reseed'):
-        model.reseed(seed)      # after the analysis and the warm-up, which draw from it
-    state = list(start)
+    # The part (throwmap.PartOnArm), seeded after the analysis and the warm-up, which draw from
+    # the scene's generator: each throw draws its release noise, then its sensor reading.
+    part = PartOnArm(scene, *start, sensor_radius=sensor_radius, footprint=footprint, seed=seed)
     arm = scene.arm_length
     header.update(sensor_radius=float(sensor_radius), footprint=float(footprint),
-                  start=list(state), seed=seed,
-                  noisy_sensor=getattr(scene.effects, 'sensor_noise', None) is not None,
+                  start=list(start), seed=seed, noisy_sensor=part.noisy_sensor,
                   arm_length=arm if arm is not None and math.isfinite(arm) else None)
+    last = {}
+
+    def state():
+        return part.edge, (None if part.lost else part.R)
 
     def throw():
-        if state[0] < 0:
-            return -1, None, 'lost'         # no part on the arm (lost off its end before)
         try:
-            edge, R, kind = model.f(state[0], state[1])
+            t = part.throw()            # no part on the arm: an empty throw, kind 'lost'
         except ThrowmapError as exc:
             raise ThrowFailed(_err_text(exc), str(exc)) from None
-        if kind == 'lost':
-            state[0], state[1] = -1, None
-        else:
-            state[0], state[1] = int(edge), float(R)
-        return state[0], state[1], kind
+        last['state'], last['bit'] = state(), t.detected
+        return state() + (t.kind,)
 
     def seen(edge, R):
-        return edge >= 0 and bool(sees(scene.part, edge, R, sensor_radius, footprint))
+        return part.sees(edge, R)
 
     def sense(edge, R):
-        if edge < 0 and not header['noisy_sensor']:
-            return False
-        return bool(scene.sense(edge, math.nan if R is None else R, sensor_radius, footprint))
+        # The reading taken of the part at rest after the throw (sensor noise included).
+        if last.get('state') == (edge, R):
+            return last['bit']
+        return part.read(edge, math.nan if R is None else R)
 
     def place():
-        state[0], state[1] = start
+        part.place(*start)
         return start
 
     return Controller(throw=throw, sense=sense, release_speed=scene.release_speed,
-                      state=lambda: (state[0], state[1]), header=header, sees=seen,
-                      place=place, **kwargs)
+                      state=state, header=header, sees=seen, place=place, **kwargs)
 
 
 def build_arg_parser():

@@ -23,14 +23,15 @@ import pytest
 
 PKG = pathlib.Path(__file__).resolve().parents[1]
 REPO = PKG.parents[1]
-# Test the source tree, not a possibly stale colcon install.
-sys.path.insert(0, str(PKG))
+# Test the source trees, not a possibly stale colcon install; the graph test support
+# (feeder_testing) lives with the tests, in no package.
+sys.path[:0] = [str(PKG), str(REPO / 'src' / 'feeder_common'), str(REPO / 'tests')]
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
 
 @pytest.fixture(scope='session')
 def domain_id():
-    from feeder_driver.testing import reserve_domain_id
+    from feeder_testing import reserve_domain_id
     return reserve_domain_id()
 
 

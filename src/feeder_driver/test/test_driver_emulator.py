@@ -23,7 +23,7 @@ import time
 
 from feeder_driver import protocol as p
 from feeder_driver.emulator import EmulatorError, Faults
-from feeder_driver.testing import EmulatorThread
+from feeder_testing import EmulatorThread
 import pytest
 import serial
 from throwmap import load_scene, sees

@@ -23,7 +23,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from feeder_driver import protocol as p
 from feeder_driver.driver_node import DriverNode
 from feeder_driver.emulator import Faults
-from feeder_driver.testing import EmulatorThread
+from feeder_testing import EmulatorThread
 import pytest
 import rclpy
 from rclpy.context import Context

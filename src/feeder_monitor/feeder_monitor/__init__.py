@@ -16,6 +16,6 @@
 feeder_monitor: edge1_ready from the one-bit sensor and the predicted limit set; bag_recorder.
 
 ROS-free modules: ``readiness`` (detection-pattern rules, the monitor's state machine, pairing of
-proximity with cycle_status), ``bag`` (rosbag2 MCAP writing with rosbags). ROS glue:
+proximity with cycle_status), ``bag`` (rosbag2 MCAP bags as rosbag2 writes them). ROS glue:
 ``monitor_node`` and ``bag_recorder``.
 """

@@ -20,22 +20,21 @@ bag_recorder: records the feeder graph's topics to a rosbag2 MCAP directory.
 
 It subscribes to every topic it discovers (or those given, resolved in its namespace) with
 ``raw=True``, so the bytes it stores are the CDR the publishers sent, with the QoS the
-publishers offer (a latched topic is subscribed transient local and recorded so). It stops on
-SIGINT or SIGTERM, after ``--duration`` seconds or ``--max-messages`` messages, always closing
-the bag (metadata.yaml written) and printing a summary.
+publishers offer (a latched topic is subscribed transient local and recorded so) and the type
+hash they announce. Each message is stored with its receive time (log time) and its send time
+(publish time, the DDS source timestamp), as rosbag2 does. It stops on SIGINT or SIGTERM, after
+``--duration`` seconds or ``--max-messages`` messages, always closing the bag (metadata.yaml
+written) and printing a summary.
 """
 
 import argparse
 import importlib
 import re
-import signal
 import sys
 
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
+from feeder_common.node import run_node
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.signals import SignalHandlerOptions
 import rclpy.utilities
 
 from .bag import BagWriter, qos
@@ -84,6 +83,15 @@ def offered_qos(endpoint_qos):
                q.avoid_ros_namespace_conventions)
 
 
+def announced_hash(publishers):
+    """Return the RIHS01 type hash the publishers announce (rosbag2 records it), or None."""
+    for p in publishers:
+        h = getattr(p, 'topic_type_hash', None)
+        if h is not None and getattr(h, 'version', 0) >= 1:
+            return str(h)
+    return None
+
+
 def subscription_qos(publisher_qos):
     """Pick a QoS that receives from every publisher (reliable, latched only if all are)."""
     reliable = all(q.reliability == ReliabilityPolicy.RELIABLE for q in publisher_qos)
@@ -98,18 +106,34 @@ def subscription_qos(publisher_qos):
 class BagRecorder(Node):
     """Subscribes (raw) to the selected topics as they appear and writes them to a bag."""
 
+    # The send time of each message comes with its MessageInfo, which rclpy 9.1's events
+    # executor cannot pass to a callback.
+    executor_kind = 'single'
+
     def __init__(self, writer, topics=None, exclude=None, discovery_period=0.5,
-                 max_messages=None, **kwargs):
+                 max_messages=None, duration=None, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         self.writer = writer
         self.wanted = None if topics is None else {self.resolve_topic_name(t) for t in topics}
         self.exclude = re.compile(exclude) if exclude else None
         self.max_messages = max_messages
-        self.done = False
+        self.done = None            # why recording ended by itself
+        self.exit_reason = None     # why the process stopped (the run helper's)
         self._subs = {}
         self._skipped = set()
         self.create_timer(discovery_period, self._discover)
+        if duration is not None:
+            self._duration_timer = self.create_timer(duration, self._duration_over)
+            self._duration_text = f'{duration} s'
         self._discover()
+
+    def finished(self):
+        """Why recording is over (the run helper stops the process), or None."""
+        return self.done
+
+    def _duration_over(self):
+        self.destroy_timer(self._duration_timer)
+        self.done = self.done or self._duration_text
 
     def _selected(self, topic):
         if topic in ALWAYS_EXCLUDED and (self.wanted is None or topic not in self.wanted):
@@ -138,18 +162,20 @@ class BagRecorder(Node):
                 self.get_logger().warning(f'not recording {topic}: {exc}')
                 continue
             profiles = [p.qos_profile for p in pubs]
-            self.writer.add_topic(topic, msgtype, [offered_qos(q) for q in profiles])
+            self.writer.add_topic(topic, msgtype, [offered_qos(q) for q in profiles],
+                                  announced_hash(pubs))
             self._subs[topic] = self.create_subscription(
-                cls, topic, lambda data, t=topic: self._record(t, data),
+                cls, topic, lambda data, info, t=topic: self._record(t, data, info),
                 subscription_qos(profiles), raw=True)
             self.get_logger().info(f'recording {topic} ({msgtype})')
 
-    def _record(self, topic, data):
+    def _record(self, topic, data, info):
         if self.done:
             return
-        self.writer.write(topic, self.get_clock().now().nanoseconds, data)
+        self.writer.write(topic, info['received_timestamp'], data, info['source_timestamp'],
+                          info.get('publication_sequence_number') or 0)
         if self.max_messages is not None and self.writer.total >= self.max_messages:
-            self.done = True
+            self.done = f'{self.max_messages} messages'
 
 
 def main(argv=None):
@@ -157,40 +183,25 @@ def main(argv=None):
     args = parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
     try:
         writer = BagWriter(args.output)
-    except (FileExistsError, OSError) as exc:
+    except OSError as exc:      # FileExistsError included
         print(f'bag_recorder: {exc}', file=sys.stderr)
         return 2
-    stop = {'signal': None}
+    made = []
 
-    def on_signal(signum, frame):
-        stop['signal'] = signal.Signals(signum).name
+    def make_node(**kwargs):
+        made.append(BagRecorder(writer, args.topics, args.exclude, args.discovery_period,
+                                args.max_messages, args.duration, **kwargs))
+        return made[-1]
 
     try:
-        with rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO):
-            signal.signal(signal.SIGINT, on_signal)
-            signal.signal(signal.SIGTERM, on_signal)
-            node = BagRecorder(writer, args.topics, args.exclude, args.discovery_period,
-                               args.max_messages)
-            executor = SingleThreadedExecutor()
-            executor.add_node(node)
-            start = node.get_clock().now()
-            reason = None
-            while reason is None:
-                executor.spin_once(timeout_sec=0.25)
-                elapsed = (node.get_clock().now() - start).nanoseconds * 1e-9
-                if stop['signal']:
-                    reason = stop['signal']
-                elif node.done:
-                    reason = f'{args.max_messages} messages'
-                elif args.duration is not None and elapsed >= args.duration:
-                    reason = f'{args.duration} s'
-            node.destroy_node()
+        status = run_node(make_node, 'bag_recorder', argv)
     finally:
         writer.close()
+    reason = (made[0].done or made[0].exit_reason) if made else 'not started'
     counts = ', '.join(f'{t}: {n}' for t, n in sorted(writer.counts.items()))
-    print(f'bag_recorder: stopped ({reason}); {writer.total} messages on {len(writer.counts)} '
+    print(f'bag_recorder: stopped: {reason}; {writer.total} messages on {len(writer.counts)} '
           f'topics in {writer.path}' + (f' ({counts})' if counts else ''), flush=True)
-    return 0
+    return status
 
 
 if __name__ == '__main__':

@@ -16,25 +16,26 @@
 monitor_node: raises edge1_ready when a detection proves the part lies on the goal edge.
 
 ROS glue only: the rules and the state machine are feeder_monitor.readiness's, the analysis is
-throwmap's (through feeder_sim.analysis, the same numbers the sim uses).
+throwmap's (throwmap.scene_analysis, the same numbers the sim uses), the contract (QoS,
+message parsers, parameters, run helper) feeder_common's.
 """
 
 import functools
-import math
 import sys
 import time
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from feeder_sim.analysis import load, scene_analysis
-from feeder_sim.params import check_changes
-from feeder_sim.ros_glue import (CYCLE_STATUS_QOS, declare, diagnostic_array, diagnostic_status,
-                                 DIAGNOSTICS_QOS, LATCHED_QOS, ParameterGate, run_node,
-                                 stamp_seconds, StartupError)
+from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_common import qos
+from feeder_common.diagnostics import Updater
+from feeder_common.messages import parse_cycle_status, proximity_detected, time_ns
+from feeder_common.node import run_node, StartupError
+from feeder_common.parameters import ParameterGate
+from feeder_common.params import check_scene
+from feeder_common.stamps import ns_seconds
 from rclpy.node import Node
-from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Range
 from std_msgs.msg import Bool
-from throwmap import analyse, ThrowmapError
+from throwmap import analyse, load_scene, scene_analysis, ThrowmapError
 
 from .params import MONITOR_PARAMS
 from .readiness import (ANOMALY, CyclePairer, limit_set_orbit, ReadinessMonitor,
@@ -49,50 +50,53 @@ class MonitorNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('feeder_monitor', **kwargs)
-        self._specs = {s.name: s for s in MONITOR_PARAMS}
         # Scenes by path, loaded once (the parameter checks load them too).
-        self._load_scene = functools.lru_cache(maxsize=None)(load)
+        self._load_scene = functools.lru_cache(maxsize=None)(load_scene)
         self._scene = None
         self._base = None
         self._orbit = None
         self._monitor = None
         self._pairer = None
-        ParameterGate(self, self._validate, self._apply)
-        self._scene = self._load_scene(declare(self, self._specs['scene']))
-        orbit_throws = declare(self, self._specs['orbit_throws'])
+        self._params = ParameterGate(self, MONITOR_PARAMS, self._validate, self._apply)
+        p = self._params
+        self._scene = self._load_scene(p.declare('scene'))
+        orbit_throws = p.declare('orbit_throws')
         try:
             self._base = analyse(self._scene)
             self._orbit = limit_set_orbit(self._scene, self._base, orbit_throws)
-            for name in RULE_PARAMS + ('stamp_tolerance', 'pair_timeout',
-                                       'diagnostics_period'):
-                declare(self, self._specs[name])
+            p.declare_all()
             rules = self._rules({})
         except ThrowmapError as exc:
             raise StartupError(f'scene {self._scene.source}: {exc}') from None
         except ValueError as exc:       # a rule parameter the analysis rejects
             raise StartupError(str(exc)) from None
+        for name in p.unknown_given():
+            self.get_logger().warning(f'parameter {name} is not a parameter of monitor_node; '
+                                      'ignored (docs/nodes.md lists them)')
         self._monitor = ReadinessMonitor(rules)
         self._pairer = CyclePairer(self._param('stamp_tolerance'), self._param('pair_timeout'))
         self._anomaly_in_period = None
         self._lost_mark = 0
         self._bad_input = 0
 
-        self._ready_pub = self.create_publisher(Bool, 'edge1_ready', LATCHED_QOS)
-        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', DIAGNOSTICS_QOS)
-        self.create_subscription(Range, 'proximity', self._on_proximity, qos_profile_sensor_data)
+        self._ready_pub = self.create_publisher(Bool, 'edge1_ready', qos.EDGE1_READY)
+        self.create_subscription(Range, 'proximity', self._on_proximity,
+                                 qos.PROXIMITY_SUBSCRIPTION)
         self.create_subscription(DiagnosticStatus, 'cycle_status', self._on_cycle_status,
-                                 CYCLE_STATUS_QOS)
+                                 qos.CYCLE_STATUS)
         # Runs only while a cycle waits for its other half (see _decide).
         self._expire_timer = self.create_timer(min(0.1, self._param('pair_timeout') / 2),
                                                self._on_expire)
         self._expire_timer.cancel()
-        self.create_timer(self._param('diagnostics_period'), self._publish_diagnostics)
+        self._diagnostics = Updater(self, self._param('diagnostics_period'), self._scene.name)
+        self._diagnostics.add('readiness', self._diag_readiness)
+        self._diagnostics.add('inputs', self._diag_inputs)
         self._ready_pub.publish(Bool(data=False))
         self._log_rules(rules)
 
     # ------------------------------------------------------------------ parameters
     def _param(self, name):
-        return self.get_parameter(name).value
+        return self._params.values[name]
 
     def _rules(self, changes):
         """Rules from the current parameters overridden by ``changes``; ValueError if invalid."""
@@ -104,10 +108,11 @@ class MonitorNode(Node):
                                    value('settle_cycles'), value('silence_margin'),
                                    value('early_margin_cycles'), value('run_margin_cycles'))
 
-    def _validate(self, changes):
-        reason = check_changes(self._specs, changes, self._load_scene)
-        if reason:
-            return reason
+    def _validate(self, changes, current):
+        if 'scene' in changes:
+            reason = check_scene(changes['scene'], self._load_scene)
+            if reason:
+                return reason
         # At start-up (no monitor yet) the rules are checked once all are declared.
         if self._monitor is not None and any(n in changes for n in RULE_PARAMS):
             try:
@@ -119,6 +124,8 @@ class MonitorNode(Node):
     def _apply(self, changes):
         if self._monitor is None:
             return
+        if 'diagnostics_period' in changes:
+            self._diagnostics.set_period(changes['diagnostics_period'])
         if any(n in changes for n in RULE_PARAMS):
             rules = self._rules({})
             self._monitor.set_rules(rules)
@@ -146,30 +153,23 @@ class MonitorNode(Node):
 
     # ------------------------------------------------------------------ inputs
     def _on_proximity(self, msg):
-        r = msg.range
-        if math.isnan(r):
+        detected = proximity_detected(msg)
+        if detected is None:
             self._bad_input += 1
             return
-        detected = r < 0 if math.isinf(r) else msg.min_range <= r <= msg.max_range
-        self._decide(self._pairer.add_proximity(stamp_seconds(msg.header.stamp), detected,
-                                                time.monotonic()))
+        self._decide(self._pairer.add_proximity(ns_seconds(time_ns(msg.header.stamp)),
+                                                detected, time.monotonic()))
 
     def _on_cycle_status(self, msg):
-        values = {kv.key: kv.value for kv in msg.values}
         try:
-            seq = int(values['seq'])
-        except (KeyError, ValueError):
+            status = parse_cycle_status(msg)
+        except ValueError as exc:
             self._bad_input += 1
-            self.get_logger().warning(f'cycle_status without a valid seq: {values}',
-                                      throttle_duration_sec=5.0)
+            self.get_logger().warning(f'{exc}; ignored', throttle_duration_sec=5.0)
             return
-        detected = {'1': True, '0': False}.get(values.get('sensor'))
-        try:
-            stamp = float(values['stamp'])
-        except (KeyError, ValueError):
-            stamp = None
-        self._decide(self._pairer.add_status(seq, msg.level == DiagnosticStatus.OK, detected,
-                                             stamp, msg.message, time.monotonic()))
+        stamp = None if status.stamp_ns is None else ns_seconds(status.stamp_ns)
+        self._decide(self._pairer.add_status(status.seq, status.ok, status.sensor, stamp,
+                                             status.message, time.monotonic()))
 
     def _on_expire(self):
         self._decide(self._pairer.expire(time.monotonic()))
@@ -193,10 +193,9 @@ class MonitorNode(Node):
                 self.get_logger().debug(f'cycle {v.seq}: part proven on the goal edge')
 
     # ------------------------------------------------------------------ diagnostics
-    def _publish_diagnostics(self):
+    def _diag_readiness(self, stat):
         m = self._monitor
         r = m.rules
-        name = self.get_name()
         anomaly = self._anomaly_in_period
         self._anomaly_in_period = None
         if anomaly or m.state == ANOMALY:
@@ -213,23 +212,22 @@ class MonitorNode(Node):
             level, message = 'ok', m.state
         if level != 'error' and r.provable and r.noisy_sensor:
             message = f'{message} (noisy sensor: {self._noise_note(r)})'
-        values = {'state': m.state, 'last_seq': m.last_seq, **m.counts,
-                  'since_restart': m.since_restart, 'cycles_since_detection': m.gap,
-                  'last_anomaly': m.last_anomaly, **r.as_dict()}
-        statuses = [diagnostic_status(f'{name}: readiness', level, message, self._scene.name,
-                                      values)]
+        stat.summary(level, message)
+        stat.update({'state': m.state, 'last_seq': m.last_seq, **m.counts,
+                     'since_restart': m.since_restart, 'cycles_since_detection': m.gap,
+                     'last_anomaly': m.last_anomaly, **r.as_dict(),
+                     'namespace': self.get_namespace()})
+
+    def _diag_inputs(self, stat):
         p = self._pairer
         lost = p.counts['proximity_lost']
         pending = p.pending
-        in_level = 'warn' if lost > self._lost_mark or self._bad_input else 'ok'
+        level = 'warn' if lost > self._lost_mark or self._bad_input else 'ok'
         self._lost_mark = lost
-        statuses.append(diagnostic_status(
-            f'{name}: inputs', in_level,
-            'proximity and cycle_status paired' if in_level == 'ok' else
-            'proximity messages lost or malformed input', self._scene.name,
-            {**p.counts, 'pending_status': pending[0], 'pending_proximity': pending[1],
-             'bad_input': self._bad_input}))
-        self._diag_pub.publish(diagnostic_array(self.get_clock().now().to_msg(), statuses))
+        stat.summary(level, 'proximity and cycle_status paired' if level == 'ok' else
+                     'proximity messages lost or malformed input')
+        stat.update({**p.counts, 'pending_status': pending[0], 'pending_proximity': pending[1],
+                     'bad_input': self._bad_input})
 
 
 def main(args=None):

@@ -12,9 +12,9 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Parameter table of monitor_node (ROS-free; the spec type is feeder_sim.params.ParamSpec)."""
+"""Parameter table of monitor_node (ROS-free; the spec type is feeder_common's)."""
 
-from feeder_sim.params import ParamSpec
+from feeder_common.params import ParamSpec
 
 MONITOR_PARAMS = (
     ParamSpec('scene', '', "scene YAML the feeder runs (the same file as the sim's); must load",
@@ -41,5 +41,5 @@ MONITOR_PARAMS = (
     ParamSpec('pair_timeout', 0.5, 'a cycle_status waits this long for its proximity, s (then '
               'its own sensor bit is used)', minimum=0.01, maximum=10.0),
     ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages', minimum=0.1,
-              maximum=60.0, read_only=True),
+              maximum=60.0),
 )

@@ -37,10 +37,10 @@ verdicts.
 from collections import deque
 from dataclasses import dataclass
 import math
-from typing import NamedTuple, Optional
+from typing import Optional
 
 import numpy as np
-from throwmap import sees
+from throwmap import PartOnArm
 
 WARMING_UP = 'warming up'
 TRACKING = 'tracking'
@@ -123,17 +123,9 @@ class Rules:
                 'arm_length': self.arm_length}
 
 
-class LimitSetOrbit(NamedTuple):
-    """States of a long orbit in the limit set; ``segments``: (start, stop) index ranges."""
-
-    edges: np.ndarray
-    radii: np.ndarray
-    segments: tuple
-
-
 def limit_set_orbit(scene, analysis, throws, attempts=20):
     """
-    Continue the analysis's limit-set orbit by ``throws`` throws.
+    Continue the analysis's limit-set orbit by ``throws`` throws (throwmap.PartOnArm.orbit).
 
     With scene effects an orbit may end early: the part is lost off a finite arm, or a noisy
     throw leaves the domain of f. The states before that are kept as one segment and, when the
@@ -142,24 +134,9 @@ def limit_set_orbit(scene, analysis, throws, attempts=20):
     every call.
     """
     ls = analysis.limit_set
-    model = scene.model
-    start = (int(ls.tail_edges[-1]), float(ls.tail_radii[-1]))
-    if scene.stochastic:
-        model.reseed(scene.seed)
-    edges, radii, segments, total = [], [], [], 0
-    for _ in range(attempts):
-        e, r, _, _, done = model.orbits([start[0]], [start[1]], int(throws) - total)
-        n = int(done[0])
-        if n > 0:
-            edges.append(e[0, 1:n + 1])
-            radii.append(r[0, 1:n + 1])
-            segments.append((total, total + n))
-            total += n
-        if total >= throws or not scene.stochastic:
-            break
-    if not edges:
-        return LimitSetOrbit(np.zeros(0, dtype=np.int64), np.zeros(0), ())
-    return LimitSetOrbit(np.concatenate(edges), np.concatenate(radii), tuple(segments))
+    part = PartOnArm(scene, seed=scene.seed if scene.stochastic else None)
+    return part.orbit(throws, start=(int(ls.tail_edges[-1]), float(ls.tail_radii[-1])),
+                      attempts=attempts)
 
 
 def orbit_readings(scene, orbit, radius, footprint):
@@ -167,12 +144,11 @@ def orbit_readings(scene, orbit, radius, footprint):
     Sensor bits along ``orbit`` at ``radius``: the scene's sensor model, noise included.
 
     A noisy sensor (sensor_noise) draws from the scene's seed, so the bits are the same on
-    every call; otherwise the bits are the geometric ``throwmap.sees``.
+    every call; otherwise the bits are the geometric ones.
     """
-    if getattr(scene.effects, 'sensor_noise', None) is None:
-        return np.asarray(sees(scene.part, orbit[0], orbit[1], radius, footprint), dtype=bool)
-    scene.model.reseed(scene.seed)
-    return np.asarray(scene.sense(orbit[0], orbit[1], radius, footprint), dtype=bool)
+    part = PartOnArm(scene, sensor_radius=radius, footprint=footprint,
+                     seed=scene.seed if scene.noisy_sensor else None)
+    return part.readings(orbit[0], orbit[1])
 
 
 def settle_throws(analysis):
@@ -186,7 +162,7 @@ def settle_throws(analysis):
 def rules_from_analysis(scene, analysis, orbit, warmup_cycles=-1, settle_cycles=-1,
                         silence_margin=1.5, early_margin=2, run_margin=0):
     """
-    Derive the rules at the analysis's sensor (``analysis.sensor``; feeder_sim.analysis).
+    Derive the rules at the analysis's sensor (``analysis.sensor``; throwmap.scene_analysis).
 
     ``orbit``: the limit set's states (:func:`limit_set_orbit`). ``warmup_cycles`` and
     ``settle_cycles`` < 0 take the analysis's values. Margins: a silence may last
@@ -208,7 +184,7 @@ def rules_from_analysis(scene, analysis, orbit, warmup_cycles=-1, settle_cycles=
         else None
     max_silence = int(math.ceil(pattern.max_gap * float(silence_margin))) \
         if pattern.max_gap is not None else None
-    noisy = getattr(scene.effects, 'sensor_noise', None) is not None
+    noisy = scene.noisy_sensor
     p_goal = None
     stoch = (analysis.stochastic or {}).get('sensor') if noisy else None
     if stoch and math.isclose(stoch['radius'], sensor.radius, rel_tol=0, abs_tol=1e-9):

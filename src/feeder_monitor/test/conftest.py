@@ -22,7 +22,8 @@ HERE = pathlib.Path(__file__).resolve()
 REPO = HERE.parents[3]
 SCENES = REPO / 'scenes'
 # Test the source trees (also when installed copies are on PYTHONPATH).
-sys.path[:0] = [str(HERE.parents[1]), str(HERE.parents[2] / 'feeder_sim')]
+sys.path[:0] = [str(HERE.parents[1]), str(HERE.parents[2] / 'feeder_sim'),
+                str(HERE.parents[2] / 'feeder_common')]
 
 
 @pytest.fixture(scope='session')

@@ -33,14 +33,20 @@ def test_round_trip(tmp_path):
     w.add_topic('/feeder/predicted/edge', 'std_msgs/msg/Int32', [VOLATILE])
     for k in range(5):
         w.write('/feeder/predicted/edge', 1000 + k,
-                ts.serialize_cdr(Int32(data=k), Int32.__msgtype__))
+                ts.serialize_cdr(Int32(data=k), Int32.__msgtype__), publish_time_ns=900 + k,
+                sequence=k + 1)
     w.write('/feeder/edge1_ready', 2000, ts.serialize_cdr(Bool(data=True), Bool.__msgtype__))
     assert w.counts == {'/feeder/edge1_ready': 1, '/feeder/predicted/edge': 5} and w.total == 6
     w.close()
     w.close()                          # idempotent
     meta = yaml.safe_load((path / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
     assert meta['storage_identifier'] == 'mcap' and meta['version'] == 9
-    assert meta['message_count'] == 6
+    assert meta['message_count'] == 6 and meta['ros_distro'] == 'kilted'
+    assert meta['starting_time']['nanoseconds_since_epoch'] == 1000
+    assert meta['duration']['nanoseconds'] == 1000
+    topics = {t['topic_metadata']['name']: t for t in meta['topics_with_message_count']}
+    assert topics['/feeder/edge1_ready']['topic_metadata']['type_description_hash'] == \
+        ts.hash_rihs01('std_msgs/msg/Bool')
     with Reader(path) as r:
         conns = {c.topic: c for c in r.connections}
         assert conns['/feeder/predicted/edge'].msgcount == 5
@@ -53,6 +59,19 @@ def test_round_trip(tmp_path):
                for c, t, raw in r.messages()]
     assert got[:5] == [('/feeder/predicted/edge', 1000 + k, k) for k in range(5)]
     assert got[5] == ('/feeder/edge1_ready', 2000, True)
+    # The MCAP layout rosbag2_storage_mcap writes, read with the mcap library.
+    from mcap.reader import make_reader
+    with open(path / 'bag.mcap', 'rb') as fh:
+        reader = make_reader(fh)
+        summary = reader.get_summary()
+        chans = {c.topic: c for c in summary.channels.values()}
+        assert chans['/feeder/edge1_ready'].metadata['topic_type_hash'].startswith('RIHS01_')
+        assert 'transient_local' in chans['/feeder/edge1_ready'].metadata[
+            'offered_qos_profiles']
+        msgs = [(m.log_time, m.publish_time, m.sequence) for _, c, m in reader.iter_messages()
+                if c.topic == '/feeder/predicted/edge']
+        assert msgs == [(1000 + k, 900 + k, k + 1) for k in range(5)]
+        assert [m.name for m in reader.iter_metadata()] == ['rosbag2']
 
 
 def test_refuses_an_existing_path_and_a_second_connection(tmp_path):

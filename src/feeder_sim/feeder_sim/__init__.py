@@ -13,9 +13,10 @@
 # limitations under the License.
 
 """
-feeder_sim: the feeder's simulator node and the ROS-free pieces it (and the monitor) use.
+feeder_sim: the feeder's simulator node (the predictor, or the hardware's stand-in).
 
 ROS-free modules: ``analysis`` (scene analysis at a chosen sensor radius), ``predictor`` (the
-part's state, throw by throw), ``markers`` (RViz geometry), ``params`` (parameter tables and
-checks). ROS glue: ``ros_glue`` (descriptors, diagnostics, messages) and ``sim_node``.
+part's state, throw by throw), ``markers`` (RViz geometry in the library's plane), ``params``
+(the parameter table and the checks that need the scene). ROS glue: ``marker_msgs`` (Marker
+messages in feeder_base) and ``sim_node``; the shared contract is feeder_common's.
 """

@@ -15,8 +15,10 @@
 """
 Geometry of the feeder's RViz markers, ROS-free (the node turns these into Marker messages).
 
-Everything is in frame ``feeder_base``: x along the arm from the pivot, y up, z out of the
-plate; the arm's surface is the line y = h. Namespaces and ids are stable, so that every new
+Everything is in the library's plane (frame F: x along the arm from the pivot, y up; the
+arm's surface is the line y = h); a box's third size is its depth out of the plane.
+feeder_sim.marker_msgs turns the specs into Marker messages in ``feeder_base`` (REP 103: F's y
+is its z). Namespaces and ids are stable, so that every new
 array replaces the previous markers in RViz:
 
 =========== ======= ===========================================================

@@ -13,50 +13,27 @@
 # limitations under the License.
 
 """
-Parameter tables (ROS-free): one spec per parameter, from which the node builds descriptors.
+Parameter table of sim_node (ROS-free) and the checks a range cannot express.
 
-The idea of generate_parameter_library without the tool: name, default (its type is the
-parameter's type), range, read-only flag and description live in one table; docs/nodes.md
-shows the same table. Checks that a range cannot express (a scene that must load, a start state
-inside the domain of f) are plain functions returning the reason of a rejection, or None.
+The spec type, the type coercion and the range checks are feeder_common's; here are the sim's
+parameters and the checks that need the scene: a scene that must load, a start state inside
+the domain of f. Each check returns the reason of a rejection, or None.
 """
 
-from dataclasses import dataclass
 import math
-from typing import Optional
 
-from throwmap import ThrowmapError
-
-
-@dataclass(frozen=True)
-class ParamSpec:
-    """A parameter: ``default`` fixes the type (bool, int, float or str)."""
-
-    name: str
-    default: object
-    description: str
-    minimum: Optional[float] = None
-    maximum: Optional[float] = None
-    read_only: bool = False
-    constraints: str = ''
-
-    def check_range(self, value):
-        """Reason why ``value`` is out of range, or None (rclpy checks this too)."""
-        if self.minimum is not None and value < self.minimum:
-            return f'{self.name} = {value} is below {self.minimum}'
-        if self.maximum is not None and value > self.maximum:
-            return f'{self.name} = {value} is above {self.maximum}'
-        return None
+from feeder_common.params import check_scene, ParamSpec
 
 
 SIM_PARAMS = (
-    ParamSpec('autostart', True, 'configure and activate at start-up (the pip install of ROS 2 '
-              'has no ros2 lifecycle CLI); false: wait for ~/change_state', read_only=True),
+    ParamSpec('autostart', True, 'configure and activate at start-up; false: wait for '
+              '~/change_state (ros2 lifecycle set)', read_only=True),
     ParamSpec('scene', '', 'scene YAML (throwmap format, e.g. scenes/triangle.yaml); must load',
               read_only=True, constraints='a file throwmap.load_scene accepts'),
-    ParamSpec('hardware_mode', False, 'true: stand in for the driver (services ~/trigger_cycle, '
-              '~/enable; topics proximity, cycle_status, joint_states) with sensor bits from '
-              "the prediction; false: follow the driver's cycle_status", read_only=True),
+    ParamSpec('hardware_mode', False, 'true: stand in for the driver, with exactly its '
+              'interface (services ~/trigger_cycle, ~/enable; topics proximity, cycle_status, '
+              'joint_states), sensor bits from the simulated part; false: the predictor, '
+              "following the driver's cycle_status", read_only=True),
     ParamSpec('start_edge', 0, 'edge the part rests on before the first throw (default: the '
               "scene's start); setting it (or start_radius) restarts the prediction there",
               minimum=0, maximum=1023,
@@ -74,47 +51,22 @@ SIM_PARAMS = (
               maximum=10.0),
     ParamSpec('cycle_period', 1.0, 'hardware mode: seconds between cycles while enabled',
               minimum=0.005, maximum=60.0),
-    ParamSpec('markers_period', 0.1, 'at most one markers message per this many seconds (the '
-              'last state always follows within it); 0: one after every throw', minimum=0.0,
-              maximum=10.0),
+    ParamSpec('markers_period', 0.1, 'predictor mode: at most one markers message per this many '
+              'seconds (the last state always follows within it); 0: one after every throw',
+              minimum=0.0, maximum=10.0),
     ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages', minimum=0.1,
-              maximum=60.0, read_only=True),
+              maximum=60.0),
 )
 
 
-def check_scene(path, loader):
-    """Reason why the scene at ``path`` is unusable (``loader`` raises ThrowmapError), or None."""
-    if not path:
-        return ('scene: not set; give the path of a scene YAML, e.g. '
-                '--ros-args -p scene:=scenes/triangle.yaml')
-    try:
-        loader(path)
-    except ThrowmapError as exc:
-        return f'scene: {exc}'
-    except OSError as exc:      # unreadable file: permissions, a directory, ...
-        return f'scene: cannot read {path}: {exc}'
-    return None
-
-
-def check_changes(specs, changes, loader):
+def check_changes(changes, loader):
     """
-    Reason to reject a parameter set, or None: ranges of the table and a scene that must load.
+    Reason to reject a parameter set beyond types and ranges, or None: a scene that must load.
 
-    ``specs`` maps names to ParamSpecs (names not in it are not checked); ``changes`` maps
-    names to new values; ``loader`` loads a scene (see :func:`check_scene`).
+    ``changes`` maps names to new values; ``loader`` loads a scene (see :func:`check_scene`).
     """
-    for name, value in changes.items():
-        spec = specs.get(name)
-        if spec is None:
-            continue
-        if not isinstance(value, (bool, str)):
-            reason = spec.check_range(value)
-            if reason:
-                return reason
-        if name == 'scene':
-            reason = check_scene(value, loader)
-            if reason:
-                return reason
+    if 'scene' in changes:
+        return check_scene(changes['scene'], loader)
     return None
 
 

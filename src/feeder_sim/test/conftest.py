@@ -21,8 +21,8 @@ from throwmap import analyse, load_scene
 HERE = pathlib.Path(__file__).resolve()
 REPO = HERE.parents[3]
 SCENES = REPO / 'scenes'
-# Test the source tree (also when an installed copy is on PYTHONPATH).
-sys.path.insert(0, str(HERE.parents[1]))
+# Test the source trees (also when installed copies are on PYTHONPATH).
+sys.path[:0] = [str(HERE.parents[1]), str(HERE.parents[2] / 'feeder_common')]
 
 
 @pytest.fixture(scope='session')

@@ -14,8 +14,9 @@
 
 import pathlib
 
-from feeder_sim.analysis import load
-from feeder_sim.params import check_scene, check_start, ParamSpec, SIM_PARAMS
+from feeder_common.params import check_scene
+from feeder_sim.params import check_start, SIM_PARAMS
+from throwmap import load_scene as load
 
 
 DOCS = pathlib.Path(__file__).resolve().parents[3] / 'docs' / 'nodes.md'
@@ -48,33 +49,24 @@ def test_specs_are_typed_ranged_and_documented():
         assert type(s.default) in (bool, int, float, str)
         assert s.description
         if s.minimum is not None:
-            assert s.check_range(s.minimum) is None
-            assert s.check_range(s.minimum - 1) is not None
+            assert s.check(type(s.default)(s.minimum)) is None
+            assert s.check(type(s.default)(s.minimum - 1)) is not None
         assert f'`{s.name}`' in text, f'{s.name} missing from docs/nodes.md'
 
 
-def test_check_range():
-    spec = ParamSpec('x', 1.0, 'x', minimum=0.0, maximum=2.0)
-    assert spec.check_range(1.0) is None
-    assert 'below' in spec.check_range(-0.1)
-    assert 'above' in spec.check_range(2.5)
-
-
 def test_config_yaml_matches_the_table():
+    """One '/**' section for both roles; every run-time parameter without a scene default."""
     import yaml
     path = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'sim.yaml'
     data = yaml.safe_load(path.read_text())
     specs = {s.name: s for s in SIM_PARAMS}
-    assert set(data) == {'/**/feeder_sim', '/**/feeder_driver'}
-    for node, section in data.items():
-        params = section['ros__parameters']
-        assert set(params) <= set(specs), set(params) - set(specs)
-        for name, value in params.items():
-            if name == 'hardware_mode':
-                assert value == (node == '/**/feeder_driver')
-            else:
-                assert value == specs[name].default, (node, name)
-            assert type(value) is type(specs[name].default), (node, name)
+    assert list(data) == ['/**']
+    params = data['/**']['ros__parameters']
+    assert set(params) == {s.name for s in SIM_PARAMS if not s.read_only} - \
+        {'start_edge', 'start_radius'}
+    for name, value in params.items():
+        assert value == specs[name].default, name
+        assert type(value) is type(specs[name].default), name
 
 
 def test_a_start_beyond_a_finite_arm_is_rejected(short_arm):

@@ -16,6 +16,7 @@
 
 import io
 import json
+import math
 import subprocess
 import sys
 
@@ -115,3 +116,73 @@ def test_errors_exit_2_with_a_message(argv, words, capsys):
     assert code == 2
     err = capsys.readouterr().err
     assert err.startswith('throwmap: error: ') and words in err
+
+
+def _expected_row(model, line, lineno):
+    """Return what the batch answered for a line before it was rebuilt (model.throw per line)."""
+    from throwmap import ThrowmapError
+    try:
+        state = json.loads(line)
+        if not isinstance(state, dict) or 'edge' not in state or 'R' not in state:
+            raise ValueError('expected an object with "edge" and "R"')
+        unknown = set(state) - {'edge', 'R'}
+        if unknown:
+            raise ValueError(f'unknown keys {sorted(unknown)}; allowed: edge, R')
+        res = model.throw(state['edge'], state['R'])
+    except ThrowmapError as exc:
+        return {'error': str(exc)}
+    except ValueError as exc:
+        return {'error': f'line {lineno}: {exc}'}
+    return {'edge': res.edge, 'R': None if math.isnan(res.R) else res.R, 'kind': res.kind,
+            'flight_time': res.flight_time, 'net_rotation': res.net_rotation,
+            'impacts': len(res.impacts), 'first_contact_vertex': res.first_contact_vertex}
+
+
+@pytest.mark.parametrize('scene_file', ['triangle.yaml', 'house.yaml', 'experiment.yaml'])
+def test_batch_answers_each_line_as_a_throw_would_in_order(scene_file):
+    import numpy as np
+    from throwmap import load_scene
+    from throwmap.cli import BATCH_BLOCK, throw_batch
+    rng = np.random.default_rng(5)
+    odd = ['not json', '{"edge": 1}', '{"edge": 1, "R": 0.2, "x": 1}', '{"edge": 1.0, "R": 0.2}',
+           '{"edge": true, "R": 0.2}', '{"edge": 1, "R": "0.2"}', '{"edge": 9, "R": 0.2}',
+           '{"edge": 1, "R": 1e400}', '{"R": 0.2, "edge": 1}', '{"edge": 01, "R": 0.2}',
+           '   ', '{ "edge" :2 ,"R":0.2 }', '{"edge": 1, "R": 1}', '{"edge": 1, "R": 0.02}',
+           '{"edge": 0, "R": 0.45}', '{"edge": -1, "R": 0.2}', '[1, 2]', '{"edge": 1, "R": -0.2}']
+    lines = []
+    for k in range(2 * BATCH_BLOCK + 300):
+        if k % 97 == 0:
+            lines.append(odd[(k // 97) % len(odd)])
+        else:
+            lines.append(json.dumps({'edge': int(rng.integers(0, 5)),
+                                     'R': float(rng.uniform(0.05, 0.42))}))
+    text = '\n'.join(lines) + '\n'
+    batch = load_scene(str(SCENES / scene_file))
+    out = io.StringIO()
+    code = throw_batch(batch.model, io.StringIO(text), out)
+    got = [json.loads(x) for x in out.getvalue().splitlines()]
+    single = load_scene(str(SCENES / scene_file))   # same seed: the same draws, in order
+    expected = [_expected_row(single.model, line, k + 1) for k, line in enumerate(lines)
+                if line.strip()]
+    assert code == 1 and len(got) == len(expected)
+    assert got == expected
+    assert sum('error' in g for g in got) > len(odd)
+
+
+def test_batch_streams_its_answers_block_by_block():
+    from throwmap.cli import BATCH_BLOCK
+    proc = subprocess.Popen([sys.executable, '-m', 'throwmap.cli', 'throw', TRIANGLE, '--json'],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        proc.stdin.write('{"edge": 1, "R": 0.12}\n' * BATCH_BLOCK)
+        proc.stdin.flush()
+        # The first block is answered while stdin is still open.
+        first = [proc.stdout.readline() for _ in range(BATCH_BLOCK)]
+        assert all(json.loads(x)['kind'] == 'jog' for x in first)
+        proc.stdin.write('{"edge": 2, "R": 0.01}\n')
+        proc.stdin.close()
+        rest = proc.stdout.read().splitlines()
+        assert len(rest) == 1 and 'bound (3)' in json.loads(rest[0])['error']
+        assert proc.wait(timeout=60) == 1
+    finally:
+        proc.kill()

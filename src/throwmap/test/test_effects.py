@@ -19,10 +19,10 @@ import math
 
 import numpy as np
 import pytest
-from throwmap import general, InputError, kernel, limit_set, load_scene, orbit, sees, ThrowModel
-from throwmap.closed import release_state
-from throwmap.effect_model import carry_margin, EffectModel, PartLost
-from throwmap.scene import Scene
+from throwmap import (EffectModel, InputError, limit_set, load_scene, orbit, PartLost, Scene, sees,
+                      sensor_probability, ThrowModel)
+from throwmap.internal import (carry_margin, carry_release_state, plate_drag,
+                               routh_stronge_impact, sticking_impact)
 from throwmap_testing import PAPER_W, SCENES, TRIANGLE_VERTICES
 
 BASE = {'name': 't', 'part': {'vertices': TRIANGLE_VERTICES}, 'arm': {'offset': -0.005},
@@ -45,7 +45,7 @@ def states(model, count, seed, r_hi=0.28):
     rng = np.random.default_rng(seed)
     part = model.part
     edges = rng.choice(part.stable_edges, count)
-    lo = np.array([max(model.r_grasp[e], -part.u_l[e]) * 1.001 for e in edges])
+    lo = np.array([model.r_min(e) * 1.001 for e in edges])
     return edges, lo + rng.uniform(0, 1, count) * (r_hi - lo)
 
 
@@ -101,9 +101,9 @@ def test_backplate_friction_to_zero_converges_to_the_base_model(base):
 
 
 def test_plate_drag_translation_rotation_and_its_torque_about_a_pivot(triangle):
-    qu, qv, qw = general.plate_quadrature(triangle.part, 4)
+    qu, qv, qw = triangle.part.area_quadrature(4)
     coef = 0.17
-    fx, fy, tq = general.plate_drag(0.3, -0.4, 0.0, 0.7, qu[1], qv[1], qw, coef, 1e-9)
+    fx, fy, tq = plate_drag(0.3, -0.4, 0.0, 0.7, qu[1], qv[1], qw, coef, 1e-9)
     assert (fx, fy) == pytest.approx((-0.6 * coef, 0.8 * coef), rel=1e-9)
     assert tq == pytest.approx(0.0, abs=1e-12)
     # Rolling about vertex P: every point moves perpendicular to its radius from P, so the drag
@@ -112,7 +112,7 @@ def test_plate_drag_translation_rotation_and_its_torque_about_a_pivot(triangle):
     p = 2
     om = -3.0
     vx, vy = -om * (-bv[p]), om * (-bu[p])      # v_cm = om z x (CM - P), phi = 0
-    fx, fy, tq = general.plate_drag(vx, vy, om, 0.0, qu[1], qv[1], qw, coef, 1e-12)
+    fx, fy, tq = plate_drag(vx, vy, om, 0.0, qu[1], qv[1], qw, coef, 1e-12)
     cx, cy = -bu[p], -bv[p]
     torque_p = tq + (cx * fy - cy * fx)
     dmean = float((qw * np.hypot(qu[1] - bu[p], qv[1] - bv[p])).sum())
@@ -126,13 +126,13 @@ def test_impact_law_with_e0_and_wide_cone_is_the_sticking_impact():
         rx, ry = rng.uniform(-0.05, 0.05, 2)
         vx, vy = rng.uniform(-1, 1), rng.uniform(-2, -0.1)
         om, rho2 = rng.uniform(-8, 8), rng.uniform(1e-4, 2e-3)
-        ref = kernel.sticking_impact(rx, ry, vx, vy, om, rho2)
+        ref = sticking_impact(rx, ry, vx, vy, om, rho2)
         if vy + om * rx >= 0 or ref[1] < vy:
             continue    # separating, or the sticking impulse would pull: no impact in the law
         checked += 1
-        got = general.impact(rx, ry, vx, vy, om, rho2, 0.0, math.inf)
+        got = routh_stronge_impact(rx, ry, vx, vy, om, rho2, 0.0, math.inf)
         assert got == pytest.approx(ref, rel=1e-10, abs=1e-12)
-        big = general.impact(rx, ry, vx, vy, om, rho2, 0.0, 1e6)
+        big = routh_stronge_impact(rx, ry, vx, vy, om, rho2, 0.0, 1e6)
         assert big == pytest.approx(ref, rel=1e-10, abs=1e-12)
     assert checked > 150
 
@@ -145,7 +145,7 @@ def test_impacts_never_gain_energy_and_respect_the_friction_cone():
         rho2 = rng.uniform(1e-4, 2e-3)
         e, mu = rng.uniform(0, 1), rng.uniform(0, 2)
         ke0 = 0.5 * (vx * vx + vy * vy + rho2 * om * om)
-        vx1, vy1, om1 = general.impact(rx, ry, vx, vy, om, rho2, e, mu)
+        vx1, vy1, om1 = routh_stronge_impact(rx, ry, vx, vy, om, rho2, e, mu)
         ke1 = 0.5 * (vx1 * vx1 + vy1 * vy1 + rho2 * om1 * om1)
         assert ke1 <= ke0 * (1 + 1e-12) + 1e-15
         pt, pn = vx1 - vx, vy1 - vy
@@ -234,7 +234,6 @@ def test_sensor_noise_rates(base):
 
 
 def test_sensor_guarantee_becomes_a_probability():
-    from throwmap.stochastic import sensor_probability
     s = scene(sensor={'goal_edge': 1, 'false_positive': 0.02}, noise={'seed': 2},
               effects=['sensor_noise'])
     exact = sensor_probability(scene().model, 1, 0.27, 0.0, (1, 0.12), 600, seeds=2)
@@ -245,7 +244,7 @@ def test_sensor_guarantee_becomes_a_probability():
 
 def test_finite_carry_tends_to_the_impulsive_throw(base):
     part = base.part
-    st = release_state(1, 0.12, base.w, base.h, 1e-9, part.d)
+    st = carry_release_state(1, 0.12, base.w, base.h, 1e-9, part.d)
     hd = base.h + part.d[1]
     assert st == pytest.approx((0.12, hd, 0.0, -hd * base.w, 0.12 * base.w, base.w), abs=1e-9)
     model = scene(contact={'mu': 0.8}, throw={'carry': {'release_angle': 1e-8}},

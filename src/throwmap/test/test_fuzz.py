@@ -149,7 +149,7 @@ def state(case, model):
     part = model.part
     edges = part.stable_edges
     edge = edges[int(case['edge_pick'] * len(edges)) % len(edges)]
-    r_min = max(model.r_grasp[edge], -part.u_l[edge])
+    r_min = model.r_min(edge)
     return edge, r_min * (1 + 10 ** case['log_beyond']) + 1e-300
 
 
@@ -277,7 +277,7 @@ def test_fuzz_throw_map(case):
         # against the part (a CM nearly above a vertex): rounded differently, it may move
         # past a state that close to it.
         u = min(abs(part.u_l[edge]), abs(part.u_r[edge]))
-        r_min = max(model.r_grasp[edge], -part.u_l[edge])
+        r_min = model.r_min(edge)
         assert R / r_min - 1 <= 1e-11 + 1e-14 * part.r / u, (R / r_min - 1, part.r / u)
         return
     same = signature(res10) == signature(res) and abs(res10.R / k10 - res.R) <= 1e-9 * (

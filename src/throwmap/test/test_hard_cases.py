@@ -363,7 +363,7 @@ def test_release_speed_to_zero_flight_time_to_zero():
         part = model.part
         tol_t = model.accuracy.contact_time_tol
         for edge in part.stable_edges:
-            R = 1.5 * max(model.r_grasp[edge], -part.u_l[edge])
+            R = 1.5 * model.r_min(edge)
             res = model.throw(edge, R)
             assert_valid(model, res)
             assert (res.edge, res.kind) == (edge, 'jog')
@@ -414,7 +414,7 @@ def test_very_fast_throws_with_several_turns_find_the_first_contact(w):
     part = model.part
     turns = []
     for edge in part.stable_edges:
-        lo = max(model.r_grasp[edge], -part.u_l[edge])
+        lo = model.r_min(edge)
         for R in np.linspace(lo * 1.01, lo * 4, 5):
             res = model.throw(edge, R)
             assert_valid(model, res)
@@ -507,7 +507,7 @@ def test_many_vertices_semicircle(n):
     part = Part(np.vstack([0.05 * np.stack([np.cos(arc), np.sin(arc)], axis=1), [[-0.05, 0]]]))
     flat = int(np.argmax(part.edge_length))
     model = ThrowModel(part, -0.5 * part.d_min, PAPER_W, G)
-    lo = max(model.r_grasp[flat], -part.u_l[flat])
+    lo = model.r_min(flat)
     kinds = set()
     for R in np.linspace(lo * 1.001, 0.4, 8):
         res = model.throw(flat, R)
@@ -581,7 +581,7 @@ def test_very_thin_parts(aspect):
     assert part.stable.all() and part.d_min == pytest.approx(thick / 2)
     model = ThrowModel(part, -0.25 * thick, PAPER_W, G)
     for edge in range(4):
-        lo = max(model.r_grasp[edge], -part.u_l[edge])
+        lo = model.r_min(edge)
         for R in lo * (1 + np.logspace(-9, 0.5, 12)):
             assert_valid(model, model.throw(edge, R))
     edges, radii, rots, status, done = model.orbits([0, 1], [0.08, 1.2 * model.r_grasp[1]], 300)
@@ -898,7 +898,7 @@ def test_regression_short_hop_is_not_rounded_to_an_ulp_of_d():
     part = scene.part
     assert part.d[1] + part.V[1, 1] > 0      # the rounding that used to bite
     for edge in part.stable_edges:
-        R = 1.2 * max(scene.model.r_grasp[edge], -part.u_l[edge])
+        R = 1.2 * scene.model.r_min(edge)
         for w in (1e-3, 1e-5, 1e-7, 1e-8, 1e-10):
             model = ThrowModel(part, scene.h, w, scene.gravity)
             res = model.throw(edge, R)
@@ -955,6 +955,6 @@ def test_regression_rolling_ends_are_exact_with_the_cm_next_to_a_vertex():
         assert math.remainder(exterior - ends, 2 * math.pi) == pytest.approx(0, abs=1e-14)
     model = ThrowModel(part, -0.5 * part.d_min, 20.0, G)
     for edge in part.stable_edges:
-        lo = max(model.r_grasp[edge], -part.u_l[edge])
+        lo = model.r_min(edge)
         for R in lo * (1 + np.logspace(-6, 1, 15)):
             assert_valid(model, model.throw(edge, R))

@@ -19,7 +19,7 @@ import math
 import numpy as np
 import pytest
 from throwmap import in_dynamic_grasp, Part, ThrowModel
-from throwmap.kernel import sticking_impact
+from throwmap.internal import sticking_impact
 from throwmap_testing import PAPER_W, random_convex_vertices, random_state, TRIANGLE_VERTICES
 
 

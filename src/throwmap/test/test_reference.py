@@ -113,7 +113,7 @@ def random_case(rng):
     g = -rng.uniform(2.0, 20.0)
     model = fast_model(v, cm, rho2, h, w, g)
     edge = int(rng.choice(model.part.stable_edges))
-    lo = max(model.r_grasp[edge], -model.part.u_l[edge])
+    lo = model.r_min(edge)
     if lo > MAX_GRASP_PARTS * model.part.r:
         return random_case(rng)     # a barely stable edge: R_grasp of metres, flights of hours
     R = float(lo + rng.uniform(1e-6, 1.0) * max(4 * model.part.r, lo))
@@ -302,7 +302,7 @@ def _graze_states(count):
         v, cm, rho2, h, w, g, edge, _ = random_case(rng)
         model = fast_model(v, cm, rho2, h, w, g)
         part = model.part
-        lo = max(model.r_grasp[edge], -part.u_l[edge]) * (1 + 1e-9) + 1e-12
+        lo = model.r_min(edge) * (1 + 1e-9) + 1e-12
         radii = np.linspace(lo, lo + 4 * part.r, 80)
         times = np.array([model.throw(edge, r).flight_time for r in radii])
         steps = np.abs(np.diff(times))
@@ -363,7 +363,7 @@ def _flat_landing_states(count):
         v, cm, rho2, h, w, g, edge, _ = random_case(rng)
         model = fast_model(v, cm, rho2, h, w, g)
         part = model.part
-        lo = max(model.r_grasp[edge], -part.u_l[edge]) * (1 + 1e-9) + 1e-12
+        lo = model.r_min(edge) * (1 + 1e-9) + 1e-12
         radii = np.linspace(lo, lo + 4 * part.r, 40)
         first = [model.throw(edge, r).first_contact_vertex for r in radii]
         for m in range(len(radii) - 1):
@@ -465,7 +465,7 @@ def test_jog_flip_boundaries_of_the_paper_triangle_coincide():
     sim = ReferenceSimulator(part.vertices, part.cm, part.rho2, -0.005, 5.5851, -9.66)
     delta = DISC_DELTA_REL * part.r
     for edge in part.stable_edges:
-        a = max(model.r_grasp[edge], -part.u_l[edge]) + 1e-9
+        a = model.r_min(edge) + 1e-9
         assert model.f(edge, a)[2] == 'jog'
         b = a + 0.01
         while model.f(edge, b)[2] == 'jog':
@@ -484,7 +484,7 @@ def test_jog_flip_boundaries_of_the_paper_triangle_coincide():
         fast = model.throw(edge, b)
         moved = dataclasses.replace(fast, R=fast.R + 1e-6 * part.r)
         assert not near_discontinuity(sim, edge, a, moved, part.r)
-        inside = 0.5 * (max(model.r_grasp[edge], -part.u_l[edge]) + a)
+        inside = 0.5 * (model.r_min(edge) + a)
         assert not near_discontinuity(sim, edge, inside, model.throw(edge, inside), part.r)
 
 

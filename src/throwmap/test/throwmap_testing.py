@@ -50,6 +50,6 @@ def random_state(model, rng, spread=3.0):
     """Return a random (edge, R) inside the domain of f."""
     part = model.part
     edge = int(rng.choice(part.stable_edges))
-    lo = max(model.r_grasp[edge], -part.u_l[edge]) * 1.0001 + 1e-9
+    lo = model.r_min(edge) * 1.0001 + 1e-9
     R = lo + rng.uniform(0, spread) * max(lo, part.r)
     return edge, float(R)

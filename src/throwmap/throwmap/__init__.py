@@ -20,21 +20,35 @@ Quick use::
     from throwmap import load_scene
     scene = load_scene('scenes/triangle.yaml')
     scene.model.f(1, 0.12)          # -> (edge', R', 'jog' | 'flip')
+
+The public API is what this module exports; throwmap.internal lists the compiled pieces the
+tests exercise directly. docs/physics.md, docs/effects.md and docs/numerics.md describe the
+modules (layers, from the bottom: errors, status, part, grasp, ballistic, catch, base_map,
+event_sim, pipeline, effects, compose, model, effect_model, orbits, basins, sensor,
+stochastic, scene, part_on_arm, analysis, cli).
 """
 
-from .dynamics import (analyse, Analysis, Basin, basin, default_grid, design_radii, limit_set,
-                       limit_set_from_orbit, LimitSet, Orbit, orbit, sees, sensor_design,
-                       SensorDesign)
-from .effect_model import EffectModel, PartLost
-from .errors import DomainError, InputError, NumericalError, ThrowmapError
+from .accuracy import Accuracy, SimulatorAccuracy
+from .analysis import (analyse, Analysis, analysis_json, LIMIT_SET_FIELDS, limit_set_rows,
+                       scene_analysis, SensorDesignError)
+from .basins import Basin, basin, default_grid, design_radii
+from .effect_model import EffectModel, EffectThrowResult
+from .errors import DomainError, InputError, NumericalError, PartLost, ThrowmapError
 from .grasp import edge_grasp, grasp_table, in_dynamic_grasp, wrench_cone_margins
-from .model import Accuracy, Impact, ThrowModel, ThrowResult
+from .model import Impact, ThrowModel, ThrowResult
+from .orbits import limit_set, limit_set_from_orbit, LimitSet, Orbit, orbit
 from .part import Part
+from .part_on_arm import PartOnArm, resting_pose, Throw, wrap_angle
 from .scene import load_scene, Scene
+from .sensor import read_sensor, sees, sensor_design, SensorDesign
+from .stochastic import basin_distribution, sensor_probability, SensorProbability
 
-__all__ = ['Accuracy', 'analyse', 'Analysis', 'basin', 'Basin', 'default_grid', 'design_radii',
-           'DomainError', 'edge_grasp', 'EffectModel', 'grasp_table', 'Impact',
-           'in_dynamic_grasp', 'InputError', 'limit_set', 'limit_set_from_orbit', 'LimitSet',
-           'load_scene', 'NumericalError', 'orbit', 'Orbit', 'Part', 'PartLost', 'Scene', 'sees',
-           'sensor_design', 'SensorDesign', 'ThrowmapError', 'ThrowModel', 'ThrowResult',
-           'wrench_cone_margins']
+__all__ = ['Accuracy', 'analyse', 'Analysis', 'analysis_json', 'basin', 'Basin',
+           'basin_distribution', 'default_grid', 'design_radii', 'DomainError', 'edge_grasp',
+           'EffectModel', 'EffectThrowResult', 'grasp_table', 'Impact', 'in_dynamic_grasp',
+           'InputError', 'LIMIT_SET_FIELDS', 'limit_set', 'limit_set_from_orbit',
+           'limit_set_rows', 'LimitSet', 'load_scene', 'NumericalError', 'orbit', 'Orbit',
+           'Part', 'PartLost', 'PartOnArm', 'read_sensor', 'resting_pose', 'Scene',
+           'scene_analysis', 'sees', 'sensor_design', 'sensor_probability', 'SensorDesign',
+           'SensorDesignError', 'SensorProbability', 'SimulatorAccuracy', 'Throw',
+           'ThrowmapError', 'ThrowModel', 'ThrowResult', 'wrap_angle', 'wrench_cone_margins']

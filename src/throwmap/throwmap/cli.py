@@ -15,18 +15,26 @@
 """``throwmap`` command line: grasp, throw, orbit, limit-set, basin, design, plot."""
 
 import argparse
+import itertools
 import json
 import math
 import os
+import re
 import sys
 import time
 import warnings
 
 import numpy as np
 
-from .dynamics import analyse, basin, default_grid, limit_set, orbit
+from .analysis import analyse
+from .basins import basin, default_grid
 from .errors import ThrowmapError
+from .orbits import limit_set, orbit
 from .scene import load_scene
+from .status import LOST, OK
+
+# The batch reads stdin in blocks of this many lines: one f_batch, one write, one flush each.
+BATCH_BLOCK = 4096
 
 
 def _json_default(obj):
@@ -100,10 +108,9 @@ def cmd_grasp(scene, args, out):
                           'u_l': float(scene.part.u_l[g.edge]),
                           'u_r': float(scene.part.u_r[g.edge])} for g in rows],
                'R_grasp': r_all, 'mu_min': mu_all,
-               'carry_R_min': ({str(i): float(scene.model.r_grasp[i])
-                                for i in scene.part.stable_edges}
-                               if getattr(getattr(scene, 'effects', None), 'carry', None)
-                               else None)}, out)
+               'domain_R_min': ({str(i): float(scene.model.r_min(i))
+                                 for i in scene.part.stable_edges}
+                                if scene.model.domain_note() else None)}, out)
         return 0
     out.write(f'{scene.name}: dynamic grasp (impulse cone, constraints (1)-(4)), h = '
               f'{scene.h * 100:g} cm\n')
@@ -114,21 +121,209 @@ def cmd_grasp(scene, args, out):
               'binding': f'({g.binding})' if g.stable else '-'} for g in rows]
     _table(table, ['edge', 'stable', 'd (cm)', 'R_grasp (cm)', 'mu_min', 'binding'], out)
     out.write(f'all stable edges: R >= {r_all * 100:.3f} cm with mu >= {mu_all:.3f}\n')
-    carry = getattr(getattr(scene, 'effects', None), 'carry', None)
-    if carry is not None:
-        # The impulse cone above is the paper's limit; the scene's carry has its own domain.
-        out.write(f'with the finite carry (release at {math.degrees(carry.release_angle):g} deg, '
-                  f'mu = {scene.model.mu:g}): R >= '
-                  + ', '.join(f'{scene.model.r_grasp[i] * 100:.3f} cm on E{i}'
-                              for i in scene.part.stable_edges) + '\n')
+    note = scene.model.domain_note()
+    if note:
+        # The impulse cone above is the paper's limit; an effect (finite_carry) moves the domain.
+        out.write(note + '\n')
     return 0
 
 
-def _throw_row(model, edge, R):
-    res = model.throw(edge, R)
-    return {'edge': res.edge, 'R': res.R, 'kind': res.kind, 'flight_time': res.flight_time,
-            'net_rotation': res.net_rotation, 'impacts': len(res.impacts),
-            'first_contact_vertex': res.first_contact_vertex}
+# One state as JSON, the common spelling: {"edge": <int>, "R": <number>} (JSON's grammar: its
+# whitespace, its numbers). Anything else goes through json.loads.
+_WS = r'[ \t\n\r]*'
+_STATE_TEXT = (_WS + r'\{' + _WS + r'"edge"' + _WS + ':' + _WS + r'(-?(?:0|[1-9][0-9]*))' + _WS
+               + ',' + _WS + r'"R"' + _WS + ':' + _WS
+               + r'(-?(?:0|[1-9][0-9]*)(?:\.[0-9]+)?(?:[eE][-+]?[0-9]+)?)' + _WS + r'\}' + _WS)
+_STATE = re.compile(_STATE_TEXT)
+_STATES = re.compile('^' + _STATE_TEXT.replace(r'[ \t\n\r]', r'[ \t\r]') + '$', re.MULTILINE)
+
+
+def _parse_state(line, lineno):
+    """
+    Return (edge, R) of one input line; ValueError with the line number if it is not a state.
+
+    The common spelling is matched directly; anything else goes through json.loads, which
+    accepts exactly what JSON does and says what is wrong.
+    """
+    m = _STATE.fullmatch(line)
+    if m:
+        return int(m.group(1)), float(m.group(2))
+    try:
+        state = json.loads(line)
+        if not isinstance(state, dict) or 'edge' not in state or 'R' not in state:
+            raise ValueError('expected an object with "edge" and "R"')
+        unknown = set(state) - {'edge', 'R'}
+        if unknown:
+            raise ValueError(f'unknown keys {sorted(unknown)}; allowed: edge, R')
+    except ValueError as exc:
+        raise ValueError(f'line {lineno}: {exc}') from None
+    return state['edge'], state['R']
+
+
+# One answer: what model.throw(edge, R) gives, as json.dumps would write it (floats by repr).
+_ROW = ('{"edge": %d, "R": %r, "kind": "%s", "flight_time": %r, "net_rotation": %r, '
+        '"impacts": %d, "first_contact_vertex": %d}\n')
+_ROW_TEXT = _ROW.replace('%r', '%s')
+
+
+def _number(x):
+    """Return a float for JSON: nan and inf (not JSON) as None."""
+    return x if math.isfinite(x) else None
+
+
+def _states(model, lines, first):
+    """
+    Parse a block of lines (the first is line ``first``); return (answers, todo, edges, R).
+
+    ``answers`` holds the error of each line that is refused before throwing (not a state, or
+    what throw() refuses first: types, edge numbers, unstable edges, R), BLANK for a blank
+    line; ``todo`` the other lines, in order, with their states. A block of states in the
+    common spelling is parsed at once.
+    """
+    answers = [None] * len(lines)
+    part = model.part
+    found = _STATES.findall(''.join(lines))
+    if len(found) == len(lines):        # every line in the common spelling
+        text_e, text_r = zip(*found)
+        try:
+            edges = np.fromiter(map(int, text_e), np.int64, len(lines))
+        except OverflowError:       # an edge beyond 64 bits: line by line
+            pass
+        else:
+            radii = np.fromiter(map(float, text_r), np.float64, len(lines))
+            good = (edges >= 0) & (edges < part.n)
+            good[good] = part.stable[edges[good]]
+            good &= np.isfinite(radii)
+            if good.all():
+                return answers, range(len(lines)), edges, radii
+    stable = part.stable.tolist()
+    todo, edges, radii = [], [], []
+    for k, line in enumerate(lines):
+        if not line.strip():
+            answers[k] = BLANK
+            continue
+        try:
+            edge, R = _parse_state(line, first + k)
+        except ValueError as exc:
+            answers[k] = str(exc)
+            continue
+        if not (type(edge) is int and type(R) is float and 0 <= edge < part.n
+                and stable[edge] and math.isfinite(R)):
+            err = model.domain_error(edge, R)
+            if err is not None and err.condition in ('edge_index', 'stable_edge', 'radius'):
+                answers[k] = str(err)
+                continue
+        todo.append(k)
+        edges.append(int(edge))
+        radii.append(float(R))
+    return answers, todo, np.array(edges, dtype=np.int64), np.array(radii, dtype=np.float64)
+
+
+def _batch(model, lines, first):
+    """
+    Throw the state of every line of a block with one f_batch, in order.
+
+    Returns (answers, columns): one answer per line, (edge, R, kind, flight time, net
+    rotation, events, first contact vertex) of the throw or an error message (str), the error
+    model.throw(edge, R) would raise for that line; ``columns`` the f_batch result when every
+    line is a throw that landed on the arm (the common case), else None.
+    """
+    answers, todo, edges, radii = _states(model, lines, first)
+    if not len(todo):
+        return answers, None
+    res = model.f_batch(edges, radii)
+    codes = res['status']
+    if len(todo) == len(lines) and not codes.any():
+        return None, res
+    rows = zip(res['edge'].tolist(), res['R'].tolist(), res['kind'].tolist(),
+               res['flight_time'].tolist(), res['net_rotation'].tolist(),
+               res['events'].tolist(), res['first_contact_vertex'].tolist())
+    for i, (k, code, row) in enumerate(zip(todo, codes.tolist(), rows)):
+        if code == OK or code == LOST:
+            answers[k] = row
+        else:
+            answers[k] = model.error_message(code, int(edges[i]), float(radii[i]))
+    return answers, None
+
+
+_FLOATS = json.JSONEncoder(check_circular=False)
+
+
+def _texts(column):
+    """Return the JSON texts of a column of floats (encoded at once, as json.dumps does)."""
+    return _FLOATS.encode(column.tolist())[1:-1].split(', ')
+
+
+def _json_lines(answers, columns):
+    """Return the JSON lines of a block's answers (json.dumps' formatting, floats by repr)."""
+    if columns is not None:
+        c = columns
+        return ''.join(map(_ROW_TEXT.__mod__, zip(
+            c['edge'].tolist(), _texts(c['R']), c['kind'].tolist(), _texts(c['flight_time']),
+            _texts(c['net_rotation']), c['events'].tolist(),
+            c['first_contact_vertex'].tolist())))
+    return ''.join([_ROW % a if type(a) is tuple and a[0] >= 0 else _json_special(a)
+                    for a in answers if a is not BLANK])
+
+
+def _json_special(a):
+    if type(a) is str:
+        return json.dumps({'error': a}) + '\n'
+    # lost: no R (nan), no JSON number for it
+    return json.dumps(dict(zip(ROW_KEYS, [_number(x) if isinstance(x, float) else x
+                                          for x in a]))) + '\n'
+
+
+ROW_KEYS = ('edge', 'R', 'kind', 'flight_time', 'net_rotation', 'impacts',
+            'first_contact_vertex')
+BLANK = object()        # the answer to a blank input line: none
+
+
+def _blocks(stream, size=BATCH_BLOCK):
+    """
+    Yield (lines, number of the first) of ``size`` input lines at a time, blank ones included.
+
+    A block is answered as soon as its last line has arrived (the iterator returns what the
+    pipe holds, it does not wait for a full buffer), so answers stream with the input.
+    """
+    first = 1
+    while True:
+        lines = list(itertools.islice(stream, size))
+        if not lines:
+            return
+        yield lines, first
+        first += len(lines)
+
+
+def throw_batch(model, stream, out, as_json=True):
+    """
+    Answer one state per input line, in order, block by block; return the exit code.
+
+    JSON: one line per state with edge, R, kind, flight_time, net_rotation, impacts (the
+    catch's events), first_contact_vertex, or {"error": ...}, written and flushed once per
+    block. A table otherwise. Exit code 1 if any line failed.
+    """
+    failed = False
+    table = []
+    for lines, first in _blocks(stream):
+        answers, columns = _batch(model, lines, first)
+        failed = failed or (answers is not None and any(type(a) is str for a in answers))
+        if as_json:
+            out.write(_json_lines(answers, columns))
+            out.flush()
+        else:
+            if answers is None:
+                c = columns
+                answers = list(zip(c['edge'].tolist(), c['R'].tolist(), c['kind'].tolist(),
+                                   c['flight_time'].tolist(), c['net_rotation'].tolist(),
+                                   c['events'].tolist(), c['first_contact_vertex'].tolist()))
+            table.extend({'error': a} if type(a) is str else dict(zip(ROW_KEYS, a))
+                         for a in answers if a is not BLANK)
+    if not as_json:
+        _table([{k: (f'{v:.6g}' if isinstance(v, float) else v) for k, v in r.items()}
+                for r in table], ['edge', 'R', 'kind', 'flight_time', 'net_rotation', 'error'],
+               out)
+    return 1 if failed else 0
 
 
 def cmd_throw(scene, args, out):
@@ -158,35 +353,7 @@ def cmd_throw(scene, args, out):
                     'omega+ (rad/s)', 'E- (J/kg)', 'E+ (J/kg)'], out)
         return 0
     # Batch: one JSON object per line on stdin, one answer per line, in order.
-    status = 0
-    rows = []
-    for lineno, line in enumerate(sys.stdin, 1):
-        if not line.strip():
-            continue
-        try:
-            state = json.loads(line)
-            if not isinstance(state, dict) or 'edge' not in state or 'R' not in state:
-                raise ValueError('expected an object with "edge" and "R"')
-            unknown = set(state) - {'edge', 'R'}
-            if unknown:
-                raise ValueError(f'unknown keys {sorted(unknown)}; allowed: edge, R')
-            row = _throw_row(model, state['edge'], state['R'])
-        except ThrowmapError as exc:
-            row = {'error': str(exc)}
-            status = 1
-        except ValueError as exc:
-            row = {'error': f'line {lineno}: {exc}'}
-            status = 1
-        if args.json:
-            _dump(row, out)
-            out.flush()
-        else:
-            rows.append(row)
-    if not args.json:
-        _table([{k: (f'{v:.6g}' if isinstance(v, float) else v) for k, v in r.items()}
-                for r in rows], ['edge', 'R', 'kind', 'flight_time', 'net_rotation', 'error'],
-               out)
-    return status
+    return throw_batch(model, sys.stdin, out, as_json=args.json)
 
 
 def _start(scene, args):

@@ -46,3 +46,15 @@ class DomainError(ThrowmapError):
 
 class NumericalError(ThrowmapError):
     """A computation did not finish within its documented iteration cap."""
+
+
+class PartLost(ThrowmapError):
+    """
+    The part left the arm (effect finite_arm): an outcome that ends an orbit, not a failure.
+
+    ``after``: throws done before the one that lost it, when an orbit lost it.
+    """
+
+    def __init__(self, message, after=None):
+        self.after = after
+        super().__init__(message)

@@ -12,12 +12,21 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Dynamic grasp (paper section III.A.1): impulse-cone bounds (1)-(4) and the wrench-cone test."""
+"""
+Dynamic grasp (paper section III.A.1): impulse-cone bounds (1)-(4) and the wrench-cone test.
+
+The bounds and the cone test are written once, compiled (:func:`impulse_bounds`,
+:func:`cone_margins`), and used both here (the Python API, the grasp table) and inside throws
+(the composed release checks the grasp at each throw's own offset; finite_carry checks the
+wrench cone along the carry).
+"""
 
 from dataclasses import dataclass
 import math
 
 import numpy as np
+
+from .jit import njit
 
 
 @dataclass(frozen=True)
@@ -40,18 +49,32 @@ class EdgeGrasp:
     binding: int
 
 
-def impulse_bounds(part, edge, h, mu=None):
-    """Right-hand sides of constraints (1)-(4) for a stable edge (R must exceed each)."""
-    u_l, u_r, v_l, v_r = part.u_l[edge], part.u_r[edge], part.v_l[edge], part.v_r[edge]
-    hd = h + part.d[edge]
-    b1 = (part.rho2 - v_l * hd) / u_l
-    b3 = (part.rho2 - v_r * hd) / u_r
-    if mu is None:
-        b2 = b4 = -math.inf
-    else:
-        b2 = -hd / mu
-        b4 = hd / mu
-    return float(b1), float(b2), float(b3), float(b4)
+@njit
+def impulse_bounds(edge, h, mu, rho2, d, u_l, u_r):
+    """
+    Right-hand sides of constraints (1)-(4) on a stable edge (R must exceed each).
+
+    The edge's vertices sit at v = -d in F^i. mu = inf: no friction bound (2), (4) is -inf.
+    """
+    hd = h + d[edge]
+    b1 = (rho2 + d[edge] * hd) / u_l[edge]
+    b3 = (rho2 + d[edge] * hd) / u_r[edge]
+    if math.isinf(mu):
+        return b1, -math.inf, b3, -math.inf
+    return b1, -hd / mu, b3, hd / mu
+
+
+@njit
+def impulse_grasp_radius(edge, h, mu, rho2, d, u_l, u_r):
+    """R_grasp on a stable edge at offset h: the largest of the bounds (1)-(4)."""
+    b1, b2, b3, b4 = impulse_bounds(edge, h, mu, rho2, d, u_l, u_r)
+    return max(max(b1, b3), max(b2, b4))
+
+
+def _bounds(part, edge, h, mu):
+    b = impulse_bounds(edge, float(h), math.inf if mu is None else float(mu), part.rho2, part.d,
+                       part.u_l, part.u_r)
+    return tuple(float(x) for x in b)
 
 
 def edge_grasp(part, edge, h, mu=None):
@@ -59,7 +82,7 @@ def edge_grasp(part, edge, h, mu=None):
     if not stable:
         nan = math.nan
         return EdgeGrasp(edge, False, (nan,) * 4, math.inf, math.inf, nan, 0)
-    bounds = impulse_bounds(part, edge, h, mu)
+    bounds = _bounds(part, edge, h, mu)
     geometric = max(bounds[0], bounds[2])
     hd = abs(h + part.d[edge])
     mu_min = hd / geometric if geometric > 0 else math.inf
@@ -77,13 +100,31 @@ def grasp_table(part, h, mu=None):
     return rows, float(r_all), float(mu_all)
 
 
-def contact_wrench_cone(part, edge, mu):
-    """Return the four edge wrenches w_1..w_4 of the contact cone W^i (frame F^i), rows."""
-    u_l, u_r, v_l, v_r = part.u_l[edge], part.u_r[edge], part.v_l[edge], part.v_r[edge]
-    return np.array([[-mu, 1.0, u_l + mu * v_l],
-                     [mu, 1.0, u_l - mu * v_l],
-                     [mu, 1.0, u_r - mu * v_r],
-                     [-mu, 1.0, u_r + mu * v_r]])
+@njit
+def cone_margins(ul, ur, vl, mu, w0, w1, w2):
+    """
+    Return w^T (w_j x w_k) / |w| for (j, k) = (1,2), (2,3), (3,4), (4,1); all <= 0: in the cone.
+
+    The contact wrench cone W^i of an edge with vertices (ul, vl), (ur, vl) in F^i and friction
+    mu is spanned by w_1..w_4 = (-mu, 1, ul + mu vl), (mu, 1, ul - mu vl), (mu, 1, ur - mu vl),
+    (-mu, 1, ur + mu vl). Each value reads as a signed distance-like margin.
+    """
+    c00, c01, c02 = -mu, 1.0, ul + mu * vl
+    c10, c11, c12 = mu, 1.0, ul - mu * vl
+    c20, c21, c22 = mu, 1.0, ur - mu * vl
+    c30, c31, c32 = -mu, 1.0, ur + mu * vl
+    norm = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    if norm == 0.0:
+        norm = 1.0
+    m1 = (w0 * (c01 * c12 - c02 * c11) + w1 * (c02 * c10 - c00 * c12)
+          + w2 * (c00 * c11 - c01 * c10)) / norm
+    m2 = (w0 * (c11 * c22 - c12 * c21) + w1 * (c12 * c20 - c10 * c22)
+          + w2 * (c10 * c21 - c11 * c20)) / norm
+    m3 = (w0 * (c21 * c32 - c22 * c31) + w1 * (c22 * c30 - c20 * c32)
+          + w2 * (c20 * c31 - c21 * c30)) / norm
+    m4 = (w0 * (c31 * c02 - c32 * c01) + w1 * (c32 * c00 - c30 * c02)
+          + w2 * (c30 * c01 - c31 * c00)) / norm
+    return m1, m2, m3, m4
 
 
 def required_wrench(part, edge, R, h, g, theta, theta_dot, theta_ddot):
@@ -101,10 +142,9 @@ def wrench_cone_margins(part, edge, R, h, g, mu, theta, theta_dot, theta_ddot):
     Each value is scaled by |w| so that it reads as a signed distance-like margin.
     """
     w = required_wrench(part, edge, R, h, g, theta, theta_dot, theta_ddot)
-    cone = contact_wrench_cone(part, edge, mu)
-    pairs = ((0, 1), (1, 2), (2, 3), (3, 0))
-    norm = float(np.linalg.norm(w)) or 1.0
-    return np.array([w @ np.cross(cone[j], cone[k]) for j, k in pairs]) / norm
+    return np.array(cone_margins(float(part.u_l[edge]), float(part.u_r[edge]),
+                                 float(part.v_l[edge]), float(mu), float(w[0]), float(w[1]),
+                                 float(w[2])))
 
 
 def in_dynamic_grasp(part, edge, R, h, g, mu, theta, theta_dot, theta_ddot):

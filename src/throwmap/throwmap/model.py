@@ -20,54 +20,22 @@ import warnings
 
 import numpy as np
 
-from . import kernel
-from .errors import DomainError, InputError, NumericalError
+from . import base_map, status
+from .accuracy import Accuracy, compiled_knobs, SETTLE_RULES
+from .catch import is_jog, throw_kind
+from .errors import DomainError, InputError
 from .grasp import edge_grasp, grasp_table
-
-SETTLE_RULES = ('full', 'first_stable')
-
-
-@dataclass(frozen=True)
-class Accuracy:
-    """
-    Accuracy knobs of the base model (docs/accuracy.md says what each one costs).
-
-    contact_time_tol : s. Conservative advancement stops once the next guaranteed-safe step is
-        shorter than this; the contact time is then exact to about this much (or to the
-        spacing of doubles at that time, about 4.4e-16 t, when that is coarser).
-    flat_landing_tol : rad. An edge within this angle of the arm at impact lands flat (two-point
-        sticking impact: the part stops) instead of corner first.
-    max_flight_steps : cap on advancement steps per vertex (a NumericalError beyond it).
-    max_impacts : cap on impacts while settling (a NumericalError beyond it). Settling always
-        ends (every impact loses energy), but a near-circular part rolls like a wheel: an
-        n-gon loses only ~(2 pi / n)^2 of its energy per impact and needs ~n^2 impacts
-        (300,000 for a 1024-gon thrown from R_grasp). An impact costs ~50 ns in f, f_batch
-        and orbits; ``throw`` also keeps a record of each one (~350 bytes).
-    """
-
-    contact_time_tol: float = 1e-12
-    flat_landing_tol: float = 1e-9
-    max_flight_steps: int = 100_000
-    max_impacts: int = 1_000_000
-
-    def __post_init__(self):
-        for name in ('contact_time_tol', 'flat_landing_tol'):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise InputError(f'accuracy.{name}', f'must be a number > 0, got {value!r}',
-                                 f'use e.g. the default {getattr(Accuracy, name)}')
-        for name in ('max_flight_steps', 'max_impacts'):
-            value = getattr(self, name)
-            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 10):
-                raise InputError(f'accuracy.{name}', f'must be an integer >= 10, got {value!r}',
-                                 f'use e.g. the default {getattr(Accuracy, name)}')
+from .jit import entry_point
+from .sensor import read_sensor
+from .status import EVENT_NAMES, OK, REC_COLS
+from .trajectory import throw_trajectory
 
 
 @dataclass(frozen=True)
 class Impact:
     """One event of a catch. Energies are per unit mass (J/kg) over the arm surface."""
 
-    kind: str               # 'flight' | 'landing' | 'flat_landing' | 'tip_from_rest'
+    kind: str               # 'flight' | 'landing' | 'flat_landing' | 'tip_from_rest' | ...
     vertex: int             # the vertex that hits the arm (or the pivot for tip_from_rest)
     edge: int               # the edge that lands (-1 for the first, corner-first impact)
     x: float                # arm coordinate of the contact vertex, m
@@ -77,8 +45,11 @@ class Impact:
     energy_after: float
 
 
-_EVENT_NAMES = {kernel.EV_FLIGHT_IMPACT: 'flight', kernel.EV_LANDING: 'landing',
-                kernel.EV_FLAT_LANDING: 'flat_landing', kernel.EV_TIP_FROM_REST: 'tip_from_rest'}
+def impacts_from_records(rows):
+    """Return the Impact of every event row (status.REC_* columns)."""
+    return tuple(Impact(EVENT_NAMES.get(int(row[0]), 'event'), int(row[1]), int(row[2]),
+                        float(row[3]), float(row[4]), float(row[5]), float(row[6]),
+                        float(row[7])) for row in rows)
 
 
 @dataclass(frozen=True)
@@ -105,11 +76,6 @@ class ThrowResult:
                 'impacts': [vars(i) for i in self.impacts]}
 
 
-def classify(edge0, edge, net_rotation):
-    """Jog: same edge after zero net rotation; anything else is a flip (section III.C)."""
-    return 'jog' if edge == edge0 and abs(net_rotation) < math.pi else 'flip'
-
-
 def _state_arrays(edges, radii):
     """
     Edges and radii as contiguous int64 / float64 arrays; InputError for anything else.
@@ -134,7 +100,8 @@ def batch_buffers(edges, radii):
     """
     Validate a batch of states and allocate f_batch's outputs.
 
-    Returns (edges, radii, (edge', R', status, flight time, net rotation) output arrays).
+    Returns (edges, radii, (edge', R', status, flight time, net rotation, catch events, first
+    contact vertex) output arrays).
     """
     edges, radii = _state_arrays(edges, radii)
     if edges.shape != radii.shape:
@@ -142,19 +109,19 @@ def batch_buffers(edges, radii):
                          'give one edge per radius')
     m = edges.size
     return edges, radii, (np.empty(m, dtype=np.int64), np.empty(m),
-                          np.empty(m, dtype=np.int64), np.empty(m), np.empty(m))
+                          np.empty(m, dtype=np.int64), np.empty(m), np.empty(m),
+                          np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64))
 
 
-def batch_result(edges, outputs, lost_status=None):
-    """Return f_batch's dict from the filled outputs; ``lost_status`` marks 'lost' states."""
-    out_edge, out_r, out_status, out_t, out_rot = outputs
-    ok = out_status == kernel.OK
-    jog = (out_edge == edges) & (np.abs(out_rot) < math.pi) & ok
-    kind = np.where(~ok, '', np.where(jog, 'jog', 'flip'))
-    if lost_status is not None:
-        kind = np.where(out_status == lost_status, 'lost', kind)
+def batch_result(edges, outputs):
+    """Return f_batch's dict from the filled outputs (kind '' on failure, 'lost' if lost)."""
+    out_edge, out_r, out_status, out_t, out_rot, out_events, out_vertex = outputs
+    ok = out_status == OK
+    kind = np.where(~ok, '', np.where(is_jog(edges, out_edge, out_rot), 'jog', 'flip'))
+    kind = np.where(out_status == status.LOST, 'lost', kind)
     return {'edge': out_edge, 'R': out_r, 'status': out_status, 'kind': kind,
-            'flight_time': out_t, 'net_rotation': out_rot}
+            'flight_time': out_t, 'net_rotation': out_rot, 'events': out_events,
+            'first_contact_vertex': out_vertex}
 
 
 def orbit_buffers(edges, radii, throws):
@@ -183,6 +150,10 @@ class ThrowModel:
     bounds (2) and (4) to the grasp domain; without it only the geometric bounds (1) and (3)
     apply and the required mu_min is reported instead.
     """
+
+    stochastic = False
+    seed = None
+    arm_length = math.inf       # the paper's arm has no end (effect finite_arm gives it one)
 
     def __init__(self, part, offset, release_speed, gravity, mu=None, settle_rule='full',
                  accuracy=None, field_prefix=''):
@@ -215,13 +186,9 @@ class ThrowModel:
                           'guarantee does not apply (f is still computed)', stacklevel=2)
         self.grasp = [edge_grasp(part, i, self.h, mu) for i in range(part.n)]
         self.r_grasp = np.array([gr.R_grasp for gr in self.grasp])
-        self._args = (self.w, self.g, self.h, part.n, part.rho2, part.d, part.u_l, part.u_r,
-                      part.stable, part.edge_length, part.vertex_radius, part.alpha_cw_end,
-                      part.alpha_ccw_end, part.k_cw, part.k_ccw, part.U, part.V, self.r_grasp,
-                      settle_rule == 'first_stable', self.accuracy.contact_time_tol,
-                      self.accuracy.flat_landing_tol, self.accuracy.max_flight_steps,
-                      self.accuracy.max_impacts)
-        self._no_record = np.empty((0, kernel.REC_COLS))
+        self._knobs = compiled_knobs(self.accuracy, None, settle_rule)
+        self._no_record = np.empty((0, REC_COLS))
+        self._f = None
 
     @staticmethod
     def _number(value, name, what):
@@ -232,9 +199,25 @@ class ThrowModel:
             raise InputError(name, f'must be finite, got {value!r}', f'give {what}')
         return value
 
+    def _base_args(self):
+        return (self.w, self.g, self.h, self.r_grasp, self.part.arrays, self._knobs)
+
     # ----------------------------------------------------------------------------- grasp
     def grasp_table(self):
         return grasp_table(self.part, self.h, self.mu)
+
+    def r_min(self, edge):
+        """
+        Return the lower end of the domain of f on a stable edge.
+
+        R_grasp, or the toe-stub bound -u_l (the left vertex must start right of the pivot)
+        when that is larger; an effect may move it (finite_carry: ``r_grasp`` is its own).
+        """
+        return max(float(self.r_grasp[edge]), float(-self.part.u_l[edge]))
+
+    def domain_note(self):
+        """Return a line on the domain beyond the impulse-cone grasp table, or None."""
+        return None
 
     def domain_error(self, edge, R):
         """Return the DomainError f would raise at (edge, R), or None inside the domain."""
@@ -254,13 +237,9 @@ class ThrowModel:
             return DomainError('radius', f'R must be a finite number of metres, got {R!r}')
         gr = self.grasp[edge]
         if R < gr.R_grasp:
-            names = {1: 'line of force passes left of the left vertex',
-                     2: 'impulse outside the right edge of the friction cone',
-                     3: 'line of force passes right of the right vertex',
-                     4: 'impulse outside the left edge of the friction cone'}
             return DomainError(f'grasp_bound_{gr.binding}',
                                f'no dynamic grasp on edge {edge} at R = {R:.6g} m: bound '
-                               f'({gr.binding}) ({names[gr.binding]}) needs R >= '
+                               f'({gr.binding}) ({status.bound_name(gr.binding)}) needs R >= '
                                f'{gr.R_grasp:.6g} m (short by {gr.R_grasp - R:.3g} m); throw '
                                f'from R >= R_grasp', margin=gr.R_grasp - R)
         if not R + part.u_l[edge] > 0:
@@ -270,6 +249,12 @@ class ThrowModel:
                                f'stub its toe (move down) at release; need R > {need:.6g} m',
                                margin=need - R)
         return None
+
+    def check(self, edge, R):
+        """Raise the DomainError of (edge, R), if it is outside the domain of f."""
+        err = self.domain_error(edge, R)
+        if err is not None:
+            raise err
 
     # ----------------------------------------------------------------------------- the map
     def _state(self, edge, R):
@@ -288,47 +273,50 @@ class ThrowModel:
         raise err if err is not None else DomainError(
             'radius', f'R must be a finite number of metres, got {R!r}')
 
+    def _throw_one(self, edge, R, rec):
+        # The compiled throw, called directly (its argument types never change; jit.entry_point).
+        if self._f is None:
+            self._f = entry_point(base_map.throw_one, edge, R, *self._base_args(), rec)
+        return self._f(edge, R, *self._base_args(), rec)
+
     def f(self, edge, R):
         """(edge', R', kind) of one throw; raises DomainError outside the domain."""
         edge, R = self._state(edge, R)
-        out = kernel.throw_one(edge, R, *self._args, self._no_record)
-        status = out[0]
-        if status != kernel.OK:
-            self._raise(status, edge, R)
-        return out[1], out[2], classify(edge, out[1], out[4])
+        out = self._throw_one(edge, R, self._no_record)
+        if out[0] != OK:
+            self._raise(out[0], edge, R)
+        return out[1], out[2], throw_kind(edge, out[1], out[4])
 
     def throw(self, edge, R, trajectory=False, samples=60):
         """Full ThrowResult; with ``trajectory`` the sampled poses (throwmap.trajectory)."""
         edge, R = self._state(edge, R)
-        rec = np.empty((64, kernel.REC_COLS))
-        status, j, r1, t, rot, nimp, k0, nrec = kernel.throw_one(edge, R, *self._args, rec)
-        if status != kernel.OK:
-            self._raise(status, edge, R)
+        rec = np.empty((64, REC_COLS))
+        st, j, r1, t, rot, nimp, k0, nrec = self._throw_one(edge, R, rec)
+        if st != OK:
+            self._raise(st, edge, R)
         if nrec > rec.shape[0]:     # rare long rolls: run again with room for every event
-            rec = np.empty((nrec, kernel.REC_COLS))
-            kernel.throw_one(edge, R, *self._args, rec)
-        impacts = tuple(Impact(_EVENT_NAMES[int(row[0])], int(row[1]), int(row[2]),
-                               float(row[3]), float(row[4]), float(row[5]), float(row[6]),
-                               float(row[7])) for row in rec[:nrec])
+            rec = np.empty((nrec, REC_COLS))
+            self._throw_one(edge, R, rec)
         hd = self.h + self.part.d[edge]
         e0 = 0.5 * self.w ** 2 * (hd * hd + R * R + self.part.rho2) - self.g * self.part.d[edge]
         traj = None
         if trajectory:
-            from .trajectory import throw_trajectory
             traj = throw_trajectory(self, edge, R, t, rec[:nrec], samples)
-        return ThrowResult(int(edge), float(R), int(j), float(r1), classify(edge, j, rot),
-                           float(t), float(rot), int(k0), impacts, float(e0), traj)
+        return ThrowResult(int(edge), float(R), int(j), float(r1), throw_kind(edge, j, rot),
+                           float(t), float(rot), int(k0), impacts_from_records(rec[:nrec]),
+                           float(e0), traj)
 
     def f_batch(self, edges, radii):
         """
         Evaluate f over many states at once.
 
         Returns a dict of arrays: edge, R, kind ('jog'/'flip'/''), status, flight_time,
-        net_rotation. States outside the domain get status != 0 and NaN R;
+        net_rotation, events (the number of catch events ``throw`` would list),
+        first_contact_vertex. States outside the domain get status != 0 and NaN R;
         ``error_message(status, edge, R)`` gives the text.
         """
         edges, radii, out = batch_buffers(edges, radii)
-        kernel.throw_many(edges, radii, *self._args, *out)
+        base_map.throw_many(edges, radii, *self._base_args(), self._no_record, *out)
         return batch_result(edges, out)
 
     def orbit_arrays(self, edge, R, throws):
@@ -337,46 +325,34 @@ class ThrowModel:
         out_edge = np.empty(throws + 1, dtype=np.int64)
         out_r = np.empty(throws + 1)
         out_rot = np.empty(throws + 1)
-        status, done = kernel.orbit(edge, float(R), throws, *self._args, out_edge, out_r,
-                                    out_rot)
-        if status != kernel.OK:
-            self._raise(status, int(out_edge[done]), float(out_r[done]), after=done)
+        st, done = base_map.orbit(edge, float(R), throws, *self._base_args(), self._no_record,
+                                  out_edge, out_r, out_rot)
+        if st != OK:
+            self._raise(st, int(out_edge[done]), float(out_r[done]), after=done)
         return out_edge, out_r, out_rot
 
     def orbits(self, edges, radii, throws):
         """Iterate many orbits at once: arrays (starts, throws + 1), status, throws done."""
         edges, radii, out = orbit_buffers(edges, radii, throws)
-        kernel.orbit_many(edges, radii, throws, *self._args, *out)
+        base_map.orbit_many(edges, radii, throws, *self._base_args(), self._no_record, *out)
         return out
 
-    def check(self, edge, R):
-        err = self.domain_error(edge, R)
-        if err is not None:
-            raise err
+    # ----------------------------------------------------------------------------- noise
+    def nominal(self):
+        """Return the model without its random effects: this one, which has none."""
+        return self
 
-    def error_message(self, status, edge, R):
-        if status in (kernel.ERR_FLIGHT_CAP, kernel.ERR_SETTLE_CAP, kernel.ERR_NONFINITE):
-            return str(self._numerical(status, edge, R))
-        err = self.domain_error(int(edge), float(R))
-        return str(err) if err is not None else f'status {status}'
+    def reseed(self, seed):
+        """Restart the random sequences: nothing to do without random effects."""
 
-    def _numerical(self, status, edge, R):
-        acc = self.accuracy
-        if status == kernel.ERR_FLIGHT_CAP:
-            return NumericalError(f'flight from ({edge}, {R:.6g} m): no contact found within '
-                                  f'accuracy.max_flight_steps = {acc.max_flight_steps} steps; '
-                                  'raise it or contact_time_tol')
-        if status == kernel.ERR_SETTLE_CAP:
-            return NumericalError(f'catch after ({edge}, {R:.6g} m) did not settle within '
-                                  f'accuracy.max_impacts = {acc.max_impacts} impacts; raise it')
-        return NumericalError(f'throw from ({edge}, {R:.6g} m) produced a non-finite state')
+    def read_sensor(self, edge, R, x, footprint=0.0):
+        """Return the sensor's bits at x for parts resting at (edge, R); edge -1 reads 0."""
+        return read_sensor(self.part, edge, R, x, footprint)
 
-    def _raise(self, status, edge, R, after=None):
-        if status in (kernel.ERR_FLIGHT_CAP, kernel.ERR_SETTLE_CAP, kernel.ERR_NONFINITE):
-            raise self._numerical(status, edge, R)
-        err = self.domain_error(edge, R)
-        if err is None:   # pragma: no cover - kernel and Python checks disagree
-            err = DomainError('unknown', f'kernel status {status} at ({edge}, {R})')
-        if after is not None:
-            err.args = (f'after {after} throws the orbit left the domain of f: {err}',)
-        raise err
+    # ----------------------------------------------------------------------------- errors
+    def error_message(self, status_code, edge, R):
+        """Return the message of a kernel status at (edge, R) (f_batch, orbits)."""
+        return status.message(self, status_code, edge, R)
+
+    def _raise(self, status_code, edge, R, after=None):
+        raise status.error_for(self, status_code, edge, R, after)

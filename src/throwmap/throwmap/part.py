@@ -20,6 +20,7 @@ V^{i+1}. Resting on E^i, V^i is the left vertex and V^{i+1} the right one. The f
 the centre of mass with u^i along E^i and v^i pointing away from the edge (up when resting).
 """
 
+from collections import namedtuple
 import math
 
 import numpy as np
@@ -65,6 +66,49 @@ def _hull_indices(pts):
             upper.pop()
         upper.append(k)
     return lower[:-1] + upper[:-1]
+
+
+# The part as compiled code takes it (throwmap.part.Part.arrays): one bundle, not 15 arguments.
+# Per edge i: d (CM height over E^i), u_l, u_r, stable, edge_len; per vertex k: vrad (distance from
+# the CM), acw / accw (angle of CM - V^k from the arm at the two ends of its rolling range),
+# kcw / kccw (omega ratio of a landing at the next vertex clockwise / counterclockwise);
+# U[i, k], V[i, k]: vertex k in frame F^i; rest_angle[i]: rotation of the resting pose on E^i.
+PartArrays = namedtuple('PartArrays', ['n', 'rho2', 'd', 'u_l', 'u_r', 'stable', 'edge_len',
+                                       'vrad', 'acw', 'accw', 'kcw', 'kccw', 'U', 'V',
+                                       'rest_angle'])
+
+
+def triangulate(outline):
+    """Ear-clipping triangulation of a simple counterclockwise polygon: list of index triples."""
+    pts = [tuple(p) for p in np.asarray(outline, dtype=float)]
+    idx = list(range(len(pts)))
+    tris = []
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    def inside(p, a, b, c):
+        return cross(a, b, p) >= 0 and cross(b, c, p) >= 0 and cross(c, a, p) >= 0
+
+    guard = 0
+    while len(idx) > 3 and guard < 10_000:
+        guard += 1
+        for m in range(len(idx)):
+            i0, i1, i2 = idx[m - 1], idx[m], idx[(m + 1) % len(idx)]
+            a, b, c = pts[i0], pts[i1], pts[i2]
+            if cross(a, b, c) <= 0:
+                continue
+            if any(inside(pts[k], a, b, c) for k in idx if k not in (i0, i1, i2)):
+                continue
+            tris.append((i0, i1, i2))
+            idx.pop(m)
+            break
+        else:   # pragma: no cover - degenerate outline; fall back to a fan
+            break
+    if len(idx) >= 3:
+        for m in range(1, len(idx) - 1):
+            tris.append((idx[0], idx[m], idx[m + 1]))
+    return tris
 
 
 class Part:
@@ -124,6 +168,7 @@ class Part:
         self.cm = cm_arr
         self.rho2 = float(rho2)
         self.area = float(area)
+        self._arrays = None
         self._compute_edge_frames(scale)
 
     @staticmethod
@@ -199,6 +244,52 @@ class Part:
         nxt_i, prv_i = (idx + 1) % n, (idx - 1) % n
         self.k_cw = (self.rho2 + dots[idx, nxt_i]) / (self.rho2 + dots[nxt_i, nxt_i])
         self.k_ccw = (self.rho2 + dots[idx, prv_i]) / (self.rho2 + dots[prv_i, prv_i])
+
+    @property
+    def arrays(self):
+        """Return the part's per-edge and per-vertex arrays as one bundle for compiled code."""
+        if self._arrays is None:
+            self._arrays = PartArrays(self.n, self.rho2, self.d, self.u_l, self.u_r, self.stable,
+                                      self.edge_length, self.vertex_radius, self.alpha_cw_end,
+                                      self.alpha_ccw_end, self.k_cw, self.k_ccw, self.U, self.V,
+                                      self.rest_angle)
+        return self._arrays
+
+    def area_quadrature(self, level):
+        """
+        Return a quadrature of the part's area (its outline, a uniform lamina).
+
+        Every triangle of the outline is split into level^2 similar ones, each weighted by its
+        area at its centroid. Returns QU, QV (the points in every edge frame F^i, shape (n,
+        points)) and the weights QW (sum 1).
+        """
+        pts = self.outline
+        qx, qy, qw = [], [], []
+        for i0, i1, i2 in triangulate(pts):
+            a, b, c = pts[i0], pts[i1], pts[i2]
+            ab = (b - a) / level
+            ac = (c - a) / level
+            area = 0.5 * abs(ab[0] * ac[1] - ab[1] * ac[0])
+            for r in range(level):
+                for s in range(level - r):
+                    p0 = a + r * ab + s * ac
+                    subs = [(p0, p0 + ab, p0 + ac)]
+                    if r + s < level - 1:
+                        subs.append((p0 + ab, p0 + ab + ac, p0 + ac))
+                    for t0, t1, t2 in subs:
+                        cen = (t0 + t1 + t2) / 3.0
+                        qx.append(cen[0])
+                        qy.append(cen[1])
+                        qw.append(area)
+        qw = np.array(qw)
+        qw /= qw.sum()
+        rel = np.stack([np.array(qx) - self.cm[0], np.array(qy) - self.cm[1]], axis=1)
+        verts = self.vertices
+        e = np.roll(verts, -1, axis=0) - verts
+        e /= np.hypot(e[:, 0], e[:, 1])[:, None]
+        normal = np.stack([-e[:, 1], e[:, 0]], axis=1)
+        return (np.ascontiguousarray(e @ rel.T), np.ascontiguousarray(normal @ rel.T),
+                np.ascontiguousarray(qw))
 
     def shadow(self, edge):
         """(u_min, u_max): the part's extent along the arm, relative to R, resting on ``edge``."""

@@ -27,32 +27,36 @@ import os
 import re
 import warnings
 
-import numpy as np
 import yaml
 
 from . import effects as fx
-from .effect_model import EFFECT_ACCURACY_KEYS, EffectAccuracy, EffectModel
+from .accuracy import (Accuracy, BASE_KEYS, check_knob, SETTLE_RULES, SIMULATOR_KEYS,
+                       SimulatorAccuracy)
+from .effect_model import EffectModel
 from .errors import InputError
-from .model import Accuracy, SETTLE_RULES, ThrowModel
+from .model import ThrowModel
 from .part import Part
 
-BASE_ACCURACY_KEYS = ('contact_time_tol', 'flat_landing_tol', 'max_flight_steps', 'max_impacts')
+# The base model's keys; every effect adds the keys it owns (throwmap.effects, SCHEMA).
 SCHEMA = {
     '': {'name', 'description', 'part', 'arm', 'throw', 'gravity', 'plate', 'contact', 'catch',
          'effects', 'noise', 'accuracy', 'sensor', 'start'},
     'part': {'vertices', 'vertices_cm', 'cm', 'cm_cm', 'radius_of_gyration',
              'radius_of_gyration_cm'},
-    'arm': {'offset', 'offset_cm', 'length', 'length_cm'},
-    'throw': {'release_speed', 'release_speed_deg', 'carry'},
-    'plate': {'inclination_deg', 'g0', 'mu'},
-    'contact': {'mu', 'restitution', 'bounce_threshold', 'pivot'},
+    'arm': {'offset', 'offset_cm'},
+    'throw': {'release_speed', 'release_speed_deg'},
+    'plate': {'inclination_deg', 'g0'},
+    'contact': {'mu'},
     'catch': {'settle_rule'},
-    'noise': {'seed', 'release_speed_sd', 'release_speed_sd_deg', 'offset_sd', 'offset_sd_cm'},
-    'accuracy': set(BASE_ACCURACY_KEYS) | set(EFFECT_ACCURACY_KEYS),
-    'sensor': {'goal_edge', 'radius', 'radius_cm', 'footprint', 'footprint_cm',
-               'false_positive', 'false_negative'},
+    'noise': {'seed'},
+    'accuracy': set(BASE_KEYS) | set(SIMULATOR_KEYS) | set(fx.knob_defaults()),
+    'sensor': {'goal_edge', 'radius', 'radius_cm', 'footprint', 'footprint_cm'},
     'start': {'edge', 'R', 'R_cm'},
 }
+for _section, _keys in fx.owned_keys().items():
+    SCHEMA[''].add(_section)
+    SCHEMA.setdefault(_section, set()).update(_keys)
+SECTIONS = tuple(sorted(s for s in SCHEMA if s))
 REQUIRED = {'': ('name', 'part', 'arm', 'throw'), 'part': (), 'arm': (), 'throw': ()}
 ALTERNATIVES = {'part': [('vertices', 'vertices_cm')], 'arm': [('offset', 'offset_cm')],
                 'throw': [('release_speed', 'release_speed_deg')]}
@@ -223,8 +227,7 @@ class Scene:
     def __init__(self, data, source='<scene>', seed=None):
         self.source = source
         _check_keys('', data, '')
-        for section in ('part', 'arm', 'throw', 'plate', 'contact', 'catch', 'noise',
-                        'accuracy', 'sensor', 'start'):
+        for section in SECTIONS:
             if section in data:
                 _check_keys(section, data[section], section)
         self.data = data
@@ -259,8 +262,10 @@ class Scene:
             raise InputError('catch.settle_rule', f'unknown rule {rule!r}',
                              f'use one of {", ".join(SETTLE_RULES)}')
         acc = data.get('accuracy', {})
-        accuracy = Accuracy(**{k: v for k, v in acc.items() if k in BASE_ACCURACY_KEYS})
-        knobs = EffectAccuracy(**{k: v for k, v in acc.items() if k in EFFECT_ACCURACY_KEYS})
+        accuracy = Accuracy(**{k: v for k, v in acc.items() if k in BASE_KEYS})
+        simulator = SimulatorAccuracy(**{k: v for k, v in acc.items() if k in SIMULATOR_KEYS})
+        defaults = fx.knob_defaults()
+        knobs = {k: check_knob(k, v, defaults[k]) for k, v in acc.items() if k in defaults}
         if 'length' in data['arm'] and 'length_cm' in data['arm']:
             raise InputError('arm.length', 'given twice (length and length_cm)',
                              'give only one of them')
@@ -268,19 +273,19 @@ class Scene:
                                 [('length', 1.0), ('length_cm', 0.01)])
         if mu is not None:
             mu = ThrowModel._number(mu, 'contact.mu', 'the friction coefficient')
-        self.effects = fx.compose(fx.parse_names(data.get('effects')), data, self.plate,
-                                  self.arm_length, mu)
+        self.effects = fx.compose(fx.parse_names(data.get('effects')),
+                                  fx.SceneValues(data, self.plate, mu, self.arm_length))
         self.seed = _seed(data, seed)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter('always')
-            if not self.effects and knobs.contact_method == 'advancement':
+            if not self.effects and simulator.contact_method == 'advancement':
                 self.model = ThrowModel(self.part, h, w, g, mu=mu, settle_rule=rule,
                                         accuracy=accuracy)
             else:
                 self.model = EffectModel(self.part, h, w, g, mu=mu, settle_rule=rule,
-                                         accuracy=accuracy, effects=self.effects, knobs=knobs,
-                                         seed=self.seed, g_normal=(self.plate or {}).get(
-                                             'g_normal'))
+                                         accuracy=accuracy, effects=self.effects,
+                                         simulator=simulator, knobs=knobs, seed=self.seed,
+                                         arm_length=self.arm_length)
         self.warnings = [str(c.message) for c in caught]
         for msg in self.warnings:
             warnings.warn(f'{source}: {msg}', stacklevel=2)
@@ -318,27 +323,27 @@ class Scene:
 
     @property
     def stochastic(self):
-        """Tell whether the scene names release_noise or sensor_noise (seeded results)."""
+        """Tell whether the scene names a random effect (seeded results)."""
         return self.effects.stochastic
+
+    @property
+    def noisy_sensor(self):
+        """Tell whether the scene's sensor has a model of its own errors (sensor_noise)."""
+        return any(hasattr(m, 'read_sensor') for _, m, _ in self.effects.modules())
 
     def sense(self, edge, R, x=None, footprint=None):
         """
         Return the sensor's reading for a part resting at (edge, R).
 
-        The shadow test of throwmap.sees, with sensor_noise's false positives/negatives if the
-        scene names it. x and footprint default to the scene's sensor; edge -1 (lost) is never
-        seen.
+        The shadow test of throwmap.sensor.sees, through the scene's sensor model (sensor_noise:
+        seeded false positives/negatives). x and footprint default to the scene's sensor;
+        edge -1 (lost) is never seen by the geometry.
         """
-        from .dynamics import sees
         x = self.sensor_radius if x is None else x
         if x is None:
             raise InputError('sensor.radius', 'missing', 'give the sensor position, or pass x')
         footprint = self.sensor_footprint if footprint is None else footprint
-        if isinstance(self.model, EffectModel):
-            return self.model.sensor_reading(edge, R, x, footprint)
-        edge = np.asarray(edge)
-        # Index -1 would read the last edge's shadow: a lost part must read as nothing.
-        return sees(self.part, np.maximum(edge, 0), R, x, footprint) & (edge >= 0)
+        return self.model.read_sensor(edge, R, x, footprint)
 
     @property
     def release_speed(self):
@@ -360,7 +365,7 @@ class Scene:
             edge = self.goal_edge if self.goal_edge is not None else self.part.stable_edges[0]
         R = self.start_R
         if R is None:
-            R = 1.5 * max(self.model.r_grasp[edge], -self.part.u_l[edge])
+            R = 1.5 * self.model.r_min(edge)
         return int(edge), float(R)
 
 

@@ -24,7 +24,7 @@ seed), so results are reproducible; the sensor readings use the model's own Gene
 from dataclasses import dataclass
 import math
 
-from .dynamics import basin
+from .basins import basin
 
 
 def _seeds(model, count):
@@ -44,8 +44,7 @@ def basin_distribution(model, start_edges, start_radii, throws=100, seeds=8, ref
     """
     counts = [{} for _ in range(len(start_edges))]
     for seed in _seeds(model, seeds):
-        if hasattr(model, 'reseed'):
-            model.reseed(seed)
+        model.reseed(seed)
         bas = basin(model, start_edges, start_radii, throws, reference=reference)
         for k, sig in enumerate(bas.signatures):
             if sig.startswith('error'):
@@ -105,15 +104,13 @@ def sensor_probability(model, goal_edge, radius, footprint=0.0, start=None, thro
     readings go through the scene's sensor noise when the model has it.
     """
     if start is None:
-        part = model.part
-        start = (goal_edge, 1.5 * max(model.r_grasp[goal_edge], -part.u_l[goal_edge]))
+        start = (goal_edge, 1.5 * model.r_min(goal_edge))
     hits = 0
     det = 0
     total = 0
     lost = 0
     for seed in _seeds(model, seeds):
-        if hasattr(model, 'reseed'):
-            model.reseed(seed)
+        model.reseed(seed)
         e, r, _, status, done = model.orbits([start[0]], [start[1]], throws)
         n_ok = int(done[0]) + 1
         if status[0] != 0:
@@ -122,16 +119,13 @@ def sensor_probability(model, goal_edge, radius, footprint=0.0, start=None, thro
         radii = r[0, warmup:n_ok]
         if edges.size == 0:
             continue
-        if hasattr(model, 'sensor_reading'):
-            seen = model.sensor_reading(edges, radii, radius, footprint)
-        else:
-            from .dynamics import sees
-            seen = sees(model.part, edges, radii, radius, footprint)
+        seen = model.read_sensor(edges, radii, radius, footprint)
         det += int(seen.sum())
         hits += int((seen & (edges == goal_edge)).sum())
         total += edges.size
     p, lo, hi = _wilson(hits, det)
-    noise = getattr(getattr(model, 'effects', None), 'sensor_noise', None)
+    effects = getattr(model, 'effects', None)
+    noise = effects.get('sensor_noise') if effects else None
     return SensorProbability(int(goal_edge), float(radius), float(footprint), p, lo, hi, det,
                              total, det / total if total else math.nan,
                              noise.false_positive if noise else 0.0,
@@ -149,6 +143,5 @@ def stochastic_summary(model, sensor, start, basin_starts, throws=2000, grid_thr
                                     reference)
     sp = sensor_probability(model, sensor.goal_edge, sensor.radius, sensor.footprint, start,
                             throws, seeds)
-    if hasattr(model, 'reseed'):
-        model.reseed(model.seed)
+    model.reseed(model.seed)
     return {'seeds': seeds, 'basin_outcomes': overall, 'sensor': sp.as_dict()}

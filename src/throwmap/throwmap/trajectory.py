@@ -24,7 +24,8 @@ import math
 
 import numpy as np
 
-from . import kernel
+from .status import (EV_FLAT_LANDING, EV_LANDING, REC_ALPHA0, REC_ALPHA1, REC_EDGE, REC_KIND,
+                     REC_OMEGA0, REC_PIVOT, REC_PIVOT_X, REC_VERTEX)
 
 
 @dataclass(frozen=True)
@@ -89,6 +90,7 @@ def _roll_segment(alpha0, omega0, alpha1, g_abs, lp, inertia, dt_max):
 
 
 def throw_trajectory(model, edge, R, flight_time, records, samples=60):
+    """Sample the poses of the base model's throw from (edge, R) and its event records."""
     part = model.part
     g_abs = -model.g
     w = model.w
@@ -105,10 +107,10 @@ def throw_trajectory(model, edge, R, flight_time, records, samples=60):
     t0 = T
     dt = max(T, 1e-3) / samples
     for row in records:
-        kind = int(row[kernel.REC_KIND])
-        if kind == kernel.EV_FLAT_LANDING:
-            pivot = int(row[kernel.REC_VERTEX])
-            j = int(row[kernel.REC_EDGE])
+        kind = int(row[REC_KIND])
+        if kind == EV_FLAT_LANDING:
+            pivot = int(row[REC_VERTEX])
+            j = int(row[REC_EDGE])
             a_end = (part.alpha_cw_end[pivot] if j == pivot else part.alpha_ccw_end[pivot])
             # Snap the (tiny) residual tilt at the flat landing.
             c, s = math.cos(phi), math.sin(phi)
@@ -116,11 +118,11 @@ def throw_trajectory(model, edge, R, flight_time, records, samples=60):
             ry = s * part.U[edge, pivot] + c * part.V[edge, pivot]
             phi += a_end - math.atan2(-ry, -rx)
             continue
-        if kind != kernel.EV_LANDING:
+        if kind != EV_LANDING:
             continue
-        p = int(row[kernel.REC_PIVOT])
-        a0, om0, a1 = row[kernel.REC_ALPHA0], row[kernel.REC_OMEGA0], row[kernel.REC_ALPHA1]
-        xp = row[kernel.REC_PIVOT_X]
+        p = int(row[REC_PIVOT])
+        a0, om0, a1 = row[REC_ALPHA0], row[REC_OMEGA0], row[REC_ALPHA1]
+        xp = row[REC_PIVOT_X]
         lp = part.vertex_radius[p]
         seg_t, seg_a = _roll_segment(a0, om0, a1, g_abs, lp, part.rho2 + lp * lp, dt)
         t_all.append(t0 + seg_t)

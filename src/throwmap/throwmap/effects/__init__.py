@@ -13,61 +13,131 @@
 # limitations under the License.
 
 """
-Effects beyond the paper's base model, each a module of its own (docs/effects.md).
+Effects beyond the paper's base model: the registry, and the interface an effect implements.
 
-A scene lists the effects it calls for (``effects: [backplate_friction, finite_arm]``); their
-parameters live in the scene's natural sections (plate, contact, throw.carry, arm, noise,
-sensor). compose() validates the list, reads each named effect's parameters and rejects
-parameters of effects that are not named, so nothing is silently ignored. Only named effects
-are computed; with none, the scene's model is the base ThrowModel itself (bit-identical, same
-speed).
+A scene lists the effects it calls for (``effects: [backplate_friction, finite_arm]``). Each
+effect is one module of this package that owns its scene keys, its parsing and its physics
+(docs/effects.md, "How to add an effect"). Module attributes:
+
+``NAME``
+    the name scenes use.
+``SCHEMA``
+    ``{section: (keys, ...)}``: the scene keys it owns. They are errors in a scene that does
+    not name the effect; a section that only an effect has (``air``) is added to the schema.
+``KNOBS``
+    ``{name: default}``: accuracy knobs it adds (an int default: an integer >= 1, else a number
+    > 0).
+``parse(scene)``
+    its parameters from a ``SceneValues``; errors name the field and the fix.
+``slots(params)``
+    the compiled hooks it fills with these parameters (none: the effect is the identity at
+    these parameters, and no code of it is compiled). A slot is filled by a compiled function
+    of the module with the slot's name: ``perturb``, ``release``, ``check``
+    (throwmap.pipeline), ``body_force``, ``static_hold``, ``impact`` (throwmap.event_sim).
+``bundle(params, part, knobs)``
+    the named tuple of compiled parameters its hooks receive as ``prm``.
+
+Optional, at the Python level: ``contact_law(params)`` (friction, pivot model and whether the
+impact law is sticking, for the event simulator), ``STOCHASTIC = True`` (noise: nominal models
+leave it out), ``read_sensor(seen, rng, params)``, ``domain(model, params)`` /
+``domain_error(model, params, edge, R)`` / ``domain_note(model, params)`` (an effect that moves
+the lower end of the domain of f), ``lost_reason(rows, R, params)``.
+
+Registering an effect is one line in ``REGISTRY``. Its order is the order of the effects'
+checks (the first check that changes a throw's status decides) and of summed forces.
 """
 
-from dataclasses import dataclass
-from typing import Optional
+from dataclasses import dataclass, field
+import importlib
 
-from . import (backplate_friction, finite_arm, finite_carry, impact_restitution, release_noise,
-               sensor_noise)
-from .backplate_friction import BackplateFriction
-from .finite_arm import FiniteArm
-from .finite_carry import FiniteCarry
-from .impact_restitution import ImpactRestitution
-from .release_noise import ReleaseNoise
-from .sensor_noise import SensorNoise
+from ._common import SceneValues
 from ..errors import InputError
 
-MODULES = {m.NAME: m for m in (backplate_friction, finite_carry, impact_restitution, finite_arm,
-                               release_noise, sensor_noise)}
+REGISTRY = (
+    'backplate_friction',
+    'air_drag',
+    'finite_carry',
+    'impact_restitution',
+    'finite_arm',
+    'release_noise',
+    'sensor_noise',
+)
+MODULES = {name: importlib.import_module(f'{__name__}.{name}') for name in REGISTRY}
 NAMES = tuple(MODULES)
+SLOTS = ('perturb', 'release', 'body_force', 'static_hold', 'impact', 'check')
+EVENT_SLOTS = ('body_force', 'static_hold', 'impact')     # these need the event simulator
+
+
+def owned_keys():
+    """Return {section: {key: effect}} for every scene key an effect owns."""
+    owned = {}
+    for name, module in MODULES.items():
+        for section, keys in module.SCHEMA.items():
+            for key in keys:
+                owned.setdefault(section, {})[key] = name
+    return owned
+
+
+def knob_defaults():
+    """Return {knob: default} of every effect's accuracy knobs."""
+    knobs = {}
+    for module in MODULES.values():
+        knobs.update(module.KNOBS)
+    return knobs
 
 
 @dataclass(frozen=True)
 class EffectSet:
-    """The effects a scene calls for, with their parameters (None: not named)."""
+    """The effects a scene calls for (in registry order) with their parameters."""
 
     names: tuple = ()
-    backplate: Optional[BackplateFriction] = None
-    restitution: Optional[ImpactRestitution] = None
-    carry: Optional[FiniteCarry] = None
-    arm: Optional[FiniteArm] = None
-    release_noise: Optional[ReleaseNoise] = None
-    sensor_noise: Optional[SensorNoise] = None
-
-    @property
-    def general(self):
-        """Tell whether flight or the catch is no longer closed form (throwmap.general)."""
-        return self.backplate is not None or self.restitution is not None
-
-    @property
-    def stochastic(self):
-        return self.release_noise is not None or self.sensor_noise is not None
+    params: dict = field(default_factory=dict, compare=False)
 
     def __bool__(self):
         return bool(self.names)
 
+    def __contains__(self, name):
+        return name in self.names
+
+    def get(self, name):
+        """Return the parameters of effect ``name``, None when the scene does not name it."""
+        return self.params.get(name)
+
+    def modules(self):
+        """Return (name, module, params) of each named effect, in registry order."""
+        return [(n, MODULES[n], self.params[n]) for n in self.names]
+
+    def slots(self):
+        """Return {effect name: slots it fills}, effects that fill none left out."""
+        out = {}
+        for name, module, params in self.modules():
+            filled = tuple(module.slots(params))
+            unknown = set(filled) - set(SLOTS)
+            if unknown:   # pragma: no cover - a programming error in an effect module
+                raise ValueError(f'effect {name} fills unknown slots {sorted(unknown)}')
+            if filled:
+                out[name] = filled
+        return out
+
+    @property
+    def general(self):
+        """Tell whether flight or the catch needs the event simulator (a force or impact law)."""
+        return any(set(s) & set(EVENT_SLOTS) for s in self.slots().values()) or any(
+            hasattr(m, 'contact_law') for _, m, _ in self.modules())
+
+    @property
+    def stochastic(self):
+        """Tell whether an effect is random (release_noise, sensor_noise)."""
+        return any(getattr(m, 'STOCHASTIC', False) for _, m, _ in self.modules())
+
+    def without_noise(self):
+        """Return the same set without its random effects."""
+        names = tuple(n for n in self.names if not getattr(MODULES[n], 'STOCHASTIC', False))
+        return EffectSet(names, {n: self.params[n] for n in names})
+
 
 def parse_names(value):
-    """Validate the scene's ``effects`` list: known names, each once."""
+    """Validate the scene's ``effects`` list (known names, each once); registry order."""
     if value is None:
         return ()
     if not isinstance(value, list):
@@ -81,53 +151,26 @@ def parse_names(value):
         if name in seen:
             raise InputError(f'effects[{k}]', f'{name} is listed twice', 'list it once')
         seen.append(name)
-    return tuple(seen)
+    return tuple(n for n in NAMES if n in seen)
 
 
-# Parameters that belong to one effect: giving them without naming it is an error.
-OWNED = {
-    'backplate_friction': [('plate', 'mu')],
-    'impact_restitution': [('contact', 'restitution'), ('contact', 'bounce_threshold'),
-                           ('contact', 'pivot')],
-    'finite_carry': [('throw', 'carry')],
-    'finite_arm': [('arm', 'length'), ('arm', 'length_cm')],
-    'release_noise': [('noise', 'release_speed_sd'), ('noise', 'release_speed_sd_deg'),
-                      ('noise', 'offset_sd'), ('noise', 'offset_sd_cm')],
-    'sensor_noise': [('sensor', 'false_positive'), ('sensor', 'false_negative')],
-}
-
-
-def compose(names, data, plate, arm_length, mu):
+def compose(names, scene):
     """
-    Build the EffectSet of the named effects.
+    Build the EffectSet of the named effects from the scene's values (a SceneValues).
 
-    data: the raw scene mapping; plate: the parsed plate section (dict with g_normal, mu) or
-    None; arm_length in m or None; mu: contact.mu or None.
+    A key owned by an effect the scene does not name is an error: nothing is silently ignored.
     """
-    for effect, keys in OWNED.items():
-        if effect in names:
+    for section, keys in owned_keys().items():
+        given = scene.data.get(section)
+        if not isinstance(given, dict):
             continue
-        for section, key in keys:
-            if isinstance(data.get(section), dict) and key in data[section]:
+        for key, effect in keys.items():
+            if effect not in names and key in given:
                 raise InputError(f'{section}.{key}', f'is a parameter of effect {effect}, which '
                                  'the scene does not name',
                                  f'add {effect} to effects, or remove {section}.{key}')
-    kw = {'names': tuple(names)}
-    if 'backplate_friction' in names:
-        kw['backplate'] = backplate_friction.parse(plate)
-    if 'impact_restitution' in names:
-        kw['restitution'] = impact_restitution.parse(data.get('contact'))
-    if 'finite_carry' in names:
-        kw['carry'] = finite_carry.parse(data.get('throw', {}).get('carry'), mu)
-    if 'finite_arm' in names:
-        kw['arm'] = finite_arm.parse(arm_length)
-    if 'release_noise' in names:
-        kw['release_noise'] = release_noise.parse(data.get('noise'))
-    if 'sensor_noise' in names:
-        kw['sensor_noise'] = sensor_noise.parse(data.get('sensor'))
-    return EffectSet(**kw)
+    return EffectSet(tuple(names), {n: MODULES[n].parse(scene) for n in names})
 
 
-__all__ = ['BackplateFriction', 'compose', 'EffectSet', 'FiniteArm', 'FiniteCarry',
-           'ImpactRestitution', 'MODULES', 'NAMES', 'parse_names', 'ReleaseNoise',
-           'SensorNoise']
+__all__ = ['compose', 'EffectSet', 'EVENT_SLOTS', 'knob_defaults', 'MODULES', 'NAMES',
+           'owned_keys', 'parse_names', 'REGISTRY', 'SceneValues', 'SLOTS']

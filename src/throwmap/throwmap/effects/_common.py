@@ -12,11 +12,34 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Helpers shared by the effect modules: number parsing with errors that name the field."""
+"""Helpers shared by the effect modules: the scene's values, number parsing with clear errors."""
 
+from dataclasses import dataclass
 import math
+from typing import Optional
 
 from ..errors import InputError
+
+
+@dataclass(frozen=True)
+class SceneValues:
+    """
+    What an effect's ``parse`` reads: the raw scene mapping and the values the scene parsed.
+
+    data: the scene's mapping as loaded; plate: the parsed plate section (g0, inclination_deg,
+    g_normal = g0 cos(inclination), mu) or None; mu: contact.mu or None; arm_length: arm.length
+    in m or None.
+    """
+
+    data: dict
+    plate: Optional[dict] = None
+    mu: Optional[float] = None
+    arm_length: Optional[float] = None
+
+    def section(self, name):
+        """Return the scene's section ``name`` (an empty mapping when absent)."""
+        value = self.data.get(name)
+        return value if isinstance(value, dict) else {}
 
 
 def number(data, key, where, what, lo=None, hi=None, lo_open=False, default=None,

@@ -20,49 +20,69 @@ acceleration a = w^2 / (2 theta_r) until it reaches the release angle theta_r at
 release speed), after T_c = 2 theta_r / w. During the carry the part must stay in a dynamic
 grasp: at every instant the wrench of section III.A.1,
 w = theta'' (-(h+d), R, rho^2) + theta'^2 (-R, -(h+d), 0) + (-g sin theta, -g cos theta, 0),
-must lie in the contact wrench cone W^i (all four w^T (w_j x w_k) <= 0); it is checked at
-accuracy.carry_samples + 1 evenly spaced instants, end points included. A state that fails
-is outside the domain (DomainError 'carry_grasp' naming the instant and the constraint).
+must lie in the contact wrench cone W^i (all four w^T (w_j x w_k) <= 0, throwmap.grasp); it is
+checked at accuracy.carry_samples + 1 evenly spaced instants, end points included. A state that
+fails is outside the domain (DomainError 'carry_grasp' naming the instant and the constraint).
 The cone needs the friction coefficient: contact.mu is required.
 
 At release the part leaves with the arm's rigid motion: CM at Rot(theta_r) (R, h + d), velocity
-w z x CM, rotation theta_r and rate w; flight is ballistic (closed form from that state).
+w z x CM, rotation theta_r and rate w; flight is ballistic from that state (throwmap.ballistic).
 
 The arm's return: with return_time T_r the arm goes from (theta_r, w) back to (0, 0) along
 the cubic Hermite curve; the part must clear the moving arm at every sampled instant of
 [0, T_r] and may not reach the horizontal arm before T_r (else the throw fails with 'arm_strike':
-the model has no impacts with a moving arm). Without return_time the arm is back at once (the
-base model's assumption). The catch is on the horizontal arm, unchanged.
+the model has no impacts with a moving arm). Only vertices above the arm's extent count (the
+scene's arm.length with finite_arm). Without return_time the arm is back at once (the base
+model's assumption). The catch is on the horizontal arm, unchanged.
 
-Limit: theta_r -> 0 gives the impulsive throw: the release state tends to eqs 5-6 and the
-grasp test to the impulse-cone bounds (1)-(4) (both tested).
+Hooks: ``release`` (the grasp along the carry, the release state) and ``check`` (the returning
+arm). The lower end of the domain per edge moves: above it the carry keeps the grasp and the
+returning arm clears the part (:func:`domain`: a 1 mm scan up to 1 m, then bisection to
+1e-7 m). Limit: theta_r -> 0 gives the impulsive throw: the release state tends to eqs 5-6 and
+the grasp test to the impulse-cone bounds (1)-(4) (both tested).
 
 Scene: throw: {release_speed_deg: 320, carry: {profile: constant_acceleration,
 release_angle_deg: 5, return_time: 0.05}}; contact: {mu: 0.8}; effects: [finite_carry].
 """
 
+from collections import namedtuple
 from dataclasses import dataclass
 import math
 
+import numpy as np
+
 from ._common import check_keys, number
-from ..errors import InputError
+from ..errors import DomainError, InputError
+from ..grasp import cone_margins
+from ..jit import njit
+from ..status import (bound_name, ERR_ARM_STRIKE, ERR_CARRY_GRASP, ERR_TOE_STUB, OK)
 
 NAME = 'finite_carry'
+SCHEMA = {'throw': ('carry',)}
+KNOBS = {'carry_samples': 200}
 PROFILES = ('constant_acceleration',)
 KEYS = {'profile', 'release_angle', 'release_angle_deg', 'return_time'}
+
+# theta_r (rad), return_time (s, 0: back at once), samples (carry_samples), mu (contact.mu),
+# arm_length (m, inf without finite_arm).
+CarryParams = namedtuple('CarryParams', ['theta_r', 'return_time', 'samples', 'mu',
+                                         'arm_length'])
 
 
 @dataclass(frozen=True)
 class FiniteCarry:
+    """Parameters: profile, release angle, return time; contact.mu and the arm's length."""
+
     profile: str
     release_angle: float    # rad
     return_time: float      # s; 0 means the arm is back at once
+    mu: float
+    arm_length: float       # m; inf without finite_arm
 
-    def carry_time(self, w):
-        return 2.0 * self.release_angle / w
 
-
-def parse(carry, mu):
+def parse(scene):
+    """From throw.carry, contact.mu and arm.length."""
+    carry = scene.section('throw').get('carry')
     if carry is None:
         raise InputError('throw.carry', 'missing (effect finite_carry needs it)',
                          'give throw: {carry: {profile: constant_acceleration, '
@@ -81,8 +101,182 @@ def parse(carry, mu):
                          'give the release angle theta_r > 0, e.g. release_angle_deg: 5')
     ret = number(carry, 'return_time', 'throw.carry', 'the return time in s (> 0)', lo=0.0,
                  lo_open=True, default=0.0)
-    if mu is None:
+    if scene.mu is None:
         raise InputError('contact.mu', 'missing (effect finite_carry checks the wrench cone of '
                          'section III.A.1, which needs the friction coefficient)',
                          'give contact: {mu: ...}, the part/arm Coulomb coefficient')
-    return FiniteCarry(profile, theta, ret)
+    arm = math.inf if scene.arm_length is None else float(scene.arm_length)
+    return FiniteCarry(profile, theta, ret, float(scene.mu), arm)
+
+
+def slots(params):
+    """Fill release; and check (the returning arm) when the arm takes time to return."""
+    return ('release', 'check') if params.return_time > 0.0 else ('release',)
+
+
+def bundle(params, part, knobs):
+    """Return the compiled parameters."""
+    return CarryParams(float(params.release_angle), float(params.return_time),
+                       int(knobs.carry_samples), float(params.mu), float(params.arm_length))
+
+
+@njit
+def release_state(edge, R, w, h, theta_r, d):
+    """
+    Return the release state (x0, y0, phi0, vx, vy, omega) in frame F (y0 from the pivot).
+
+    The part rests on ``edge`` at radius R of an arm at angle theta_r turning at w about the
+    pivot (theta_r = 0 is eq 5 at t = 0).
+    """
+    c = math.cos(theta_r)
+    s = math.sin(theta_r)
+    px = c * R - s * (h + d[edge])
+    py = s * R + c * (h + d[edge])
+    return px, py, theta_r, -w * py, w * px, w
+
+
+@njit
+def carry_margin(edge, R, w, h, g, mu, theta_r, samples, rho2, d, u_l, u_r):
+    """
+    Return the largest wrench-cone margin along the carry (<= 0: in a dynamic grasp).
+
+    Returns (margin, sample index, constraint 1..4) of the worst instant.
+    """
+    hd = h + d[edge]
+    a = w * w / (2.0 * theta_r)
+    tc = 2.0 * theta_r / w
+    worst = -math.inf
+    worst_k = 0
+    worst_c = 0
+    for k in range(samples + 1):
+        t = tc * k / samples
+        th = 0.5 * a * t * t
+        thd = a * t
+        m = cone_margins(u_l[edge], u_r[edge], -d[edge], mu,
+                         -a * hd - thd * thd * R - g * math.sin(th),
+                         a * R - thd * thd * hd - g * math.cos(th), a * rho2)
+        for c in range(4):
+            if m[c] > worst:
+                worst = m[c]
+                worst_k = k
+                worst_c = c + 1
+    return worst, worst_k, worst_c
+
+
+@njit
+def release(edge, R, w, h, ctx, prm):
+    """Check the grasp along the carry, then return the state at release, y0 over the arm."""
+    part = ctx.part
+    if carry_margin(edge, R, w, h, ctx.g, prm.mu, prm.theta_r, prm.samples, part.rho2, part.d,
+                    part.u_l, part.u_r)[0] > 0.0:
+        return ERR_CARRY_GRASP, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    x0, y0, phi0, vx, vy, om = release_state(edge, R, w, h, prm.theta_r, part.d)
+    return OK, x0, y0 - h, phi0, vx, vy, om
+
+
+@njit
+def arm_clearance(edge, x0, y0, phi0, vx, vy, om, g, h, theta_r, w, ret_time, samples, arm_len,
+                  part):
+    """
+    Return the smallest clearance of the part's vertices over the returning arm.
+
+    The arm follows the Hermite profile from (theta_r, w) to (0, 0) in ret_time; only vertices
+    above the arm's extent [0, arm_len] count. (x0, y0) is the CM at release from the pivot.
+    """
+    worst = math.inf
+    for k in range(1, samples + 1):
+        t = ret_time * k / samples
+        s = t / ret_time
+        th = ((2 * s ** 3 - 3 * s * s + 1) * theta_r + (s ** 3 - 2 * s * s + s) * ret_time * w)
+        c = math.cos(th)
+        sn = math.sin(th)
+        ph = phi0 + om * t
+        cp = math.cos(ph)
+        sp = math.sin(ph)
+        xc = x0 + vx * t
+        yc = y0 + vy * t + 0.5 * g * t * t
+        for j in range(part.n):
+            xv = xc + cp * part.U[edge, j] - sp * part.V[edge, j]
+            yv = yc + sp * part.U[edge, j] + cp * part.V[edge, j]
+            along = c * xv + sn * yv
+            if along < 0.0 or along > arm_len:
+                continue
+            clear = -sn * xv + c * yv - h
+            if clear < worst:
+                worst = clear
+    return worst
+
+
+@njit
+def check(outcome, release, edge, ctx, prm):
+    """Fail the throw if the returning arm meets the part or is not back before it lands (hook)."""
+    if outcome.status == OK and (outcome.t < prm.return_time or arm_clearance(
+            edge, release.x0, release.y0 + release.h, release.phi0, release.vx, release.vy,
+            release.om, ctx.g, release.h, prm.theta_r, release.w, prm.return_time, prm.samples,
+            prm.arm_length, ctx.part) < 0.0):
+        return ERR_ARM_STRIKE
+    return outcome.status
+
+
+# ------------------------------------------------------------------------------- Python level
+def domain(model, params, r_top=1.0, step=1e-3):
+    """
+    Return the lower end of the domain per stable edge (inf: none below r_top).
+
+    Above it the carry keeps the dynamic grasp and the returning arm clears the part (on a
+    1 mm grid up to r_top, then bisection to 1e-7 m). The impulse-cone R_grasp does not apply.
+    """
+    part = model.part
+    out = np.full(part.n, np.inf)
+    bad = (ERR_CARRY_GRASP, ERR_ARM_STRIKE, ERR_TOE_STUB)
+    for i in part.stable_edges:
+        rs = np.arange(max(-part.u_l[i], 0.0) + step / 2, r_top, step)
+        st = model.nominal_status(np.full(rs.size, i), rs)
+        failing = np.flatnonzero(np.isin(st, bad))
+        if failing.size == 0:
+            out[i] = max(-part.u_l[i], 0.0)
+            continue
+        k = int(failing[-1])
+        if k + 1 >= rs.size:
+            continue        # no domain on this edge below r_top
+        lo, hi = float(rs[k]), float(rs[k + 1])
+        while hi - lo > 1e-7:
+            mid = 0.5 * (lo + hi)
+            if model.nominal_status(np.array([i]), np.array([mid]))[0] in bad:
+                lo = mid
+            else:
+                hi = mid
+        out[i] = hi
+    return out
+
+
+def domain_error(model, params, edge, R):
+    """Return the DomainError of (edge, R) with the carry, or None inside the domain."""
+    part = model.part
+    margin, k, c = carry_margin(int(edge), float(R), model.w, model.h, model.g, params.mu,
+                                params.release_angle, model.knobs.carry_samples, part.rho2,
+                                part.d, part.u_l, part.u_r)
+    if margin > 0.0:
+        tc = 2 * params.release_angle / model.w
+        return DomainError('carry_grasp', f'no dynamic grasp on edge {edge} at R = {R:.6g} m '
+                           f'during the carry: constraint ({c}) ({bound_name(c, False)}) fails '
+                           f'at t = {tc * k / model.knobs.carry_samples * 1000:.3f} ms of '
+                           f'{tc * 1000:.3f} ms (margin {margin:.3g}); throw from further out, '
+                           'or carry less abruptly (larger release angle)', margin=margin)
+    if not R + part.u_l[edge] > 0:
+        return DomainError('toe_stub', f'the left vertex of edge {edge} is not right of the '
+                           'pivot')
+    if R < model.r_grasp[edge]:
+        return DomainError('carry_domain', f'on edge {edge} the finite carry needs R >= '
+                           f'{model.r_grasp[edge]:.6g} m (below it the carry loses the grasp or '
+                           f'the returning arm meets the part); got R = {R:.6g} m',
+                           margin=model.r_grasp[edge] - R)
+    return None
+
+
+def domain_note(model, params):
+    """One line for ``throwmap grasp``: the carry's own domain next to the impulse cone's."""
+    return (f'with the finite carry (release at {math.degrees(params.release_angle):g} deg, '
+            f'mu = {params.mu:g}): R >= '
+            + ', '.join(f'{model.r_grasp[i] * 100:.3f} cm on E{i}'
+                        for i in model.part.stable_edges))

@@ -26,10 +26,11 @@ normal work is (1 - e^2) times the compression work, so kinetic energy never inc
 over random impacts). The Chatterjee-Ruina algebraic law was the first candidate; with the
 clip to the friction cone it created energy in about 6 % of random impacts of these parts
 (strong coupling of normal and tangential motion), so it was not used. A rebound slower than
-``contact.bounce_threshold`` (m/s) is plastic: a further normal impulse removes it, which only
-dissipates. A flat landing of an edge is a two-point plastic impact whose tangential impulse
-is clipped to mu times the normal one; the part then slides flat with Coulomb friction mu until
-it stops (or tips, when one corner's share of the load turns negative).
+``contact.bounce_threshold`` (m/s) is plastic: the event simulator removes it with a further
+normal impulse, which only dissipates. A flat landing of an edge is a two-point plastic impact
+whose tangential impulse is clipped to mu times the normal one; the part then slides flat with
+Coulomb friction mu until it stops (or tips, when one corner's share of the load turns
+negative).
 
 ``contact.pivot`` says what a vertex does after a plastic impact:
 * 'hinge' (default, the paper's rolling model): the foam grips it; the part turns about it
@@ -39,34 +40,46 @@ it stops (or tips, when one corner's share of the load turns negative).
 * 'unilateral': full Coulomb contact: the vertex slides when the friction force needed to hold
   it exceeds mu N, and lifts off (the part flies again) when N would turn negative.
 
-Limit: e = 0 with mu = inf (or large enough that no impulse reaches the cone) is the sticking
-model; the throw map then equals the base model's (tested). mu is contact.mu, the same
+Hooks: ``impact`` (the law above, and whether the part bounces off) and the contact law (mu,
+the pivot model, and whether the law is the sticking one, for the event simulator's settling
+rule). Limit: e = 0 with mu = inf (or large enough that no impulse reaches the cone) is the
+sticking model; the throw map then equals the base model's (tested). mu is contact.mu, the same
 coefficient the grasp bounds (2) and (4) use; without it the arm's friction is unbounded.
 
 Scene: contact: {restitution: 0.3, mu: 0.8, bounce_threshold: 0.01, pivot: hinge};
 effects: [impact_restitution].
 """
 
+from collections import namedtuple
 from dataclasses import dataclass
 import math
 
 from ._common import number
 from ..errors import InputError
+from ..event_sim import ContactLaw
+from ..jit import njit
 
 NAME = 'impact_restitution'
+SCHEMA = {'contact': ('restitution', 'bounce_threshold', 'pivot')}
+KNOBS = {}
 PIVOTS = ('hinge', 'unilateral')
+
+RestitutionParams = namedtuple('RestitutionParams', ['e', 'mu', 'bounce_threshold'])
 
 
 @dataclass(frozen=True)
 class ImpactRestitution:
+    """Parameters: restitution e, the arm's friction mu, the bounce threshold, the pivot."""
+
     restitution: float
     mu: float               # inf when the scene gives no contact.mu
     bounce_threshold: float
     unilateral: bool
 
 
-def parse(contact):
-    contact = contact or {}
+def parse(scene):
+    """From the scene's contact section."""
+    contact = scene.section('contact')
     if 'restitution' not in contact:
         raise InputError('contact.restitution', 'missing (effect impact_restitution needs it)',
                          'give the coefficient of restitution e in [0, 1], e.g. 0.3')
@@ -77,6 +90,123 @@ def parse(contact):
     if pivot not in PIVOTS:
         raise InputError('contact.pivot', f'unknown pivot model {pivot!r}',
                          f'use one of {", ".join(PIVOTS)}')
-    mu = contact.get('mu')
+    mu = scene.mu
     return ImpactRestitution(e, math.inf if mu is None else float(mu), vb,
                              pivot == 'unilateral')
+
+
+def slots(params):
+    """Fill impact: the impact law."""
+    return ('impact',)
+
+
+def bundle(params, part, knobs):
+    """Return the compiled parameters of the impact law."""
+    return RestitutionParams(float(params.restitution), float(params.mu),
+                             float(params.bounce_threshold))
+
+
+def contact_law(params):
+    """Friction and pivot model of the contact phases; sticking when e = 0 and mu = inf."""
+    return ContactLaw(float(params.mu), bool(params.unilateral),
+                      params.restitution == 0.0 and math.isinf(params.mu))
+
+
+@njit
+def routh_stronge_impact(rx, ry, vx, vy, om, rho2, e, mu):
+    """
+    Frictional impact at a contact point r = (rx, ry) from the CM on the arm (normal +y).
+
+    Routh's method with Stronge's energetic restitution (module docstring). mu = inf stops slip
+    at once; with e = 0 the result is then the sticking impact of eqs 7-9. Returns
+    (vx, vy, om).
+    """
+    ut = vx - om * ry
+    un = vy + om * rx
+    if un >= 0.0:
+        return vx, vy, om    # separating or resting: no impact
+    inv = 1.0 / rho2
+    ktt = 1.0 + ry * ry * inv
+    knn = 1.0 + rx * rx * inv
+    ktn = -rx * ry * inv
+    pt = 0.0
+    pn = 0.0
+    eps = 1e-13 * (abs(ut) + abs(un))
+    if math.isinf(mu) and ut != 0.0:
+        # unbounded friction: a tangential impulse stops the slip at once
+        d_pt = -ut / ktt
+        pt += d_pt
+        ut = 0.0
+        un += ktn * d_pt
+        if un >= 0.0:
+            return vx + pt, vy, om - ry * pt * inv
+    work = 0.0
+    compressing = True
+    target = 0.0
+    for _ in range(16):
+        if abs(ut) > eps:
+            sigma = 1.0 if ut > 0.0 else -1.0
+            rate_t = -mu * sigma
+            stuck = False
+        else:
+            ut = 0.0
+            lam = -ktn / ktt
+            if abs(lam) <= mu:
+                rate_t = lam
+                stuck = True
+            else:
+                rate_t = mu if lam > 0.0 else -mu
+                stuck = False
+        dut = ktt * rate_t + ktn
+        dun = ktn * rate_t + knn
+        step = math.inf
+        ends_slip = False
+        if not stuck and ut != 0.0 and dut * ut < 0.0:
+            step = -ut / dut
+            ends_slip = True
+        if compressing:
+            if dun <= 0.0:
+                # No normal impulse can stop the approach while slipping (Painleve jam): the
+                # contact sticks instead (the impulse that stops the point, as in eqs 7-9).
+                det = ktt * knn - ktn * ktn
+                pt -= (knn * ut - ktn * un) / det
+                pn -= (-ktn * ut + ktt * un) / det
+                return vx + pt, vy + pn, om + (rx * pn - ry * pt) * inv
+            s_c = -un / dun
+            if s_c <= step:
+                step = s_c
+                ends_slip = False
+        else:
+            # W(p + s) = work + un s + dun s^2 / 2 reaches the target
+            rem = target - work
+            if dun > 0.0:
+                s_r = (-un + math.sqrt(un * un + 2.0 * dun * rem)) / dun
+            else:
+                s_r = rem / un if un > 0.0 else 0.0
+            if s_r <= step:
+                step = s_r
+                ends_slip = False
+        work += un * step + 0.5 * dun * step * step
+        pn += step
+        pt += rate_t * step
+        ut = 0.0 if ends_slip else ut + dut * step
+        un = un + dun * step
+        if ends_slip:
+            continue
+        if compressing:
+            compressing = False
+            un = 0.0
+            target = work * (1.0 - e * e)
+            if e == 0.0:
+                break
+        elif not ends_slip:
+            break
+    return vx + pt, vy + pn, om + (rx * pn - ry * pt) * inv
+
+
+@njit
+def impact(rx, ry, vx, vy, om, rho2, prm):
+    """Apply the impact law; the part bounces when it rebounds faster than the threshold (hook)."""
+    vx1, vy1, om1 = routh_stronge_impact(rx, ry, vx, vy, om, rho2, prm.e, prm.mu)
+    bounces = prm.e > 0.0 and vy1 + om1 * rx > prm.bounce_threshold
+    return vx1, vy1, om1, bounces

@@ -21,28 +21,41 @@ tension and the foam's compression vary from throw to throw. h_k is the arm surf
 whole throw (release and catch). The grasp bounds are evaluated at the throw's own h_k, so a
 noisy throw near R_grasp can leave the domain. The throw map becomes a random map: basins
 become distributions of outcomes over seeds and the sensor guarantee a probability
-(throwmap.stochastic). sd = 0 gives the deterministic map bit for bit (tested).
+(throwmap.stochastic).
+
+Hook: ``perturb``. With both sd = 0 the effect fills no hook and draws nothing: the
+deterministic map bit for bit (tested).
 
 Scene: noise: {seed: 1, release_speed_sd_deg: 5, offset_sd_cm: 0.02}; effects: [release_noise].
 """
 
+from collections import namedtuple
 from dataclasses import dataclass
 import math
 
 from ._common import number
 from ..errors import InputError
+from ..jit import njit
 
 NAME = 'release_noise'
+SCHEMA = {'noise': ('release_speed_sd', 'release_speed_sd_deg', 'offset_sd', 'offset_sd_cm')}
+KNOBS = {}
+STOCHASTIC = True
+
+NoiseParams = namedtuple('NoiseParams', ['speed_sd', 'offset_sd'])
 
 
 @dataclass(frozen=True)
 class ReleaseNoise:
+    """Parameters: standard deviations of the release speed and of the arm offset."""
+
     speed_sd: float     # rad/s
     offset_sd: float    # m
 
 
-def parse(noise):
-    noise = noise or {}
+def parse(scene):
+    """From the scene's noise section."""
+    noise = scene.section('noise')
     sd_w = number(noise, 'release_speed_sd', 'noise', 'a standard deviation >= 0', lo=0.0,
                   scale_keys=[('release_speed_sd', 1.0),
                               ('release_speed_sd_deg', math.pi / 180.0)])
@@ -52,3 +65,19 @@ def parse(noise):
         raise InputError('noise', 'effect release_noise needs release_speed_sd(_deg) and/or '
                          'offset_sd(_cm)', 'give e.g. noise: {release_speed_sd_deg: 5}')
     return ReleaseNoise(sd_w or 0.0, sd_h or 0.0)
+
+
+def slots(params):
+    """Fill perturb, unless both deviations are 0."""
+    return ('perturb',) if (params.speed_sd > 0.0 or params.offset_sd > 0.0) else ()
+
+
+def bundle(params, part, knobs):
+    """Return the compiled parameters."""
+    return NoiseParams(float(params.speed_sd), float(params.offset_sd))
+
+
+@njit
+def perturb(w, h, z0, z1, prm):
+    """Return this throw's release speed and arm offset from two standard normal draws (hook)."""
+    return w + prm.speed_sd * z0, h + prm.offset_sd * z1

@@ -13,10 +13,11 @@
 # limitations under the License.
 
 """
-Helpers for tests and demos of the feeder graph (ROS-free): DDS domains, processes, emulator.
+Support for tests, demos and benchmarks of the feeder graph: DDS domains, processes, emulator.
 
-One implementation serves the package tests, tests/conftest.py, scripts/demo_graph.py and the
-benchmarks:
+It lives with the tests and no package installs it. One implementation serves the package
+tests (their conftest puts this directory on sys.path), tests/conftest.py,
+scripts/demo_graph.py and the benchmarks:
 
 * :func:`claim_domain_id` picks a ROS_DOMAIN_ID that no other test or demo process of this
   machine holds (an exclusive ``flock`` on ``<tmp>/feeder-ros-domain-<id>.lock``, released when
@@ -38,7 +39,8 @@ import sys
 import tempfile
 import threading
 
-from .emulator import from_scene
+REPO = pathlib.Path(__file__).resolve().parents[1]
+INSTALL = REPO / 'ros2_ws' / 'install'
 
 _HELD = {}
 # Fast DDS well-known ports: PB 7400, DG 250, PG 2; unicast discovery at offset 10 (d1) and
@@ -104,7 +106,7 @@ def dds_env(domain_id, base=None):
     return env
 
 
-def install_env(install, base=None):
+def install_env(install=INSTALL, base=None):
     """
     Environment for the executables of the colcon install ``install`` (e.g. ros2_ws/install).
 
@@ -129,6 +131,7 @@ class EmulatorThread:
     """A :class:`feeder_driver.emulator.Controller` served from a background thread."""
 
     def __init__(self, scene, link, **kwargs):
+        from feeder_driver.emulator import from_scene
         self.controller = from_scene(scene, link=link, **kwargs)
         self._thread = threading.Thread(target=self.controller.run, name='feeder-emulator',
                                         daemon=True)

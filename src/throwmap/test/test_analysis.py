@@ -12,17 +12,26 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
+"""The analysis the nodes share (throwmap.analysis): rows, a moved sensor, strict JSON."""
+
 import json
 import math
 
-from feeder_sim.analysis import analysis_json, limit_set_rows, scene_analysis
 import pytest
+from throwmap import (analyse, analysis_json, LIMIT_SET_FIELDS, limit_set_rows, scene_analysis,
+                      SensorDesignError)
+
+
+@pytest.fixture(scope='module')
+def triangle_analysis(triangle_scene):
+    return analyse(triangle_scene)
 
 
 def test_limit_set_rows(triangle_analysis):
     ls = triangle_analysis.limit_set
     rows = limit_set_rows(ls)
     assert [int(r[0]) for r in rows] == sorted(ls.bands)
+    assert all(len(r) == len(LIMIT_SET_FIELDS) for r in rows)
     for edge, lo, hi, jmin, jmax in rows:
         assert (lo, hi) == ls.bands[int(edge)]
         assert lo <= hi
@@ -32,17 +41,22 @@ def test_limit_set_rows(triangle_analysis):
             assert math.isnan(jmin) and math.isnan(jmax)
 
 
-def test_moving_the_sensor_redoes_the_sensor_design(triangle, triangle_analysis):
+def test_moving_the_sensor_redoes_the_sensor_design(triangle_scene, triangle_analysis):
     base = triangle_analysis
-    same = scene_analysis(triangle, 0.0, base)
+    same = scene_analysis(triangle_scene, 0.0, base)
     assert same is base
-    near = scene_analysis(triangle, 0.20, base)
+    near = scene_analysis(triangle_scene, 0.20, base)
     assert near.sensor.radius == 0.20
     assert near.sensor.guarantee_radius == pytest.approx(base.sensor.guarantee_radius)
     assert near.limit_set is base.limit_set
     # Inside the guarantee radius other edges are seen: the warm-up cannot end within the grid.
     assert near.sensor.warmup_throws > base.sensor.warmup_throws
     assert near.sensor.detection_rate > base.sensor.detection_rate
+    # A sensor design without a finite radius is refused with the fix.
+    inf = scene_analysis(triangle_scene, 0.0, base).sensor.__class__(
+        **dict(vars(base.sensor), radius=math.inf))
+    with pytest.raises(SensorDesignError, match='give the sensor position'):
+        scene_analysis(triangle_scene, 0.0, base.__class__(**dict(vars(base), sensor=inf)))
 
 
 def test_analysis_json_is_strict(triangle_analysis):

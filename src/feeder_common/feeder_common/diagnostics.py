@@ -12,38 +12,53 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""
-A small stand-in for diagnostic_updater (which has no wheel): periodic /diagnostics.
 
-Same conventions as ros/diagnostics' Python ``Updater``: absolute topic ``/diagnostics``,
-reliable depth 1, status names ``<node name>: <task name>``, ``hardware_id`` on every status,
-values as strings. ``DiagnosticStatus.level`` is a byte field, so levels are the message's
-own constants (``DiagnosticStatus.OK`` is a one-byte bytes value), never ints.
+"""
+A small stand-in for diagnostic_updater (which has no wheel): periodic ``/diagnostics``.
+
+Same conventions as ros/diagnostics' ``Updater``: absolute topic ``/diagnostics``, reliable
+depth 1, status names ``<node name>: <task name>``, ``hardware_id`` on every status, values as
+strings. ``DiagnosticStatus.level`` is a byte field: levels are the message's own constants
+(``DiagnosticStatus.OK`` is a one-byte bytes value) or the names ``ok``, ``warn``, ``error``,
+``stale``.
 """
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-LEVELS = (DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR,
-          DiagnosticStatus.STALE)
+from . import qos
+
+LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN,
+          'error': DiagnosticStatus.ERROR, 'stale': DiagnosticStatus.STALE}
+_LEVEL_VALUES = tuple(LEVELS.values())
+
+
+def level_of(level):
+    """Return the DiagnosticStatus level of a name (``'ok'``...) or of a level constant."""
+    if isinstance(level, str) and level in LEVELS:
+        return LEVELS[level]
+    if level in _LEVEL_VALUES:
+        return level
+    raise ValueError(f'level {level!r}: use ok/warn/error/stale or DiagnosticStatus.OK/WARN/'
+                     'ERROR/STALE (bytes, not int)')
 
 
 class Status:
-    """What a task fills in: ``summary(level, message)`` and ``add(key, value)``."""
+    """What a task fills in: ``summary(level, message)``, ``add(key, value)``, ``update()``."""
 
     def __init__(self, name, hardware_id):
         self.msg = DiagnosticStatus(name=name, hardware_id=hardware_id,
                                     level=DiagnosticStatus.OK, message='')
 
     def summary(self, level, message):
-        if level not in LEVELS:
-            raise ValueError(f'level {level!r}: use DiagnosticStatus.OK/WARN/ERROR/STALE '
-                             '(bytes, not int)')
-        self.msg.level = level
-        self.msg.message = message
+        self.msg.level = level_of(level)
+        self.msg.message = str(message)
 
     def add(self, key, value):
         self.msg.values.append(KeyValue(key=str(key), value=str(value)))
+
+    def update(self, values):
+        for key, value in values.items():
+            self.add(key, value)
 
 
 class Updater:
@@ -53,9 +68,7 @@ class Updater:
         self.node = node
         self.hardware_id = hardware_id
         self.tasks = []
-        self.pub = node.create_publisher(DiagnosticArray, '/diagnostics',
-                                         QoSProfile(depth=1,
-                                                    reliability=ReliabilityPolicy.RELIABLE))
+        self.pub = node.create_publisher(DiagnosticArray, '/diagnostics', qos.DIAGNOSTICS)
         self.timer = node.create_timer(period, self.update)
 
     def add(self, name, task):
@@ -73,7 +86,7 @@ class Updater:
             try:
                 task(stat)
             except Exception as exc:    # noqa: B902 - a broken task must not stop the rest
-                stat.summary(DiagnosticStatus.ERROR, f'diagnostic task failed: {exc!r}')
+                stat.summary('error', f'diagnostic task failed: {exc!r}')
             out.append(stat.msg)
         return out
 

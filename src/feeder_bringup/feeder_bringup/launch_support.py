@@ -1,0 +1,306 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+What the feeder's launch files start, as plain data (importable without ``launch``).
+
+Each launch file declares the arguments of its table (:data:`SIM_ARGUMENTS`,
+:data:`HARDWARE_ARGUMENTS`, :data:`FEEDERS_ARGUMENTS`) and turns the plan built here
+(:func:`plan_sim`, :func:`plan_hardware`, :func:`plan_feeders`: lists of :class:`NodeSpec`)
+into launch_ros actions (:mod:`feeder_bringup.launch_actions`). So the plan can be checked
+where ``launch`` is not installed: every package, executable, config file and scene it names
+exists in the install space, and it reads only declared arguments (:class:`Arguments`).
+
+The URDF needs the scene's numbers (the sensor radius and the arm's offset h): they come from
+the throwmap CLI installed with the workspace (``throwmap design/grasp --json``), so the launch
+process needs no numpy; a given ``sensor_radius`` skips the design.
+"""
+
+from dataclasses import dataclass, field
+import json
+import math
+import os
+import pathlib
+import shutil
+import subprocess
+import tempfile
+import xml.etree.ElementTree as ET
+
+from ament_index_python.packages import (get_package_prefix, get_package_share_directory,
+                                         PackageNotFoundError)
+
+# name: (default, description)
+COMMON_ARGUMENTS = {
+    'scene': ('triangle', 'an installed scene (share/feeder_bringup/scenes/<name>.yaml: '
+              'triangle, bracket, experiment, house, rectangle, hard/<name>) or a path'),
+    'namespace': ('feeder', 'namespace of the feeder (every topic, service and node in it)'),
+    'cycle_period': ('1.0', 's between cycles while enabled'),
+    'sensor_radius': ('auto', "m; auto: throwmap's sensor design for the scene"),
+    'record': ('', 'a new directory: record the feeder to a rosbag2 MCAP bag there'),
+    'robot_state_publisher': ('auto', 'auto: start it where it is installed; true; false'),
+    'rviz': ('false', 'true: start rviz2 with share/feeder_bringup/rviz/feeder.rviz'),
+    'arm_length': ('0.4', 'm, length of the arm drawn in the robot model'),
+}
+SIM_ARGUMENTS = dict(COMMON_ARGUMENTS)
+HARDWARE_ARGUMENTS = dict(COMMON_ARGUMENTS, **{
+    'port': ('/dev/ttyACM0', 'serial port of the controller (device or pyserial URL)'),
+    'emulator': ('false', 'true: start controller_emulator on a pty and drive that'),
+    'emulator_link': ('', 'path of the emulator pty (default: <tmp>/feeder-<namespace>-tty)'),
+})
+FEEDERS_ARGUMENTS = dict(COMMON_ARGUMENTS, **{
+    'namespaces': ('feeder_1,feeder_2,feeder_3', 'comma-separated namespaces: one simulated '
+                   'feeder in each'),
+})
+del FEEDERS_ARGUMENTS['namespace']
+
+ARM_THICKNESS = 0.004   # m, as feeder_sim.markers draws it
+
+
+class LaunchArgumentError(ValueError):
+    """A launch argument is unusable; the text names it and the fix."""
+
+
+@dataclass
+class NodeSpec:
+    """One process: a ROS node (``ros``) or a plain executable of a package."""
+
+    package: str
+    executable: str
+    name: str = ''
+    namespace: str = ''
+    parameters: list = field(default_factory=list)     # file paths and dicts, in order
+    remappings: list = field(default_factory=list)
+    arguments: list = field(default_factory=list)
+    ros: bool = True
+
+
+class Arguments:
+    """The values of the declared launch arguments; reading an undeclared one is an error."""
+
+    def __init__(self, declared, given):
+        unknown = set(given) - set(declared)
+        if unknown:
+            raise LaunchArgumentError(f'unknown launch arguments {sorted(unknown)}; this launch '
+                                      f'file takes {sorted(declared)}')
+        self._values = {name: str(given.get(name, default))
+                        for name, (default, _) in declared.items()}
+
+    def __getitem__(self, name):
+        if name not in self._values:
+            raise KeyError(f'launch argument {name!r} is read but not declared')
+        return self._values[name]
+
+    def with_values(self, **values):
+        out = Arguments.__new__(Arguments)
+        out._values = dict(self._values, **{k: str(v) for k, v in values.items()})
+        return out
+
+
+def share(package):
+    return pathlib.Path(get_package_share_directory(package))
+
+
+def installed(package):
+    """Whether ``package`` is in the ament index (e.g. robot_state_publisher, rviz2)."""
+    try:
+        get_package_prefix(package)
+    except PackageNotFoundError:
+        return False
+    return True
+
+
+def executable_path(package, executable):
+    """Path of ``executable`` of ``package`` where ``ros2 run`` looks (lib/<package>)."""
+    return pathlib.Path(get_package_prefix(package)) / 'lib' / package / executable
+
+
+def installed_scenes():
+    root = share('feeder_bringup') / 'scenes'
+    return sorted(str(p.relative_to(root))[:-len('.yaml')] for p in root.rglob('*.yaml'))
+
+
+def resolve_scene(scene):
+    """Path of a scene given by name (an installed one, e.g. hard/fast_spin) or by path."""
+    path = pathlib.Path(os.path.expanduser(scene))
+    if path.suffix not in ('.yaml', '.yml'):
+        found = share('feeder_bringup') / 'scenes' / f'{scene}.yaml'
+        if found.is_file():
+            return str(found)
+        if not path.is_file():
+            raise LaunchArgumentError(f'scene:={scene}: not an installed scene; installed: '
+                                      f'{", ".join(installed_scenes())} (or give a path)')
+    if not path.is_file():
+        raise LaunchArgumentError(f'scene:={scene}: no such file; give an installed scene '
+                                  f'({", ".join(installed_scenes())}) or a path')
+    return str(path.resolve())
+
+
+def number(args, name, minimum=None):
+    try:
+        value = float(args[name])
+    except ValueError:
+        raise LaunchArgumentError(f'{name}:={args[name]} is not a number') from None
+    if not math.isfinite(value) or (minimum is not None and value < minimum):
+        raise LaunchArgumentError(f'{name}:={args[name]} must be a finite number'
+                                  + (f' >= {minimum}' if minimum is not None else ''))
+    return value
+
+
+def flag(args, name, choices=('true', 'false')):
+    value = args[name].strip().lower()
+    if value not in choices:
+        raise LaunchArgumentError(f'{name}:={args[name]}: use one of {", ".join(choices)}')
+    return value
+
+
+def namespace(text):
+    ns = '/' + text.strip().strip('/')
+    if ns == '/' or not all(part and (part[0].isalpha() or part[0] == '_') and
+                            all(c.isalnum() or c == '_' for c in part)
+                            for part in ns[1:].split('/')):
+        raise LaunchArgumentError(f'namespace {text!r}: use names of letters, digits and _, '
+                                  'e.g. feeder or line_2/feeder')
+    return ns
+
+
+_GEOMETRY = {}
+
+
+def throwmap_json(*argv):
+    exe = executable_path('throwmap', 'throwmap')
+    cmd = [str(exe) if exe.exists() else (shutil.which('throwmap') or 'throwmap'), *argv,
+           '--json']
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    if proc.returncode != 0:
+        raise LaunchArgumentError(f'{" ".join(cmd)} failed: {proc.stderr.strip()}')
+    return json.loads(proc.stdout)
+
+
+def scene_geometry(scene_path):
+    """Return (designed sensor radius, arm offset h) of a scene, m, from the throwmap CLI."""
+    if scene_path not in _GEOMETRY:
+        grasp = throwmap_json('grasp', scene_path)
+        design = throwmap_json('design', scene_path, '--quiet')
+        _GEOMETRY[scene_path] = (float(design['sensor']['radius']), float(grasp['offset']))
+    return _GEOMETRY[scene_path]
+
+
+def robot_description(sensor_radius, arm_offset, arm_length=0.4, urdf=None):
+    """
+    Return the feeder's URDF with a scene's numbers written in (no xacro).
+
+    The sensor joint sits at (sensor_radius, 0, arm_offset) on the arm; the arm's box is
+    ``arm_length`` long, its top surface at z = arm_offset.
+    """
+    path = urdf or share('feeder_bringup') / 'urdf' / 'feeder.urdf'
+    root = ET.parse(path).getroot()
+    joint = root.find("joint[@name='feeder_sensor_joint']/origin")
+    joint.set('xyz', f'{sensor_radius:.6g} 0 {arm_offset:.6g}')
+    arm = root.find("link[@name='feeder_arm']/visual[@name='arm']")
+    arm.find('origin').set('xyz', f'{arm_length / 2:.6g} 0 {arm_offset - ARM_THICKNESS / 2:.6g}')
+    arm.find('geometry/box').set('size', f'{arm_length:.6g} 0.01 {ARM_THICKNESS:.6g}')
+    return ET.tostring(root, encoding='unicode')
+
+
+def _sensor_parameter(args):
+    """{'sensor_radius': R} for the nodes when given, else {} (they design it themselves)."""
+    if args['sensor_radius'].strip().lower() == 'auto':
+        return {}
+    return {'sensor_radius': number(args, 'sensor_radius', minimum=0.0)}
+
+
+def _common_nodes(args, ns, scene):
+    """Predictor, monitor, recorder, robot_state_publisher, rviz2 of one feeder."""
+    sensor = _sensor_parameter(args)
+    nodes = [
+        NodeSpec('feeder_sim', 'sim_node', 'feeder_sim', ns,
+                 [str(share('feeder_sim') / 'config' / 'sim.yaml'), {'scene': scene, **sensor}]),
+        NodeSpec('feeder_monitor', 'monitor_node', 'feeder_monitor', ns,
+                 [str(share('feeder_monitor') / 'config' / 'monitor.yaml'),
+                  {'scene': scene, **sensor}]),
+    ]
+    if args['record']:
+        nodes.append(NodeSpec('feeder_monitor', 'bag_recorder', 'feeder_bag_recorder', ns,
+                              arguments=[os.path.abspath(os.path.expanduser(args['record']))]))
+    # Transforms stay in the feeder's namespace (<ns>/tf), so feeders side by side, each with
+    # frames feeder_base, feeder_arm, feeder_sensor, never mix.
+    tf = [('/tf', 'tf'), ('/tf_static', 'tf_static')]
+    rsp = flag(args, 'robot_state_publisher', ('auto', 'true', 'false'))
+    if rsp == 'true' or (rsp == 'auto' and installed('robot_state_publisher')):
+        radius = sensor.get('sensor_radius') or scene_geometry(scene)[0]
+        urdf = robot_description(radius, scene_geometry(scene)[1],
+                                 number(args, 'arm_length', minimum=0.01))
+        nodes.append(NodeSpec('robot_state_publisher', 'robot_state_publisher',
+                              'robot_state_publisher', ns, [{'robot_description': urdf}], tf))
+    if flag(args, 'rviz') == 'true':
+        nodes.append(NodeSpec('rviz2', 'rviz2', 'rviz2', ns, [], tf,
+                              ['-d', str(share('feeder_bringup') / 'rviz' / 'feeder.rviz')]))
+    return nodes
+
+
+def plan_sim(given):
+    """Plan the simulated feeder: the sim as hardware, the predictor, the monitor (+ options)."""
+    args = given if isinstance(given, Arguments) else Arguments(SIM_ARGUMENTS, given)
+    ns = namespace(args['namespace'])
+    scene = resolve_scene(args['scene'])
+    hardware = NodeSpec('feeder_sim', 'sim_node', 'feeder_driver', ns,
+                        [str(share('feeder_sim') / 'config' / 'sim.yaml'),
+                         {'scene': scene, 'hardware_mode': True,
+                          'cycle_period': number(args, 'cycle_period', 0.005),
+                          **_sensor_parameter(args)}])
+    return [hardware] + _common_nodes(args, ns, scene)
+
+
+def plan_hardware(given):
+    """Plan the real feeder: driver_node on a port or the emulator's pty, predictor, monitor."""
+    args = Arguments(HARDWARE_ARGUMENTS, given)
+    ns = namespace(args['namespace'])
+    scene = resolve_scene(args['scene'])
+    nodes = []
+    port = args['port']
+    if flag(args, 'emulator') == 'true':
+        port = args['emulator_link'] or os.path.join(
+            tempfile.gettempdir(), f'feeder-{ns[1:].replace("/", "-")}-tty')
+        emulator = ['--scene', scene, '--link', port]
+        sensor = _sensor_parameter(args)
+        if sensor:
+            emulator += ['--sensor-radius', str(sensor['sensor_radius'])]
+        nodes.append(NodeSpec('feeder_driver', 'controller_emulator', arguments=emulator,
+                              ros=False))
+    nodes.append(NodeSpec('feeder_driver', 'driver_node', 'feeder_driver', ns,
+                          [str(share('feeder_driver') / 'config' / 'driver.yaml'),
+                           {'port': port, 'cycle_period': number(args, 'cycle_period', 0.01)}]))
+    return nodes + _common_nodes(args, ns, scene)
+
+
+def plan_feeders(given):
+    """Plan several simulated feeders side by side, one per namespace, in one domain."""
+    args = Arguments(FEEDERS_ARGUMENTS, given)
+    names = [n.strip() for n in args['namespaces'].split(',') if n.strip()]
+    if not names:
+        raise LaunchArgumentError('namespaces:= is empty; give e.g. feeder_1,feeder_2')
+    spaces = [namespace(n) for n in names]
+    if len(set(spaces)) != len(spaces):
+        raise LaunchArgumentError(f'namespaces:={args["namespaces"]} names one twice')
+    nodes = []
+    for ns in spaces:
+        record = args['record']
+        one = Arguments(SIM_ARGUMENTS, {
+            name: args[name] for name in SIM_ARGUMENTS if name != 'namespace'})
+        one = one.with_values(namespace=ns,
+                              record=os.path.join(record, ns[1:].replace('/', '_'))
+                              if record else '')
+        nodes += plan_sim(one)
+    return nodes

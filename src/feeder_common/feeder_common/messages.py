@@ -1,0 +1,130 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+Builders and parsers of the messages the driver (or the sim standing in for it) sends.
+
+``cycle_status`` (diagnostic_msgs/DiagnosticStatus): one per fired cycle, ``name = 'cycle'``,
+level OK (completed) or ERROR (failed, the reason in ``message``), ``hardware_id`` = who ran
+it, values ``seq``, ``sensor`` (``1``/``0``/``none``), ``stamp`` (the sample time,
+:mod:`feeder_common.stamps`). ``proximity`` (sensor_msgs/Range, REP 117 fixed-distance ranger):
+``-inf`` part detected, ``+inf`` not. ``joint_states``: the arm joint ``feeder_arm_joint``.
+Every stamp is integer nanoseconds here; :func:`time_msg` and :func:`time_ns` convert.
+"""
+
+from dataclasses import dataclass
+import math
+from typing import Optional
+
+from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from sensor_msgs.msg import JointState, Range
+
+from .frames import ARM_JOINT, SENSOR_FRAME
+from .stamps import NS, parse_stamp_text, stamp_text
+
+CYCLE_STATUS_NAME = 'cycle'
+_SENSOR_TEXT = {True: '1', False: '0', None: 'none'}
+_SENSOR_BIT = {'1': True, '0': False}
+
+
+def time_msg(stamp_ns):
+    """Convert integer nanoseconds to builtin_interfaces/Time."""
+    sec, nsec = divmod(int(stamp_ns), NS)
+    return Time(sec=sec, nanosec=nsec)
+
+
+def time_ns(stamp):
+    """Convert builtin_interfaces/Time to integer nanoseconds."""
+    return stamp.sec * NS + stamp.nanosec
+
+
+@dataclass(frozen=True)
+class CycleStatus:
+    """
+    A parsed ``cycle_status``.
+
+    ``sensor`` None: no bit (a failed cycle); ``stamp_ns`` None: no usable stamp.
+    """
+
+    seq: int
+    ok: bool
+    sensor: Optional[bool]
+    stamp_ns: Optional[int]
+    message: str
+    hardware_id: str
+
+
+def cycle_status(seq, ok, message, sensor, stamp_ns, hardware_id):
+    """Build a ``cycle_status``; ``sensor`` True/False, or None for a failed cycle."""
+    return DiagnosticStatus(
+        level=DiagnosticStatus.OK if ok else DiagnosticStatus.ERROR, name=CYCLE_STATUS_NAME,
+        message=message, hardware_id=hardware_id,
+        values=[KeyValue(key='seq', value=str(int(seq))),
+                KeyValue(key='sensor', value=_SENSOR_TEXT[sensor]),
+                KeyValue(key='stamp', value=stamp_text(stamp_ns))])
+
+
+def parse_cycle_status(msg):
+    """Parse a ``cycle_status``; ValueError naming what is wrong when ``seq`` is unusable."""
+    values = {kv.key: kv.value for kv in msg.values}
+    try:
+        seq = int(values['seq'])
+    except KeyError:
+        raise ValueError('cycle_status without a seq value') from None
+    except ValueError:
+        raise ValueError(f'cycle_status seq {values["seq"]!r} is not an integer') from None
+    if seq < 0:
+        raise ValueError(f'cycle_status seq {seq} is negative')
+    try:
+        stamp = parse_stamp_text(values['stamp'])
+    except (KeyError, ValueError):
+        stamp = None
+    return CycleStatus(seq, msg.level == DiagnosticStatus.OK,
+                       _SENSOR_BIT.get(values.get('sensor')), stamp, msg.message,
+                       msg.hardware_id)
+
+
+def proximity(stamp_ns, detected, range_m, frame_id=SENSOR_FRAME):
+    """Build a ``proximity`` Range: a fixed-distance ranger (REP 117), -inf = part detected."""
+    rng = Range()
+    rng.header.stamp = time_msg(stamp_ns)
+    rng.header.frame_id = frame_id
+    rng.radiation_type = Range.INFRARED
+    rng.field_of_view = 0.0
+    rng.min_range = rng.max_range = float(range_m)
+    rng.range = -math.inf if detected else math.inf
+    return rng
+
+
+def proximity_detected(msg):
+    """Sensor bit of a ``proximity`` Range (REP 117), or None for NaN (no reading)."""
+    r = msg.range
+    if math.isnan(r):
+        return None
+    if math.isinf(r):
+        return r < 0
+    return bool(msg.min_range <= r <= msg.max_range)
+
+
+def joint_state(stamp_ns, position, velocity):
+    """Build a ``joint_states`` message of the arm joint (rad, rad/s; no effort)."""
+    js = JointState()
+    js.header.stamp = time_msg(stamp_ns)
+    js.name = [ARM_JOINT]
+    js.position = [float(position)]
+    js.velocity = [float(velocity)]
+    js.effort = []
+    return js

@@ -1,0 +1,238 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+The run helper of every feeder node's ``main``, and the base of its lifecycle nodes.
+
+:func:`run_node` owns the process: it handles SIGINT and SIGTERM itself (rclpy's handlers
+would shut the context down under a running callback, which then fails to publish), spins the
+node until a signal, a lifecycle shutdown or the node's own :meth:`finished`, then shuts the
+node down in order - lifecycle shutdown transition (a driver aborts its cycle and reports it),
+``destroy_node`` (the node leaves the graph at once), context shutdown - and returns 0. A bad
+start-up parameter or a :class:`StartupError` prints one line ``<prog>: error: <reason>`` and
+returns 2.
+"""
+
+import gc
+import os
+import signal
+import socket
+import sys
+import threading
+
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
+from rclpy.signals import SignalHandlerOptions
+
+from .parameters import ParameterError
+
+# The executor every node spins in (bench/graph_bench.py compares them; the environment
+# variable FEEDER_EXECUTOR=single|events overrides it, for such comparisons).
+DEFAULT_EXECUTOR = 'events'
+
+
+# The longest wait of one spin_once: a wake-up (signal, work) ends it earlier.
+SPIN_TIMEOUT = 1.0
+
+
+class StartupError(Exception):
+    """The node cannot run (e.g. the scene's analysis fails); the text says why and the fix."""
+
+
+class FeederLifecycleNode(LifecycleNode):
+    """
+    A lifecycle node that tells its state and when its process should end.
+
+    ``configure_error`` is the reason a configure failed (the run helper prints it);
+    ``exit_reason`` is why the process is stopping (e.g. ``interrupted (SIGTERM)``), set before
+    the shutdown transition so that ``on_shutdown`` can report it.
+    """
+
+    def __init__(self, node_name, **kwargs):
+        self.configure_error = None
+        self.exit_reason = None
+        super().__init__(node_name, **kwargs)
+
+    @property
+    def lifecycle_state(self):
+        """Label of the current state: unconfigured, inactive, active, finalized, ..."""
+        # rclpy has no public accessor; its own trigger_shutdown reads the state this way.
+        return self._state_machine.current_state[1]
+
+    def finished(self):
+        """Why the process should end now (a lifecycle shutdown happened), or None."""
+        return 'lifecycle shutdown' if self.lifecycle_state == 'finalized' else None
+
+
+def make_executor(kind=None, context=None):
+    """
+    Return the executor named ``kind`` (``events`` or ``single``).
+
+    Default: FEEDER_EXECUTOR, else :data:`DEFAULT_EXECUTOR`. The events executor of rclpy 9.1
+    supports no guard conditions (a thread that must wake the node hands the executor a task:
+    ``node.executor.create_task(callback)``, thread-safe in both) and cannot pass a
+    MessageInfo to a callback: a node that needs one names ``single`` in its ``executor_kind``
+    attribute (the run helper passes it here).
+    """
+    kind = kind or os.environ.get('FEEDER_EXECUTOR') or DEFAULT_EXECUTOR
+    if kind == 'events':
+        from rclpy.experimental import EventsExecutor
+        return EventsExecutor(context=context)
+    if kind == 'single':
+        return SingleThreadedExecutor(context=context)
+    raise ValueError(f'FEEDER_EXECUTOR={kind!r}: use events or single')
+
+
+class _SignalWake:
+    """
+    Wake the executor when a signal arrives.
+
+    Python runs a signal handler only between bytecodes, and the executor waits in C: the
+    signal's byte on the wakeup fd lets a thread hand the executor an empty task (thread-safe in
+    both executors; the events executor supports no guard conditions), so the wait ends at once
+    and the handler runs.
+    """
+
+    def __init__(self, executor):
+        self._executor = executor
+        self._rsock, self._wsock = socket.socketpair()
+        self._wsock.setblocking(False)
+        self._previous = signal.set_wakeup_fd(self._wsock.fileno(), warn_on_full_buffer=False)
+        self._thread = threading.Thread(target=self._run, name='feeder-signal-wake', daemon=True)
+        self._thread.start()
+
+    def _run(self):
+        while True:
+            try:
+                if not self._rsock.recv(64):
+                    return
+                self._executor.create_task(_nothing)
+            except Exception:   # noqa: B902 - socket closed or the executor gone: done
+                return
+
+    def close(self):
+        signal.set_wakeup_fd(self._previous)
+        self._wsock.close()         # the reader sees the end of the stream and returns
+        self._thread.join(timeout=1.0)
+        self._rsock.close()
+
+
+def _nothing():
+    pass
+
+
+def _shutdown_transition(node, reason):
+    """Tell the node why it stops; run the shutdown transition of a lifecycle node."""
+    if hasattr(node, 'exit_reason') and not node.exit_reason:
+        node.exit_reason = reason
+    if not isinstance(node, LifecycleNode):
+        return
+    if isinstance(node, FeederLifecycleNode) and \
+            node.lifecycle_state not in ('unconfigured', 'inactive', 'active'):
+        return
+    try:
+        node.trigger_shutdown()
+    except Exception as exc:    # noqa: B902 - report and go on tearing down
+        print(f'{node.get_name()}: shutdown transition failed: {exc!r}', file=sys.stderr)
+
+
+def autostart(node):
+    """Configure and activate a lifecycle node whose ``autostart`` parameter is true."""
+    if not isinstance(node, LifecycleNode) or not node.has_parameter('autostart') or \
+            not node.get_parameter('autostart').value:
+        return
+    if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
+        raise StartupError(getattr(node, 'configure_error', None) or
+                           'configure failed (see the log above)')
+    if node.trigger_activate() != TransitionCallbackReturn.SUCCESS:
+        raise StartupError('activate failed (see the log above)')
+
+
+def run_node(make_node, prog, args=None):
+    """
+    Run ``make_node(context=...)`` until SIGINT, SIGTERM or its end; the executable's status.
+
+    0 after a clean stop; 2 (one line on stderr) for a bad start-up parameter, a
+    :class:`StartupError` or a failed autostart. An exception from a callback tears the node
+    down and propagates (a bug: exit 1 with its traceback). A node that has an
+    ``exit_reason`` attribute gets the reason it stops in it (``interrupted (SIGINT)``, or
+    what its own ``finished()`` returned).
+    """
+    stop = {}
+
+    def on_signal(signum, frame):
+        stop.setdefault('reason', f'interrupted ({signal.Signals(signum).name})')
+
+    # The handlers stay until the process ends: a Ctrl-C in a terminal reaches every process
+    # of its group and ros2 launch forwards one more, so a second signal may come while the
+    # node shuts down or the interpreter exits; it must not turn a clean exit into a crash.
+    for s in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(s, on_signal)
+    context = Context()
+    try:
+        with rclpy.init(args=args, context=context,
+                        signal_handler_options=SignalHandlerOptions.NO):
+            return _run(make_node, prog, stop, context)
+    finally:
+        # Destroying the context ends the DDS participant, which tells every peer at once
+        # that this process left (else they wait for its lease, 20 s, to run out).
+        context.destroy()
+        # Nothing is left to stop: ignore further signals while the interpreter exits (it
+        # resets handlers it runs to the default, which would end the process by the signal).
+        for s in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(s, signal.SIG_IGN)
+
+
+def _run(make_node, prog, stop, context):
+    try:
+        node = make_node(context=context)
+    except (ParameterError, StartupError) as exc:
+        print(f'{prog}: error: {exc}', file=sys.stderr)
+        return 2
+    wake = None
+    executor = None
+    try:
+        try:
+            autostart(node)
+        except StartupError as exc:
+            print(f'{prog}: error: {exc}', file=sys.stderr)
+            return 2
+        executor = make_executor(getattr(node, 'executor_kind', None), context)
+        executor.add_node(node)
+        wake = _SignalWake(executor)
+        # Start-up objects (numba, throwmap's analysis) never die: keep them out of the
+        # garbage collector's way, so that a collection cannot stall a cycle.
+        gc.freeze()
+        finished = getattr(node, 'finished', lambda: None)
+        while 'reason' not in stop:
+            reason = finished()
+            if reason:
+                stop['reason'] = reason
+                break
+            # (The events executor's spin_once without a timeout does not wait: it spins.)
+            executor.spin_once(timeout_sec=SPIN_TIMEOUT)
+        return 0
+    finally:
+        _shutdown_transition(node, stop.get('reason', 'stopped'))
+        if wake is not None:
+            wake.close()
+        if executor is not None:
+            executor.remove_node(node)
+            executor.shutdown()
+        node.destroy_node()
+        # The frozen start-up objects hold the context's users: let them go.
+        gc.unfreeze()

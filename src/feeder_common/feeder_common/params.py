@@ -1,0 +1,150 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+Parameter specs (ROS-free): one table per node, from which descriptors and checks are built.
+
+The idea of generate_parameter_library without the tool: name, default (its Python type is the
+parameter's type), range, allowed values, read-only flag and description live in one place.
+ROS users write ``1`` for ``1.0``: an integer given for a double is taken as that double
+(:meth:`ParamSpec.coerce`); every other type mismatch is an error that names the parameter,
+what it got and how to write it.
+"""
+
+from dataclasses import dataclass
+import math
+from typing import Optional
+
+_KINDS = ((bool, 'bool'), (int, 'integer'), (float, 'double'), (str, 'string'))
+
+
+def kind_of(value):
+    """ROS parameter type name of a Python value: bool, integer, double, string (or other)."""
+    for py, name in _KINDS:     # bool first: it is an int to Python
+        if isinstance(value, py):
+            return name
+    return type(value).__name__
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """A parameter: ``default`` fixes the type (bool, int, float or str)."""
+
+    name: str
+    default: object
+    description: str
+    minimum: Optional[float] = None
+    maximum: Optional[float] = None
+    read_only: bool = False
+    constraints: str = ''
+    choices: tuple = ()         # allowed values (e.g. baud rates); empty: any in range
+
+    @property
+    def kind(self):
+        return kind_of(self.default)
+
+    def coerce(self, value):
+        """
+        Return ``(value, None)`` with ``value`` of this parameter's type, or ``(None, reason)``.
+
+        An integer for a double becomes that double; nothing else is converted.
+        """
+        got = kind_of(value)
+        want = self.kind
+        if got == want:
+            return value, None
+        if want == 'double' and got == 'integer':
+            return float(value), None
+        if want == 'integer' and got == 'double' and math.isfinite(value) and \
+                value == int(value):
+            hint = f'; write {int(value)}'
+        elif want == 'string':
+            hint = f"; quote it to pass it as text: -p {self.name}:=\"'{value}'\""
+        elif want == 'bool':
+            hint = '; write true or false'
+        elif want in ('integer', 'double'):
+            hint = f'; write a number, e.g. {self.default!r}'
+        else:
+            hint = ''
+        return None, f'{self.name} must be a{"n" if want == "integer" else ""} {want}, got ' \
+            f'{got} {value!r}{hint}'
+
+    def check(self, value):
+        """Reason why ``value`` (already of the right type) is invalid, or None."""
+        if self.kind == 'double' and not math.isfinite(value):
+            return f'{self.name} must be finite, got {value!r}'
+        reason = self.check_range(value)
+        if reason:
+            return reason
+        if self.choices and value not in self.choices:
+            return (f'{self.name} = {value!r} is not one of the allowed values: '
+                    f'{", ".join(str(c) for c in self.choices)}')
+        if self.kind == 'string' and self.constraints == 'not empty' and not value.strip():
+            return f'{self.name} must not be empty'
+        return None
+
+    def check_range(self, value):
+        """Reason why a number is out of range, or None (rclpy checks the range too)."""
+        if self.kind not in ('integer', 'double'):
+            return None
+        lo, hi = self.minimum, self.maximum
+        if (lo is not None and value < lo) or (hi is not None and value > hi):
+            if lo is not None and hi is not None:
+                return f'{self.name} = {value!r} is outside [{lo}, {hi}]; pick a value in ' \
+                    'that range'
+            if lo is not None:
+                return f'{self.name} = {value!r} is below the minimum {lo}'
+            return f'{self.name} = {value!r} is above the maximum {hi}'
+        return None
+
+    def validate(self, value):
+        """Coerce and check: ``(value, None)`` or ``(None, reason)``."""
+        value, reason = self.coerce(value)
+        if reason is None:
+            reason = self.check(value)
+        return (None, reason) if reason else (value, None)
+
+
+def by_name(specs):
+    """Map names to specs; a name given twice is an error in the table."""
+    out = {}
+    for s in specs:
+        if s.name in out:
+            raise ValueError(f'parameter {s.name} is declared twice')
+        out[s.name] = s
+    return out
+
+
+def defaults(specs):
+    return {s.name: s.default for s in specs}
+
+
+def check_scene(path, loader):
+    """
+    Reason why the scene file at ``path`` is unusable, or None.
+
+    ``loader(path)`` loads it and raises ValueError (throwmap's errors are ValueErrors, their
+    text names the field and the fix) or OSError (unreadable file).
+    """
+    if not path:
+        return ('scene: not set; give the path of a scene YAML, e.g. '
+                '--ros-args -p scene:=scenes/triangle.yaml')
+    try:
+        loader(path)
+    except OSError as exc:
+        return f'scene: cannot read {path}: {exc}'
+    except ValueError as exc:
+        return f'scene: {exc}'
+    return None

@@ -1,0 +1,142 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Accuracy knobs (docs/accuracy.md measures what each one costs), and their compiled bundle.
+
+:class:`Accuracy` holds the base model's knobs, :class:`SimulatorAccuracy` those of the contact
+finder's alternative and of the event simulator. Effects add their own knobs (an effect module's
+``KNOBS``, e.g. backplate_friction's ``plate_quadrature``); :func:`check_knob` validates them
+all alike. Compiled code takes every knob as one :data:`Knobs` bundle.
+"""
+
+from collections import namedtuple
+from dataclasses import dataclass, fields
+import math
+
+from .errors import InputError
+
+SETTLE_RULES = ('full', 'first_stable')
+CONTACT_METHODS = ('advancement', 'scan')
+METHOD_ADVANCEMENT = 0
+METHOD_SCAN = 1
+
+# The knobs as compiled code takes them, and the settle rule (first_stable: the catch ends on
+# the first stable edge that lands, section IV's simplification).
+Knobs = namedtuple('Knobs', ['contact_time_tol', 'flat_landing_tol', 'max_flight_steps',
+                             'max_impacts', 'first_stable', 'contact_method',
+                             'contact_scan_step', 'contact_root_tol', 'integrator_step',
+                             'roll_step', 'settle_energy', 'max_sim_steps'])
+
+
+def check_knob(name, value, default):
+    """Validate one knob: an integer >= 1 if its default is an int, else a number > 0."""
+    if isinstance(default, int):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise InputError(f'accuracy.{name}', f'must be an integer >= 1, got {value!r}',
+                             f'use e.g. the default {default}')
+    elif (isinstance(value, bool) or not isinstance(value, (int, float))
+          or not math.isfinite(value) or value <= 0):
+        raise InputError(f'accuracy.{name}', f'must be a number > 0, got {value!r}',
+                         f'use e.g. the default {default}')
+    return value
+
+
+@dataclass(frozen=True)
+class Accuracy:
+    """
+    Accuracy knobs of the base model.
+
+    contact_time_tol : s. Conservative advancement stops once the next guaranteed-safe step is
+        shorter than this; the contact time is then exact to about this much (or to the
+        spacing of doubles at that time, about 4.4e-16 t, when that is coarser).
+    flat_landing_tol : rad. An edge within this angle of the arm at impact lands flat (two-point
+        sticking impact: the part stops) instead of corner first.
+    max_flight_steps : cap on advancement steps per vertex (a NumericalError beyond it).
+    max_impacts : cap on impacts while settling (a NumericalError beyond it). Settling always
+        ends (every impact loses energy), but a near-circular part rolls like a wheel: an
+        n-gon loses only ~(2 pi / n)^2 of its energy per impact and needs ~n^2 impacts
+        (300,000 for a 1024-gon thrown from R_grasp). An impact costs ~50 ns in f, f_batch
+        and orbits; ``throw`` also keeps a record of each one (~350 bytes).
+    """
+
+    contact_time_tol: float = 1e-12
+    flat_landing_tol: float = 1e-9
+    max_flight_steps: int = 100_000
+    max_impacts: int = 1_000_000
+
+    def __post_init__(self):
+        for name in ('contact_time_tol', 'flat_landing_tol'):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise InputError(f'accuracy.{name}', f'must be a number > 0, got {value!r}',
+                                 f'use e.g. the default {getattr(Accuracy, name)}')
+        for name in ('max_flight_steps', 'max_impacts'):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 10):
+                raise InputError(f'accuracy.{name}', f'must be an integer >= 10, got {value!r}',
+                                 f'use e.g. the default {getattr(Accuracy, name)}')
+
+
+@dataclass(frozen=True)
+class SimulatorAccuracy:
+    """
+    Knobs of the contact finder's alternative and of the event simulator (throwmap.event_sim).
+
+    contact_method : 'advancement' (conservative advancement: exact, never misses a contact)
+        or 'scan' (samples every contact_scan_step, bisects to contact_root_tol; misses any
+        graze shorter than a step). Applies to ballistic flight.
+    contact_scan_step : s, sample interval of the 'scan' method.
+    contact_root_tol : s, bisection tolerance of every scanned event (scan method, and all
+        events of the event simulator).
+    integrator_step : s, RK4 step of flight in the event simulator; contacts are looked for
+        at every step, so this is also its scan resolution.
+    roll_step : s, RK4 step of rolling/sliding phases in the event simulator.
+    settle_energy : J/kg, rocking energy above the flat pose below which the event simulator
+        lays the part flat (only when the impact law is not the sticking one; otherwise the
+        exact rule holds).
+    max_sim_steps : cap on integrator steps per throw in the event simulator.
+    """
+
+    contact_method: str = 'advancement'
+    contact_scan_step: float = 1e-3
+    contact_root_tol: float = 1e-12
+    integrator_step: float = 1e-3
+    roll_step: float = 1e-3
+    settle_energy: float = 1e-8
+    max_sim_steps: int = 2_000_000
+
+    def __post_init__(self):
+        if self.contact_method not in CONTACT_METHODS:
+            raise InputError('accuracy.contact_method', f'unknown method {self.contact_method!r}',
+                             f'use one of {", ".join(CONTACT_METHODS)}')
+        for f in fields(self):
+            if f.name != 'contact_method':
+                check_knob(f.name, getattr(self, f.name), f.default)
+
+
+BASE_KEYS = tuple(f.name for f in fields(Accuracy))
+SIMULATOR_KEYS = tuple(f.name for f in fields(SimulatorAccuracy))
+
+
+def compiled_knobs(accuracy, simulator=None, settle_rule='full'):
+    """Return the :data:`Knobs` bundle of the base and simulator knobs and the settle rule."""
+    sim = simulator or SimulatorAccuracy()
+    return Knobs(float(accuracy.contact_time_tol), float(accuracy.flat_landing_tol),
+                 int(accuracy.max_flight_steps), int(accuracy.max_impacts),
+                 settle_rule == 'first_stable',
+                 METHOD_SCAN if sim.contact_method == 'scan' else METHOD_ADVANCEMENT,
+                 float(sim.contact_scan_step), float(sim.contact_root_tol),
+                 float(sim.integrator_step), float(sim.roll_step), float(sim.settle_energy),
+                 int(sim.max_sim_steps))

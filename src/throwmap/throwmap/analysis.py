@@ -1,0 +1,150 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The analysis of a scene that the CLI and the ROS nodes need, computed once, in one place.
+
+:func:`analyse`: the limit set from the scene's start, the design radii (R_flip, R_max), a
+basin over the default grid, the sensor design and, for noisy scenes, the outcome distribution
+and P(goal edge | detection). :func:`scene_analysis` redoes the sensor design at a sensor
+position a node parameter may set (the guarantee radius does not move; the warm-up and the
+detection rate do), so that everything published and checked refers to the sensor actually
+used. A scene that cannot be run raises a ThrowmapError with the library's message: the part is
+lost from the scene's start (PartLost), the orbit leaves the domain of f (DomainError), or the
+sensor design gives no finite radius and none was given (:class:`SensorDesignError`).
+"""
+
+import dataclasses
+from dataclasses import dataclass
+import json
+import math
+
+import numpy as np
+
+from .basins import Basin, basin, default_grid, design_radii
+from .errors import ThrowmapError
+from .orbits import limit_set, LimitSet
+from .sensor import sensor_design, SensorDesign
+from .stochastic import stochastic_summary
+
+# Fields of one limit-set row (limit_set_rows), in order.
+LIMIT_SET_FIELDS = ('edge', 'R_min', 'R_max', 'jogs_min', 'jogs_max')
+
+
+class SensorDesignError(ThrowmapError):
+    """The sensor design of a scene gives no usable sensor radius; the message says the fix."""
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """
+    Everything the nodes and the CLI derive from a scene.
+
+    That is: the limit set, the design radii, a basin and the sensor placement.
+    """
+
+    start: tuple
+    limit_set: LimitSet
+    radii: dict
+    basin: Basin
+    sensor: SensorDesign
+    stochastic: dict = None     # noisy scenes: outcome distribution, P(goal | detection)
+
+    def as_dict(self):
+        d = {'start': {'edge': self.start[0], 'R': self.start[1]},
+             'limit_set': self.limit_set.as_dict(), 'design': self.radii,
+             'basin': self.basin.summary(), 'sensor': self.sensor.as_dict()}
+        if self.stochastic is not None:
+            d['stochastic'] = self.stochastic
+        return d
+
+
+def analyse(scene, throws=10_000, grid_radii=50, grid_throws=200, progress=None):
+    """
+    Limit set from the scene's start, R_flip/R_max, a basin grid and the sensor design.
+
+    The goal edge is the scene's ``sensor.goal_edge``, else the edge that reaches furthest
+    out in the limit set (the only one a far sensor can prove).
+    """
+    model = scene.model
+    start = scene.default_start()
+    noisy = model.stochastic
+    if noisy:
+        model.reseed(scene.seed)
+    ls = limit_set(model, start[0], start[1], throws)
+    # Design radii are properties of the deterministic map: noise is taken out for them.
+    radii = design_radii(model.nominal())
+    e, r = default_grid(model, grid_radii, radii['R_max_all'])
+    bas = basin(model, e, r, grid_throws, reference=ls, progress=progress)
+    goal = scene.goal_edge
+    if goal is None:
+        u_max = model.part.U.max(axis=1)
+        goal = max(ls.bands, key=lambda k: ls.bands[k][1] + u_max[k])
+    sensor = sensor_design(model, ls, goal, scene.sensor_footprint, scene.sensor_radius, bas)
+    stoch = None
+    if noisy:
+        stoch = stochastic_summary(model, sensor, start, (e, r), throws=min(throws, 2000),
+                                   grid_throws=grid_throws, seeds=8, reference=ls)
+    return Analysis(start, ls, radii, bas, sensor, stoch)
+
+
+def scene_analysis(scene, sensor_radius=0.0, analysis=None):
+    """
+    Analysis of ``scene`` with the sensor at ``sensor_radius`` (0: the analysis's choice).
+
+    ``analysis`` reuses an earlier :func:`analyse` result (it takes 0.5-2 s).
+    """
+    an = analysis if analysis is not None else analyse(scene)
+    if sensor_radius and sensor_radius > 0.0 and sensor_radius != an.sensor.radius:
+        sensor = sensor_design(scene.model, an.limit_set, an.sensor.goal_edge,
+                               an.sensor.footprint, float(sensor_radius), an.basin)
+        an = dataclasses.replace(an, sensor=sensor)
+    if not math.isfinite(an.sensor.radius):
+        s = an.sensor
+        raise SensorDesignError(
+            f"sensor: throwmap's sensor design gives no finite radius for this scene "
+            f'(guarantee radius {s.guarantee_radius:.6g} m, reach {s.reach_radius:.6g} m); '
+            'give the sensor position (parameter sensor_radius, or sensor.radius in the scene)')
+    return an
+
+
+def limit_set_rows(limit_set):
+    """Rows ``[edge, R_min, R_max, jogs_min, jogs_max]`` sorted by edge (NaN: no jog count)."""
+    rows = []
+    for edge in sorted(limit_set.bands):
+        lo, hi = limit_set.bands[edge]
+        jogs = limit_set.jogs.get(edge, (math.nan, math.nan))
+        rows.append([float(edge), float(lo), float(hi), float(jogs[0]), float(jogs[1])])
+    return rows
+
+
+def _plain(value):
+    """JSON-safe copy: numpy scalars to Python, tuples to lists, non-finite floats to None."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        value = float(value)
+        return value if math.isfinite(value) else None
+    return value
+
+
+def analysis_json(analysis):
+    """Strict JSON of ``analysis.as_dict()`` (infinities and NaN become null)."""
+    return json.dumps(_plain(analysis.as_dict()), sort_keys=True)

@@ -1,0 +1,691 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The event-driven simulator of one throw and catch, for effects that break closed form.
+
+:func:`build` makes the simulator from three hooks (docs/effects.md has the interface):
+
+* ``body_force(vx, vy, om, phi, edge, prm) -> (fx, fy, torque)``: force and torque about the
+  CM per unit mass on the part moving at (vx, vy, om), rotated by phi from its resting pose on
+  the start edge; acts in flight and in every contact phase (backplate_friction, air_drag).
+* ``static_hold(phi, om, turned, size, pu, pv, g, edge, prm) -> (held, turn)``: whether the
+  body force holds the part at rest on its pivot (pu, pv) at a turning point of a roll (or a
+  creep), and the turn that releases it (backplate_friction).
+* ``impact(rx, ry, vx, vy, om, rho2, prm) -> (vx, vy, om, bounces)``: the impact of the
+  vertex at (rx, ry) from the CM (impact_restitution); ``bounces``: the part flies off again.
+
+Defaults (:func:`no_force`, :func:`no_hold`, :func:`sticking_law`) are the base model's. The
+contact's friction coefficient, whether a pivot may slide and lift off, and whether the impact
+law is the sticking one (then the exact settling rule holds) come as a :data:`ContactLaw`.
+The simulator names no effect.
+
+Phases (per unit mass, frame F, heights over the arm surface):
+* FLIGHT: gravity plus the body force, integrated with fixed-step RK4 (``integrator_step``).
+  Contact is looked for at the end of every step: a vertex at or below the arm and moving down.
+  The crossing is refined by bisection on re-integrated sub-steps to ``contact_root_tol``. A
+  graze shorter than a step is missed; the accuracy benchmark shows how often.
+* IMPACT at one vertex: the impact hook. A vertex that stays on the arm has its normal velocity
+  removed (a further normal impulse, which only dissipates); a pinned pivot (not
+  ``unilateral``) is then caught by a sticking impulse.
+* CONTACT at one vertex P: sticking (rolling about P) or sliding along the arm, integrated with
+  RK4 at ``roll_step``. Events: another vertex lands (impact there; if the old pivot would then
+  be driven into the arm, the edge lands flat instead), the normal force turns negative
+  (liftoff into flight), the friction force leaves the cone (stick -> slip), the slip velocity
+  reaches zero (slip -> stick test).
+* FLAT on edge j: two-point contact, sliding with Coulomb friction until it stops; a vertex whose
+  share of the normal force turns negative starts a rotation about the other one; at rest on an
+  unstable edge the part tips over catch.tip_pivot.
+* Settling: at rest flat on a stable edge. With the sticking impact law and mu = inf the base
+  model's rule applies (catch.stays_on_edge). Otherwise, rocking is simulated until the energy
+  above the flat pose falls below ``settle_energy``; then the part is laid flat about its pivot.
+"""
+
+from collections import namedtuple
+import math
+
+from .catch import flat_landing_edge, record, stays_on_edge, sticking_impact, tip_pivot
+from .jit import njit
+from .status import (ERR_NONFINITE, ERR_PAINLEVE, ERR_SETTLE_CAP, ERR_SIM_CAP, EV_BOUNCE,
+                     EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_HELD, EV_LANDING, EV_LIFTOFF,
+                     EV_SETTLE_SNAP, EV_TIP_FROM_REST, OK)
+
+# mu: Coulomb friction of the arm (inf: a vertex never slips); unilateral: a pivot may slide and
+# lift off (False: it is pinned, the paper's rolling); sticking: the impact law is eqs 7-9.
+ContactLaw = namedtuple('ContactLaw', ['mu', 'unilateral', 'sticking'])
+STICKING_CONTACT = ContactLaw(math.inf, False, True)
+
+MODE_FLIGHT = 0
+MODE_CONTACT = 1
+MODE_FLAT = 2
+MODE_DONE = 3
+
+# Event codes of a contact phase (contact_trigger).
+NO_EVENT = 0
+LANDING = 1
+LIFTOFF = 2
+STICK_TO_SLIP = 3
+SLIP_REVERSAL = 4
+PAINLEVE = 5
+
+
+# ------------------------------------------------------------------------------- defaults
+@njit(cache=False)
+def no_force(vx, vy, om, phi, edge, prm):
+    """Return no body force: the base model's flight and rolling."""
+    return 0.0, 0.0, 0.0
+
+
+@njit(cache=False)
+def no_hold(phi, om, turned, size, pu, pv, g, edge, prm):
+    """Hold nothing: the part never rests on a corner."""
+    return False, 0.0
+
+
+@njit(cache=False)
+def sticking_law(rx, ry, vx, vy, om, rho2, prm):
+    """Apply the base model's impact: sticking (eqs 7-9), never a bounce."""
+    vx1, vy1, om1 = sticking_impact(rx, ry, vx, vy, om, rho2)
+    return vx1, vy1, om1, False
+
+
+# ------------------------------------------------------------------------------- helpers
+@njit
+def lowest_approaching(x, y, phi, vx, vy, om, bu, bv, skip):
+    """(index, height) of a vertex at or below the arm and moving down, else (-1, lowest)."""
+    c = math.cos(phi)
+    s = math.sin(phi)
+    best = -1
+    best_f = math.inf
+    low = math.inf
+    for k in range(bu.shape[0]):
+        if k == skip:
+            continue
+        rx = c * bu[k] - s * bv[k]
+        ry = s * bu[k] + c * bv[k]
+        f = y + ry
+        if f < low:
+            low = f
+        if f <= 0.0 and vy + om * rx < 0.0 and f < best_f:
+            best = k
+            best_f = f
+    return best, low
+
+
+@njit
+def energy(vx, vy, om, y, g, rho2):
+    """Energy per unit mass over the arm surface."""
+    return 0.5 * (vx * vx + vy * vy + rho2 * om * om) - g * y
+
+
+@njit
+def remove_normal(rx, ry, vx, vy, om, rho2):
+    """Pure normal impulse that stops the contact point's normal motion (dissipative)."""
+    un = vy + om * rx
+    knn = 1.0 + rx * rx / rho2
+    lam = -un / knn
+    return vx, vy + lam, om + rx * lam / rho2
+
+
+@njit
+def flat_impact(vx, vy, mu):
+    """
+    Land flat: a two-point plastic impact.
+
+    Vertical velocity and rotation stop; the tangential impulse stops the slide if the friction
+    cone allows, else it is clipped to mu times the normal one. Returns (vx, om, vy).
+    """
+    pn = -vy
+    if pn < 0.0:
+        pn = 0.0
+    pt = -vx
+    if abs(pt) > mu * pn:
+        pt = math.copysign(mu * pn, pt)
+    return vx + pt, 0.0, 0.0
+
+
+@njit
+def contact_to_cm(xp, phi, vxp, om, bu_p, bv_p):
+    """CM position and velocity (x, y, vx, vy) with vertex p at arm coordinate xp."""
+    c = math.cos(phi)
+    s = math.sin(phi)
+    cx = -(c * bu_p - s * bv_p)
+    cy = -(s * bu_p + c * bv_p)
+    return xp + cx, cy, vxp - om * cy, om * cx
+
+
+@njit
+def _event(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1):
+    nan = math.nan
+    return record(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1, nan, nan, nan, nan, nan)
+
+
+# ------------------------------------------------------------------------------- the builder
+def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
+    """
+    Return the simulator ``simulate`` compiled over these hooks.
+
+    simulate(edge, x0, y0, phi0, vx0, vy0, om0, g, part, knobs, law, prm, rec) throws from the
+    release state (y0 over the arm, phi0 from the resting pose on ``edge``) and returns (status,
+    edge, R, first contact time, net rotation, impacts, first contact vertex, records written,
+    lowest and highest arm coordinate touched). ``prm`` is passed to every hook; ``law`` is a
+    :data:`ContactLaw`.
+    """
+
+    @njit(cache=False)
+    def flight_rhs(vx, vy, om, phi, g, rho2, edge, prm):
+        fx, fy, tq = body_force(vx, vy, om, phi, edge, prm)
+        return fx, g + fy, tq / rho2
+
+    @njit(cache=False)
+    def flight_step(x, y, phi, vx, vy, om, dt, g, rho2, edge, prm):
+        """One RK4 step of free flight (exact for the ballistic case: polynomial of degree 2)."""
+        a1, b1, c1 = flight_rhs(vx, vy, om, phi, g, rho2, edge, prm)
+        h2 = 0.5 * dt
+        a2, b2, c2 = flight_rhs(vx + h2 * a1, vy + h2 * b1, om + h2 * c1, phi + h2 * om, g,
+                                rho2, edge, prm)
+        a3, b3, c3 = flight_rhs(vx + h2 * a2, vy + h2 * b2, om + h2 * c2,
+                                phi + h2 * (om + h2 * c1), g, rho2, edge, prm)
+        a4, b4, c4 = flight_rhs(vx + dt * a3, vy + dt * b3, om + dt * c3,
+                                phi + dt * (om + h2 * c2), g, rho2, edge, prm)
+        # Positions integrate the velocity stages (RK4 of the first-order system).
+        x_new = x + dt * (6.0 * vx + dt * (a1 + a2 + a3)) / 6.0
+        y_new = y + dt * (6.0 * vy + dt * (b1 + b2 + b3)) / 6.0
+        p_new = phi + dt * (6.0 * om + dt * (c1 + c2 + c3)) / 6.0
+        vx_new = vx + dt * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
+        vy_new = vy + dt * (b1 + 2.0 * b2 + 2.0 * b3 + b4) / 6.0
+        om_new = om + dt * (c1 + 2.0 * c2 + 2.0 * c3 + c4) / 6.0
+        return x_new, y_new, p_new, vx_new, vy_new, om_new
+
+    @njit(cache=False)
+    def contact_accel(xp, phi, vxp, om, sliding, sigma, bu_p, bv_p, g, rho2, mu, edge, prm):
+        """
+        Accelerations (axp, alpha) and contact force (Ft, N) with vertex p on the arm.
+
+        sliding = False: p sticks (axp = 0); True: p slides with friction -mu N sigma. The
+        status flag is False when no consistent normal force exists (Painleve).
+        """
+        c = math.cos(phi)
+        s = math.sin(phi)
+        cx = -(c * bu_p - s * bv_p)    # CM - P
+        cy = -(s * bu_p + c * bv_p)
+        vcx = vxp - om * cy
+        vcy = om * cx
+        fx, fy, tq = body_force(vcx, vcy, om, phi, edge, prm)
+        if not sliding:
+            alpha = (tq + cx * (g + fy) - cy * fx) / (rho2 + cx * cx + cy * cy)
+            ft = -alpha * cy - om * om * cx - fx
+            n = alpha * cx - om * om * cy - g - fy
+            return 0.0, alpha, ft, n, True
+        # Friction -mu |N| sigma: solve with N >= 0 first; a hinge pivot (bilateral) may need
+        # N < 0, then the friction term changes sign.
+        for sgn_n in (1.0, -1.0):
+            ms = mu * sigma * sgn_n
+            b = cx + ms * cy
+            den = rho2 + b * cx
+            if den <= 1e-12 * rho2:
+                return 0.0, 0.0, 0.0, 0.0, False
+            alpha = (tq + b * (om * om * cy + g + fy)) / den
+            n = alpha * cx - om * om * cy - g - fy
+            if n * sgn_n >= 0.0:
+                ft = -ms * n
+                axp = fx + ft + alpha * cy + om * om * cx
+                return axp, alpha, ft, n, True
+        return 0.0, 0.0, 0.0, 0.0, False
+
+    @njit(cache=False)
+    def contact_step(xp, phi, vxp, om, dt, sliding, sigma, bu_p, bv_p, g, rho2, mu, edge, prm):
+        a1, b1, _, _, _ = contact_accel(xp, phi, vxp, om, sliding, sigma, bu_p, bv_p, g, rho2,
+                                        mu, edge, prm)
+        h2 = 0.5 * dt
+        a2, b2, _, _, _ = contact_accel(xp + h2 * vxp, phi + h2 * om, vxp + h2 * a1,
+                                        om + h2 * b1, sliding, sigma, bu_p, bv_p, g, rho2, mu,
+                                        edge, prm)
+        a3, b3, _, _, _ = contact_accel(xp + h2 * (vxp + h2 * a1), phi + h2 * (om + h2 * b1),
+                                        vxp + h2 * a2, om + h2 * b2, sliding, sigma, bu_p, bv_p,
+                                        g, rho2, mu, edge, prm)
+        a4, b4, _, _, _ = contact_accel(xp + dt * (vxp + h2 * a2), phi + dt * (om + h2 * b2),
+                                        vxp + dt * a3, om + dt * b3, sliding, sigma, bu_p, bv_p,
+                                        g, rho2, mu, edge, prm)
+        xp_new = xp + dt * (6.0 * vxp + dt * (a1 + a2 + a3)) / 6.0
+        p_new = phi + dt * (6.0 * om + dt * (b1 + b2 + b3)) / 6.0
+        v_new = vxp + dt * (a1 + 2.0 * a2 + 2.0 * a3 + a4) / 6.0
+        o_new = om + dt * (b1 + 2.0 * b2 + 2.0 * b3 + b4) / 6.0
+        if not sliding:
+            return xp, p_new, 0.0, o_new
+        return xp_new, p_new, v_new, o_new
+
+    @njit(cache=False)
+    def contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm):
+        """Return the event at a contact state (NO_EVENT, LANDING, ...) and the landing vertex."""
+        x, y, vx, vy = contact_to_cm(xp, phi, vxp, om, bu[p], bv[p])
+        k, _ = lowest_approaching(x, y, phi, vx, vy, om, bu, bv, p)
+        if k >= 0:
+            return LANDING, k
+        _, _, ft, n, ok = contact_accel(xp, phi, vxp, om, sliding, sigma, bu[p], bv[p], g, rho2,
+                                        law.mu, edge, prm)
+        if not ok:
+            return PAINLEVE, -1
+        if n < 0.0 and law.unilateral:
+            return LIFTOFF, -1
+        if sliding:
+            if vxp * sigma < 0.0:
+                return SLIP_REVERSAL, -1
+        elif law.unilateral and abs(ft) > law.mu * n:
+            return STICK_TO_SLIP, -1
+        return NO_EVENT, -1
+
+    @njit(cache=False)
+    def contact_mode(vxp, xp, phi, om, p, bu, bv, g, rho2, law, edge, prm):
+        """
+        Return (sliding, sigma) for a new contact phase at vertex p with slip velocity vxp.
+
+        A pinned pivot (not unilateral) never slides.
+        """
+        mu = law.mu
+        if math.isinf(mu) or not law.unilateral:
+            return False, 0.0
+        if abs(vxp) > 1e-12:
+            return True, math.copysign(1.0, vxp)
+        _, _, ft, n, _ = contact_accel(xp, phi, 0.0, om, False, 0.0, bu[p], bv[p], g, rho2, mu,
+                                       edge, prm)
+        if abs(ft) <= mu * n:
+            return False, 0.0
+        # Slip starts in the direction in which, with friction opposing it, the point
+        # accelerates.
+        first = -math.copysign(1.0, ft)
+        for sigma in (first, -first):
+            axp, _, _, _, ok = contact_accel(xp, phi, 0.0, om, True, sigma, bu[p], bv[p], g,
+                                             rho2, mu, edge, prm)
+            if ok and axp * sigma > 0.0:
+                return True, sigma
+        return False, 0.0   # no consistent slip (Painleve): the point sticks
+
+    @njit(cache=False)
+    def flat_forces(vx, j, part, g, mu, phi, edge, prm):
+        """Flat on edge j: (ax, N_left, N_right) for sliding at vx."""
+        fx, fy, tq = body_force(vx, 0.0, 0.0, phi, edge, prm)
+        n = -(g + fy)
+        if vx != 0.0:
+            ft = -mu * n * math.copysign(1.0, vx)
+        else:
+            ft = -fx
+            if abs(ft) > mu * n:
+                ft = math.copysign(mu * n, ft)
+        nb = -(tq + part.d[j] * ft + part.u_l[j] * n) / (part.u_r[j] - part.u_l[j])
+        na = n - nb
+        return fx + ft, na, nb
+
+    @njit(cache=False)
+    def simulate(edge, x0, y0, phi0, vx0, vy0, om0, g, part, knobs, law, prm, rec):
+        n = part.n
+        rho2 = part.rho2
+        d = part.d
+        u_l = part.u_l
+        edge_len = part.edge_len
+        acw = part.acw
+        accw = part.accw
+        stable = part.stable
+        mu = law.mu
+        unilateral = law.unilateral
+        dt = knobs.integrator_step
+        rdt = knobs.roll_step
+        root = knobs.contact_root_tol
+        settle_e = knobs.settle_energy
+        flat_tol = knobs.flat_landing_tol
+        max_steps = knobs.max_sim_steps
+        max_imp = knobs.max_impacts
+        first_stable = knobs.first_stable
+        exact_rule = law.sticking and math.isinf(mu)
+        bu = part.U[edge]
+        bv = part.V[edge]
+        size = 0.0
+        for k in range(n):
+            size = max(size, math.sqrt(bu[k] * bu[k] + bv[k] * bv[k]))
+        g_abs = -g
+        nan = math.nan
+        x, y, phi, vx, vy, om = x0, y0, phi0, vx0, vy0, om0
+        mode = MODE_FLIGHT
+        t = 0.0
+        t_first = nan
+        k_first = -1
+        impacts = 0
+        nrec = 0
+        x_lo = math.inf
+        x_hi = -math.inf
+        steps = 0
+        # contact state
+        p = -1
+        xp = 0.0
+        vxp = 0.0
+        sliding = False
+        sigma = 0.0
+        # the vertex that just left the arm is ignored in flight until it is seen above it
+        sep = -1
+        # flat state
+        j_flat = -1
+        out_edge = -1
+        out_r = nan
+        while True:
+            steps += 1
+            if steps > max_steps:
+                return ERR_SIM_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
+            if impacts > max_imp:
+                return ERR_SETTLE_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
+            if mode == MODE_FLIGHT:
+                x1, y1, p1, vx1, vy1, om1 = flight_step(x, y, phi, vx, vy, om, dt, g, rho2,
+                                                        edge, prm)
+                if not (math.isfinite(y1) and math.isfinite(om1)):
+                    return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
+                            x_hi)
+                if sep >= 0 and y1 + math.sin(p1) * bu[sep] + math.cos(p1) * bv[sep] > 0.0:
+                    sep = -1
+                k, _ = lowest_approaching(x1, y1, p1, vx1, vy1, om1, bu, bv, sep)
+                if k < 0:
+                    x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
+                    t += dt
+                    continue
+                lo = 0.0
+                hi = dt
+                while hi - lo > root:
+                    mid = 0.5 * (lo + hi)
+                    xm, ym, pm, vxm, vym, omm = flight_step(x, y, phi, vx, vy, om, mid, g, rho2,
+                                                            edge, prm)
+                    km, _ = lowest_approaching(xm, ym, pm, vxm, vym, omm, bu, bv, sep)
+                    if km >= 0:
+                        hi = mid
+                        k = km
+                    else:
+                        lo = mid
+                x, y, phi, vx, vy, om = flight_step(x, y, phi, vx, vy, om, hi, g, rho2, edge,
+                                                    prm)
+                t += hi
+                k2, _ = lowest_approaching(x, y, phi, vx, vy, om, bu, bv, sep)
+                if k2 >= 0:
+                    k = k2
+                sep = -1
+                c = math.cos(phi)
+                s = math.sin(phi)
+                rx = c * bu[k] - s * bv[k]
+                ry = s * bu[k] + c * bv[k]
+                y = -ry      # put the vertex exactly on the arm (error below root_tol * |v|)
+                if k_first < 0:
+                    k_first = k
+                    t_first = t
+                xk = x + rx
+                x_lo = min(x_lo, xk)
+                x_hi = max(x_hi, xk)
+                e_before = energy(vx, vy, om, y, g, rho2)
+                impacts += 1
+                alpha = math.atan2(-ry, -rx)
+                jf = flat_landing_edge(alpha, k, flat_tol, part)
+                if jf >= 0:
+                    # An edge at V^k lies flat: two-point landing on it, laid exactly flat at
+                    # the vertex that hit (a sub-tolerance turn).
+                    j_flat = jf
+                    phi += (acw[k] if jf == k else accw[k]) - alpha
+                    mode = MODE_FLAT
+                    c = math.cos(phi)
+                    s = math.sin(phi)
+                    x = xk - (c * bu[k] - s * bv[k])
+                    y = d[j_flat]
+                    vx, om, vy = flat_impact(vx, vy, mu)
+                    x_l = x + u_l[j_flat]
+                    x_lo = min(x_lo, x_l)
+                    x_hi = max(x_hi, x_l + edge_len[j_flat])
+                    nrec = _event(rec, nrec, EV_FLAT_LANDING, k, j_flat, xk, om0, 0.0, e_before,
+                                  energy(vx, vy, om, y, g, rho2))
+                    continue
+                vxa, vya, oma, bounces = impact(rx, ry, vx, vy, om, rho2, prm)
+                if bounces:
+                    nrec = _event(rec, nrec, EV_BOUNCE, k, -1, xk, om, oma, e_before,
+                                  energy(vxa, vya, oma, y, g, rho2))
+                    vx, vy, om = vxa, vya, oma
+                    sep = k
+                    continue
+                vxa, vya, oma = remove_normal(rx, ry, vxa, vya, oma, rho2)
+                if not unilateral:
+                    # a pinned pivot: the foam catches a vertex that is still slipping
+                    vxa, vya, oma = sticking_impact(rx, ry, vxa, vya, oma, rho2)
+                nrec = _event(rec, nrec, EV_FLIGHT_IMPACT, k, -1, xk, om, oma, e_before,
+                              energy(vxa, vya, oma, y, g, rho2))
+                vx, vy, om = vxa, vya, oma
+                p = k
+                xp = xk
+                vxp = vx - om * ry
+                mode = MODE_CONTACT
+                sliding, sigma = contact_mode(vxp, xp, phi, om, p, bu, bv, g, rho2, law, edge,
+                                              prm)
+                continue
+            if mode == MODE_CONTACT:
+                code, kk = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2,
+                                           law, edge, prm)
+                if code == NO_EVENT:
+                    xp1, p1, v1, o1 = contact_step(xp, phi, vxp, om, rdt, sliding, sigma, bu[p],
+                                                   bv[p], g, rho2, mu, edge, prm)
+                    if not (math.isfinite(p1) and math.isfinite(o1)):
+                        return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec,
+                                x_lo, x_hi)
+                    code, kk = contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, g,
+                                               rho2, law, edge, prm)
+                    if code == NO_EVENT:
+                        turned = om * o1 <= 0.0
+                        xp, phi, vxp, om = xp1, p1, v1, o1
+                        t += rdt
+                        x_lo = min(x_lo, xp)
+                        x_hi = max(x_hi, xp)
+                        if not sliding:
+                            held, dphi = static_hold(phi, om, turned, size, bu[p], bv[p], g,
+                                                     edge, prm)
+                            if held:
+                                # The body force holds the part balanced on a corner; the
+                                # feeder's vibration breaks the tie: turned to the edge of the
+                                # holding zone on its CM's side, it falls from rest.
+                                phi += dphi
+                                e_now = -g * contact_to_cm(xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
+                                om = 0.0
+                                nrec = _event(rec, nrec, EV_HELD, p, -1, xp, 0.0, 0.0, e_now,
+                                              e_now)
+                        continue
+                    lo = 0.0
+                    hi = rdt
+                    while hi - lo > root:
+                        mid = 0.5 * (lo + hi)
+                        xm, pm, vm, omm = contact_step(xp, phi, vxp, om, mid, sliding, sigma,
+                                                       bu[p], bv[p], g, rho2, mu, edge, prm)
+                        cm_, km_ = contact_trigger(xm, pm, vm, omm, sliding, sigma, p, bu, bv,
+                                                   g, rho2, law, edge, prm)
+                        if cm_ != NO_EVENT:
+                            hi = mid
+                            code = cm_
+                            kk = km_
+                        else:
+                            lo = mid
+                    xp, phi, vxp, om = contact_step(xp, phi, vxp, om, hi, sliding, sigma, bu[p],
+                                                    bv[p], g, rho2, mu, edge, prm)
+                    t += hi
+                    x_lo = min(x_lo, xp)
+                    x_hi = max(x_hi, xp)
+                    code2, kk2 = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g,
+                                                 rho2, law, edge, prm)
+                    if code2 != NO_EVENT:
+                        code = code2
+                        kk = kk2
+                if code == PAINLEVE:
+                    return (ERR_PAINLEVE, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
+                            x_hi)
+                if code == SLIP_REVERSAL:
+                    vxp = 0.0
+                    sliding, sigma = contact_mode(0.0, xp, phi, om, p, bu, bv, g, rho2, law,
+                                                  edge, prm)
+                    continue
+                if code == STICK_TO_SLIP:
+                    _, _, ft, _, _ = contact_accel(xp, phi, 0.0, om, False, 0.0, bu[p], bv[p], g,
+                                                   rho2, mu, edge, prm)
+                    sliding = True
+                    sigma = -math.copysign(1.0, ft)
+                    continue
+                x, y, vx, vy = contact_to_cm(xp, phi, vxp, om, bu[p], bv[p])
+                if code == LIFTOFF:
+                    e_now = energy(vx, vy, om, y, g, rho2)
+                    nrec = _event(rec, nrec, EV_LIFTOFF, p, -1, xp, om, om, e_now, e_now)
+                    mode = MODE_FLIGHT
+                    sep = p
+                    continue
+                # Landing of vertex kk while rolling/sliding about p.
+                q = kk
+                if q == (p + 1) % n:
+                    j = p
+                elif q == (p - 1) % n:
+                    j = q
+                else:
+                    j = -1
+                e_before = energy(vx, vy, om, y, g, rho2)
+                if j >= 0:
+                    # Turn about p until the edge is exactly flat (a sub-root_tol correction),
+                    # so that both of its vertices lie on the arm.
+                    c = math.cos(phi)
+                    s = math.sin(phi)
+                    alpha_q = math.atan2(-(s * bu[q] + c * bv[q]), -(c * bu[q] - s * bv[q]))
+                    phi += (acw[q] if j == q else accw[q]) - alpha_q
+                    x, y, vx, vy = contact_to_cm(xp, phi, vxp, om, bu[p], bv[p])
+                c = math.cos(phi)
+                s = math.sin(phi)
+                rx = c * bu[q] - s * bv[q]
+                ry = s * bu[q] + c * bv[q]
+                xq = x + rx
+                x_lo = min(x_lo, xq)
+                x_hi = max(x_hi, xq)
+                impacts += 1
+                vxa, vya, oma, bounces = impact(rx, ry, vx, vy, om, rho2, prm)
+                # Does the old pivot move into the arm after the impact at q?
+                rpx = c * bu[p] - s * bv[p]
+                vpn = vya + oma * rpx
+                if j >= 0 and vpn < 0.0:
+                    x_l = xq if j == q else xq - edge_len[j]
+                    om_before = om
+                    vx, om, vy = flat_impact(vx, vy, mu)
+                    x = x_l - u_l[j]
+                    y = d[j]
+                    j_flat = j
+                    mode = MODE_FLAT
+                    nrec = _event(rec, nrec, EV_LANDING, q, j, xq, om_before, 0.0, e_before,
+                                  energy(vx, vy, om, y, g, rho2))
+                    if first_stable and stable[j]:
+                        out_edge = j
+                        out_r = x
+                        mode = MODE_DONE
+                    continue
+                if bounces:
+                    nrec = _event(rec, nrec, EV_BOUNCE, q, j, xq, om, oma, e_before,
+                                  energy(vxa, vya, oma, y, g, rho2))
+                    vx, vy, om = vxa, vya, oma
+                    mode = MODE_FLIGHT
+                    sep = q
+                    if first_stable and j >= 0 and stable[j]:
+                        out_edge = j
+                        out_r = (xq if j == q else xq - edge_len[j]) - u_l[j]
+                        mode = MODE_DONE
+                    continue
+                vxa, vya, oma = remove_normal(rx, ry, vxa, vya, oma, rho2)
+                if not unilateral:
+                    vxa, vya, oma = sticking_impact(rx, ry, vxa, vya, oma, rho2)
+                e_after = energy(vxa, vya, oma, y, g, rho2)
+                nrec = _event(rec, nrec, EV_LANDING, q, j, xq, om, oma, e_before, e_after)
+                vx, vy, om = vxa, vya, oma
+                if j >= 0 and stable[j]:
+                    x_l = xq if j == q else xq - edge_len[j]
+                    ke = e_after - g_abs * d[j]
+                    lq = math.sqrt(bu[q] * bu[q] + bv[q] * bv[q])
+                    lp = math.sqrt(bu[p] * bu[p] + bv[p] * bv[p])
+                    if first_stable or (exact_rule and stays_on_edge(ke, lq, lp, d[j], g_abs)):
+                        out_edge = j
+                        out_r = x_l - u_l[j]
+                        mode = MODE_DONE
+                        continue
+                    if not exact_rule and ke <= settle_e:
+                        nrec = _event(rec, nrec, EV_SETTLE_SNAP, q, j, xq, oma, 0.0, e_after,
+                                      g_abs * d[j])
+                        out_edge = j
+                        out_r = x_l - u_l[j]
+                        mode = MODE_DONE
+                        continue
+                p = q
+                xp = xq
+                vxp = vx - om * ry
+                sliding, sigma = contact_mode(vxp, xp, phi, om, p, bu, bv, g, rho2, law, edge,
+                                              prm)
+                continue
+            if mode == MODE_FLAT:
+                j = j_flat
+                if vx == 0.0 and stable[j]:
+                    out_edge = j
+                    out_r = x
+                    mode = MODE_DONE
+                    continue
+                ax, na, nb = flat_forces(vx, j, part, g, mu, phi, edge, prm)
+                if vx == 0.0 or na < 0.0 or nb < 0.0:
+                    # Tip about the vertex that keeps the load; at rest (on an unstable edge)
+                    # the one the CM lies beyond.
+                    x_l = x + u_l[j]
+                    if vx == 0.0:
+                        p = tip_pivot(j, part)[0]
+                    elif na < 0.0:
+                        p = (j + 1) % n
+                    else:
+                        p = j
+                    xp = x_l + edge_len[j] if p != j else x_l
+                    x_lo = min(x_lo, xp)
+                    x_hi = max(x_hi, xp)
+                    om = 0.0
+                    vy = 0.0
+                    c = math.cos(phi)
+                    s = math.sin(phi)
+                    if not unilateral and vx != 0.0:
+                        vx, vy, om = sticking_impact(c * bu[p] - s * bv[p],
+                                                     s * bu[p] + c * bv[p], vx, 0.0, 0.0, rho2)
+                    vxp = vx - om * (s * bu[p] + c * bv[p])
+                    e_now = energy(vx, vy, om, y, g, rho2)
+                    nrec = _event(rec, nrec, EV_TIP_FROM_REST, p, j, xp, 0.0, 0.0, e_now, e_now)
+                    mode = MODE_CONTACT
+                    sliding, sigma = contact_mode(vxp, xp, phi, om, p, bu, bv, g, rho2, law,
+                                                  edge, prm)
+                    if not sliding:
+                        vxp = 0.0
+                    continue
+                # Slide flat: ax is constant-sign friction plus the body force; RK2 is plenty.
+                v_half = vx + 0.5 * rdt * ax
+                v1 = -vx
+                if v_half * vx > 0.0:
+                    ax2, _, _ = flat_forces(v_half, j, part, g, mu, phi, edge, prm)
+                    v1 = vx + rdt * ax2
+                if v1 * vx <= 0.0:
+                    # Stops within the step: constant deceleration to zero.
+                    tau = -vx / ax if ax != 0.0 else 0.0
+                    x += 0.5 * vx * tau
+                    vx = 0.0
+                    t += tau
+                else:
+                    x += 0.5 * (vx + v1) * rdt
+                    vx = v1
+                    t += rdt
+                x_lo = min(x_lo, x + u_l[j])
+                x_hi = max(x_hi, x + part.u_r[j])
+                continue
+            # MODE_DONE: snap the net rotation to the resting pose on out_edge.
+            target = part.rest_angle[out_edge] - part.rest_angle[edge]
+            rot = target + 2.0 * math.pi * round((phi - target) / (2.0 * math.pi))
+            return OK, out_edge, out_r, t_first, rot, impacts, k_first, nrec, x_lo, x_hi
+
+    return simulate

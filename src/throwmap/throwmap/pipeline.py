@@ -1,0 +1,193 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+One throw of a scene with effects, as a pipeline of hooks: perturb, release, motion, check.
+
+:func:`build` compiles the pipeline over the hooks of one effect set (throwmap.compose writes
+the module that calls it; docs/effects.md has the interface):
+
+1. ``perturb(w, h, z0, z1, prm) -> (w, h)``: this throw's release speed and arm offset from two
+   standard normal draws (release_noise). Default: the nominal ones.
+2. ``release(edge, R, w, h, ctx, prm) -> (status, x0, y0, phi0, vx, vy, om)``: the grasp check
+   and the state in which the part leaves the arm (finite_carry). Default
+   :func:`impulsive_release`: the impulse-cone R_grasp at this throw's offset, then eqs 5-6.
+3. ``motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec)``: flight and catch.
+   :func:`closed_motion` (ballistic flight, the closed-form catch) unless an effect adds a body
+   force or an impact law; then the event simulator built over those (throwmap.event_sim).
+4. ``check(outcome, release, edge, ctx, prm) -> status``: checks that can fail or lose the
+   throw after the fact (finite_carry's returning arm, finite_arm's losses). Checks run in the
+   registry's order; the first one that changes the status decides.
+
+The pipeline names no effect; with all defaults it is the base model (base_map) bit for bit.
+"""
+
+from collections import namedtuple
+import math
+
+from .ballistic import first_contact, impulsive_release as release_state, state_at
+from .catch import catch_at_contact
+from .grasp import impulse_grasp_radius
+from .jit import njit
+from .status import (ERR_EDGE_INDEX, ERR_GRASP, ERR_RELEASE, ERR_TOE_STUB, ERR_UNSTABLE_EDGE,
+                     LOST, OK)
+
+# Everything a throw needs besides its state: nominal release speed w, arm offset h, gravity g,
+# the arm's friction mu (inf: none given), the part and knobs bundles, the event simulator's
+# contact law (throwmap.event_sim.ContactLaw).
+Context = namedtuple('Context', ['w', 'h', 'g', 'mu', 'part', 'knobs', 'law'])
+# The state in which the part left the arm, and this throw's w and h.
+Release = namedtuple('Release', ['x0', 'y0', 'phi0', 'vx', 'vy', 'om', 'w', 'h'])
+# What flight and catch gave: status, new edge and R, first contact time and vertex, net
+# rotation, impacts, records written, lowest and highest arm coordinate a vertex touched.
+Outcome = namedtuple('Outcome', ['status', 'edge', 'R', 't', 'rot', 'impacts', 'vertex',
+                                 'records', 'x_lo', 'x_hi'])
+
+
+# ------------------------------------------------------------------------------- defaults
+@njit(cache=False)
+def no_perturbation(w, h, z0, z1, prm):
+    """Return the nominal release speed and offset: no perturbation."""
+    return w, h
+
+
+@njit(cache=False)
+def impulsive_release(edge, R, w, h, ctx, prm):
+    """Check the impulse-cone grasp at this throw's h, then release as in eqs 5-6."""
+    part = ctx.part
+    if not R >= impulse_grasp_radius(edge, h, ctx.mu, part.rho2, part.d, part.u_l, part.u_r):
+        return ERR_GRASP, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    x0, y0, phi0, vx, vy, om = release_state(edge, R, w, h, part.d)
+    return OK, x0, y0, phi0, vx, vy, om
+
+
+@njit(cache=False)
+def no_check(outcome, release, edge, ctx, prm):
+    """Return the outcome's status: nothing fails or loses the throw after the fact."""
+    return outcome.status
+
+
+@njit(cache=False)
+def closed_motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec):
+    """Ballistic flight (throwmap.ballistic) and the closed-form catch (throwmap.catch)."""
+    part = ctx.part
+    g = ctx.g
+    status, T, k = first_contact(edge, y0, phi0, vy, om, g, part, ctx.knobs)
+    if status != OK:
+        return status, -1, math.nan, math.nan, math.nan, 0, -1, 0, math.inf, -math.inf
+    rx, ry, x_cm, xdot, ydot, phi, energy = state_at(T, edge, k, x0, y0, phi0, vx, vy, om, g,
+                                                     part)
+    status, j, r1, rot, imp, nrec, x_lo, x_hi = catch_at_contact(
+        k, phi, rx, ry, x_cm, xdot, ydot, om, energy, -g, part, ctx.knobs, rec)
+    return status, j, r1, T, rot, imp, k, nrec, x_lo, x_hi
+
+
+# ------------------------------------------------------------------------------- the builder
+def build(perturb=no_perturbation, release=impulsive_release, motion=closed_motion,
+          check=no_check):
+    """
+    Return (throw_one, throw_many, orbit_many) compiled over these hooks.
+
+    Every function takes its record buffer ``rec`` (usually with no rows for batches).
+    throw_one(edge, R, z0, z1, ctx, prm, rec) -> (status, edge, R, first contact time, net
+    rotation, impacts, first contact vertex, records written, w used, h used, energy per unit
+    mass at release over the arm surface). ``prm`` is the effect set's parameter bundle,
+    passed to every hook.
+    """
+
+    @njit(cache=False)
+    def throw_one(edge, R, z0, z1, ctx, prm, rec):
+        nan = math.nan
+        part = ctx.part
+        if edge < 0 or edge >= part.n:
+            return ERR_EDGE_INDEX, -1, nan, nan, nan, 0, -1, 0, nan, nan, nan
+        if not part.stable[edge]:
+            return ERR_UNSTABLE_EDGE, -1, nan, nan, nan, 0, -1, 0, nan, nan, nan
+        w, h = perturb(ctx.w, ctx.h, z0, z1, prm)
+        if not w > 0.0:
+            return ERR_RELEASE, -1, nan, nan, nan, 0, -1, 0, w, h, nan
+        status, x0, y0, phi0, vx, vy, om = release(edge, R, w, h, ctx, prm)
+        if status != OK:
+            return status, -1, nan, nan, nan, 0, -1, 0, w, h, nan
+        if not (R + part.u_l[edge] > 0.0):
+            return ERR_TOE_STUB, -1, nan, nan, nan, 0, -1, 0, w, h, nan
+        e0 = 0.5 * (vx * vx + vy * vy + part.rho2 * om * om) - ctx.g * y0
+        st, j, r1, t, rot, imp, k, nrec, x_lo, x_hi = motion(edge, x0, y0, phi0, vx, vy, om,
+                                                             ctx, prm, rec)
+        out = Outcome(st, j, r1, t, rot, imp, k, nrec, x_lo, x_hi)
+        status = check(out, Release(x0, y0, phi0, vx, vy, om, w, h), edge, ctx, prm)
+        if status == st:
+            return st, j, r1, t, rot, imp, k, nrec, w, h, e0
+        # A check failed or lost the throw. A lost part keeps the rotation of its throw.
+        if not (status == LOST and st == OK):
+            rot = nan
+        return status, -1, nan, t, rot, imp, k, nrec, w, h, e0
+
+    @njit(cache=False)
+    def throw_many(edges, radii, z, ctx, prm, rec, out_edge, out_r, out_status, out_t, out_rot,
+                   out_events, out_vertex):
+        for i in range(edges.shape[0]):
+            st, j, r1, t, rot, _, k, nrec, _, _, _ = throw_one(edges[i], radii[i], z[i, 0],
+                                                               z[i, 1], ctx, prm, rec)
+            out_edge[i] = j
+            out_r[i] = r1
+            out_status[i] = st
+            out_t[i] = t
+            out_rot[i] = rot
+            out_events[i] = nrec
+            out_vertex[i] = k
+
+    @njit(cache=False)
+    def orbit_many(edges, radii, steps, z, ctx, prm, rec, out_edge, out_r, out_rot, out_status,
+                   out_done):
+        """
+        Iterate f from many starts; z has shape (starts, steps, 2).
+
+        A lost throw ends its orbit with edge -1 and status LOST.
+        """
+        for s in range(edges.shape[0]):
+            edge = edges[s]
+            R = radii[s]
+            out_edge[s, 0] = edge
+            out_r[s, 0] = R
+            out_rot[s, 0] = 0.0
+            out_status[s] = OK
+            out_done[s] = steps
+            for k in range(steps):
+                st, j, r1, _, rot, _, _, _, _, _, _ = throw_one(edge, R, z[s, k, 0],
+                                                                z[s, k, 1], ctx, prm, rec)
+                if st != OK:
+                    out_status[s] = st
+                    out_done[s] = k
+                    if st == LOST:
+                        out_edge[s, k + 1] = -1
+                    break
+                out_edge[s, k + 1] = j
+                out_r[s, k + 1] = r1
+                out_rot[s, k + 1] = rot
+                edge = j
+                R = r1
+
+    return throw_one, throw_many, orbit_many
+
+
+def event_motion(simulate):
+    """Return the motion hook that runs ``simulate`` (throwmap.event_sim.build)."""
+
+    @njit(cache=False)
+    def motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec):
+        return simulate(edge, x0, y0, phi0, vx, vy, om, ctx.g, ctx.part, ctx.knobs, ctx.law,
+                        prm, rec)
+
+    return motion

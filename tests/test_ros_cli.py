@@ -1,0 +1,221 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The real ``ros2 launch``, ``ros2 param load``, and several feeders side by side.
+
+The ``ros2`` tests run where the CLI exists (tests/ros_cli.py) and are skipped elsewhere with
+the reason; three feeders side by side also run as plain processes everywhere.
+"""
+
+import signal
+import time
+
+from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_nodes import (Collector, LATCHED, monitor, predictor, REPO, sim_as_hardware,
+                          STARTUP_TIMEOUT, status_values, TRIANGLE)
+import pytest
+import ros_cli
+from std_msgs.msg import Bool
+from std_srvs.srv import SetBool, Trigger
+
+SHARE = REPO / 'ros2_ws' / 'install'
+
+
+@pytest.fixture
+def cli(ros_domain):
+    env = ros_cli.cli_env()
+    if env is None:
+        pytest.skip(ros_cli.SKIP_REASON)
+    return env
+
+
+def nodes_on_graph(ros):
+    return {f'{ns.rstrip("/")}/{n}' for n, ns in ros.node.get_node_names_and_namespaces()}
+
+
+def wait_nodes(ros, fqns, timeout=STARTUP_TIMEOUT):
+    ros.spin_until(lambda: set(fqns) <= nodes_on_graph(ros), timeout, f'{sorted(fqns)}')
+    for fqn in fqns:
+        ros.get_parameters(fqn, ['use_sim_time'], timeout=timeout)
+
+
+class Launch:
+    def __init__(self, env, tmp_path, *argv):
+        self.log_path = tmp_path / 'launch.log'
+        self.proc = ros_cli.start(['launch', 'feeder_bringup', *argv], env, self.log_path)
+
+    @property
+    def log(self):
+        return self.log_path.read_text(errors='replace')
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+            try:
+                return self.proc.wait(timeout=30)
+            except Exception:   # noqa: B902 - never leave it running
+                self.proc.kill()
+                self.proc.wait()
+                raise
+        return self.proc.returncode
+
+
+@pytest.fixture
+def launches():
+    started = []
+    yield started
+    for launch in started:
+        launch.stop()
+
+
+def param_load(cli, fqn, path):
+    # No daemon (a test leaves no process behind); a fresh CLI participant may take a few
+    # seconds to discover the node on a loaded machine: try again then.
+    for _ in range(3):
+        status, out = ros_cli.run(['param', 'load', '--no-daemon', '--spin-time', '3', fqn,
+                                   path], cli)
+        if 'Node not found' not in out:
+            break
+    assert status == 0 and 'failed' not in out and 'Set parameter' in out, out
+    return out
+
+
+def test_sim_launch_param_load_lifecycle_and_ctrl_c(cli, ros, tmp_path, launches):
+    launch = Launch(cli, tmp_path, 'sim.launch.py', 'cycle_period:=0.02',
+                    f'record:={tmp_path / "bag"}')
+    launches.append(launch)
+    names = ['/feeder/feeder_driver', '/feeder/feeder_sim', '/feeder/feeder_monitor',
+             '/feeder/feeder_bag_recorder']
+    wait_nodes(ros, names)
+    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    assert ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True)).success
+    ros.spin_until(lambda: any(m.data for m in ready.msgs), 30.0, 'an edge1_ready true')
+
+    share = {pkg: SHARE / pkg / 'share' / pkg / 'config' for pkg in
+             ('feeder_sim', 'feeder_monitor', 'feeder_driver')}
+    param_load(cli, '/feeder/feeder_driver', share['feeder_sim'] / 'sim.yaml')
+    param_load(cli, '/feeder/feeder_sim', share['feeder_sim'] / 'sim.yaml')
+    param_load(cli, '/feeder/feeder_monitor', share['feeder_monitor'] / 'monitor.yaml')
+
+    status, out = ros_cli.run(['lifecycle', 'set', '--no-daemon', '--spin-time', '3',
+                               '/feeder/feeder_sim', 'shutdown'], cli)
+    assert status == 0 and 'Transitioning successful' in out, out
+    ros.spin_until(lambda: '/feeder/feeder_sim' not in nodes_on_graph(ros), 5.0,
+                   'the predictor off the graph')
+    ros.spin_until(lambda: '[sim_node-2]: process has finished cleanly' in launch.log, 10.0,
+                   'the predictor process to end')
+    assert launch.stop() == 0, launch.log
+    log = launch.log
+    for exe in ('sim_node-1', 'sim_node-2', 'monitor_node-3', 'bag_recorder-4'):
+        assert f'[INFO] [{exe}]: process has finished cleanly' in log, log
+    assert 'Traceback' not in log and 'process has died' not in log, log
+    ros.spin_until(lambda: not set(names) & nodes_on_graph(ros), 3.0, 'every node gone')
+    assert (tmp_path / 'bag' / 'metadata.yaml').is_file()
+
+
+def test_hardware_launch_with_the_emulator(cli, ros, tmp_path, launches):
+    launch = Launch(cli, tmp_path, 'hardware.launch.py', 'emulator:=true',
+                    f'emulator_link:={tmp_path / "tty"}', 'namespace:=hw')
+    launches.append(launch)
+    wait_nodes(ros, ['/hw/feeder_driver', '/hw/feeder_sim', '/hw/feeder_monitor'])
+    statuses = Collector(ros, DiagnosticStatus, '/hw/cycle_status')
+    deadline = time.monotonic() + 30
+    while True:     # the driver connects once the emulator's pty is there
+        res = ros.call(Trigger, '/hw/feeder_driver/trigger_cycle', Trigger.Request())
+        if res.success or time.monotonic() > deadline:
+            break
+        ros.spin_for(0.3)
+    assert res.success, res.message
+    ros.spin_until(lambda: len(statuses) == 1, 10.0, 'the cycle')
+    assert statuses.msgs[0].level == DiagnosticStatus.OK
+    param_load(cli, '/hw/feeder_driver', SHARE / 'feeder_driver' / 'share' / 'feeder_driver' /
+               'config' / 'driver.yaml')
+    assert launch.stop() == 0, launch.log
+    assert 'process has died' not in launch.log, launch.log
+
+
+def test_an_integer_for_a_double_in_launch_xml(cli, ros, tmp_path, launches):
+    xml = tmp_path / 'one.launch.xml'
+    xml.write_text(f"""<launch>
+  <node pkg="feeder_sim" exec="sim_node" name="feeder_driver" namespace="/xml">
+    <param name="scene" value="{TRIANGLE}"/>
+    <param name="hardware_mode" value="true"/>
+    <param name="cycle_period" value="1"/>
+  </node>
+</launch>
+""")
+    log = tmp_path / 'xml.log'
+    proc = ros_cli.start(['launch', str(xml)], cli, log)
+    try:
+        wait_nodes(ros, ['/xml/feeder_driver'])
+        value = ros.get_parameters('/xml/feeder_driver', ['cycle_period'])['cycle_period']
+        assert type(value) is float and value == 1.0
+    finally:
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=30) == 0, log.read_text()
+
+
+# ---- several feeders side by side --------------------------------------------------------
+
+def check_feeders_apart(ros, spaces, cycles=40):
+    """
+    Cycle every feeder but the middle one; each monitor follows its own feeder only.
+
+    Per namespace: cycle_status seqs 1..n of its own; as many edge1_ready after the latched
+    one as its own cycles (none for the idle one); its predictor followed exactly those.
+    """
+    statuses = {ns: Collector(ros, DiagnosticStatus, f'{ns}/cycle_status') for ns in spaces}
+    ready = {ns: Collector(ros, Bool, f'{ns}/edge1_ready', LATCHED) for ns in spaces}
+    for ns in spaces:
+        ros.spin_until(lambda ns=ns: len(ready[ns]) >= 1, STARTUP_TIMEOUT, f'{ns} monitor')
+        ros.spin_until(lambda ns=ns: ros.node.count_subscribers(f'{ns}/cycle_status') >= 3,
+                       STARTUP_TIMEOUT, f'{ns} readers')
+    ros.spin_for(0.5)
+    busy = [ns for k, ns in enumerate(spaces) if k != 1]
+    for ns in busy:
+        assert ros.call(SetBool, f'{ns}/feeder_driver/enable',
+                        SetBool.Request(data=True)).success
+    ros.spin_until(lambda: all(len(statuses[ns]) >= cycles for ns in busy), 60.0, 'cycles')
+    for ns in busy:
+        assert ros.call(SetBool, f'{ns}/feeder_driver/enable',
+                        SetBool.Request(data=False)).success
+    ros.spin_for(1.5)
+    for ns in spaces:
+        seqs = [int(status_values(s)['seq']) for s in statuses[ns].msgs]
+        assert seqs == list(range(1, len(seqs) + 1)), ns
+        assert len(ready[ns]) == 1 + len(seqs), (ns, len(ready[ns]), len(seqs))
+        assert all(s.hardware_id == 'sim' for s in statuses[ns].msgs)
+    assert not statuses[spaces[1]].msgs
+
+
+def test_three_feeders_side_by_side_as_processes(graph, ros):
+    spaces = ['/feeder_1', '/feeder_2', '/feeder_3']
+    for k, ns in enumerate(spaces):
+        sim_as_hardware(graph, f'cycle_period:={0.01 * (k + 1)}', ns=ns)
+        predictor(graph, ns=ns)
+        monitor(graph, ns=ns)
+    check_feeders_apart(ros, spaces)
+
+
+def test_three_feeders_side_by_side_with_ros2_launch(cli, ros, tmp_path, launches):
+    launch = Launch(cli, tmp_path, 'feeders.launch.py', 'namespaces:=left,middle,right',
+                    'cycle_period:=0.01')
+    launches.append(launch)
+    spaces = ['/left', '/middle', '/right']
+    wait_nodes(ros, [f'{ns}/{n}' for ns in spaces for n in
+                     ('feeder_driver', 'feeder_sim', 'feeder_monitor')])
+    check_feeders_apart(ros, spaces)
+    assert launch.stop() == 0, launch.log
+    assert 'process has died' not in launch.log, launch.log
