@@ -1,0 +1,213 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Effects checked against independent physics (issue 13).
+
+The references are written apart from the library (reference_impact.py: Routh/Stronge in small
+impulse steps; reference_plate.py: the plate drag of a lamina in closed form;
+reference_carry.py: a dense wrench-cone scan of the finite carry). Nothing here compares the
+library with its own earlier output.
+"""
+
+import copy
+import math
+
+import numpy as np
+import pytest
+from reference_impact import routh_impact, sticking_impulse
+from throwmap import Scene
+from throwmap.internal import routh_stronge_impact, sticking_impact
+from throwmap_testing import SCENES
+import yaml
+
+
+def triangle(**sections):
+    with open(SCENES / 'triangle.yaml', encoding='utf-8') as fh:
+        data = yaml.safe_load(fh)
+    for key, value in sections.items():
+        if value is None:
+            data.pop(key, None)
+        else:
+            data[key] = copy.deepcopy(value)
+    return Scene(data)
+
+
+def routh(args, e, mu, steps):
+    """The brute-force Routh integration's post-impact (vx, vy, omega)."""
+    return np.array(routh_impact(*args, e, mu, steps=steps)[0])
+
+
+def converges_to(got, args, e, mu, tol):
+    """The brute-force result approaches ``got`` as the impulse step shrinks, to ``tol``."""
+    weights = np.array([1.0, 1.0, math.sqrt(args[5])])     # omega as a speed rho * omega
+    scale = abs(args[2]) + abs(args[3]) + math.sqrt(args[5]) * abs(args[4])
+    coarse = (np.abs(routh(args, e, mu, 100_000) - got) * weights).max()
+    fine = (np.abs(routh(args, e, mu, 4_000_000) - got) * weights).max()
+    return fine < tol * scale and fine < 0.5 * coarse + 1e-12 * scale, (coarse, fine, scale)
+
+
+def random_impact(rng):
+    rx, ry = rng.uniform(-0.05, 0.05, 2)
+    vx, vy = rng.uniform(-1, 1), rng.uniform(-2, -0.1)
+    om, rho2 = rng.uniform(-8, 8), rng.uniform(1e-4, 2e-3)
+    return rx, ry, vx, vy, om, rho2
+
+
+def is_jam(args, mu):
+    """Slipping at first with d u_n / dp <= 0: no normal impulse stops the approach."""
+    rx, ry, vx, vy, om, rho2 = args
+    ut = vx - om * ry
+    ktn = -rx * ry / rho2
+    knn = 1.0 + rx * rx / rho2
+    return vy + om * rx < 0.0 and ut != 0.0 and knn - ktn * mu * math.copysign(1.0, ut) <= 0.0
+
+
+# ------------------------------------------------------------------ item 1: the jam
+def test_the_issues_jam_example_rebounds_as_routh_says():
+    args = (-0.0346, 0.1329, 0.2258, -0.3526, -2.8129, 2.44e-4)
+    assert is_jam(args, 2.0)
+    got = routh_stronge_impact(*args, 0.3, 2.0)
+    assert got[1] + got[2] * args[0] == pytest.approx(0.12250, abs=2e-5)   # the lead's figure
+    ok, detail = converges_to(np.array(got), args, 0.3, 2.0, 2e-5)
+    assert ok, detail
+
+
+def test_jam_impacts_with_restitution_follow_routh_in_small_impulse_steps():
+    rng = np.random.default_rng(13)
+    jams = 0
+    while jams < 40:
+        args = random_impact(rng)
+        e, mu = rng.uniform(0.05, 1.0), rng.uniform(0.3, 3.0)
+        if not is_jam(args, mu):
+            continue
+        jams += 1
+        got = np.array(routh_stronge_impact(*args, e, mu))
+        ok, detail = converges_to(got, args, e, mu, 5e-5)
+        assert ok, (args, e, mu, detail)
+        # and it rebounds: with e > 0 the jam is not a plastic impact
+        assert got[1] + got[2] * args[0] > 0.0
+
+
+def test_jam_with_zero_restitution_is_the_sticking_impact():
+    """A jam's slip dies out and the contact sticks: with e = 0 that is eqs 7-9 exactly."""
+    rng = np.random.default_rng(14)
+    jams = 0
+    while jams < 40:
+        args = random_impact(rng)
+        mu = rng.uniform(0.3, 3.0)
+        if not is_jam(args, mu):
+            continue
+        jams += 1
+        got = routh_stronge_impact(*args, 0.0, mu)
+        assert got == pytest.approx(sticking_impact(*args), rel=1e-9, abs=1e-12)
+
+
+# ------------------------------------------------------------------ item 6: mu -> inf
+def test_unbounded_friction_is_the_limit_of_routh_and_never_pulls():
+    """
+    mu = inf is Routh's method as mu -> inf, not eqs 7-9 where those would pull.
+
+    Brute-force Routh with mu = 1e3, 1e4 converges to the library's mu = inf impact; eqs 7-9 agree with it exactly where their normal impulse is >= 0, and
+    where they need a pulling (negative) normal impulse the library and Routh do not pull.
+    """
+    rng = np.random.default_rng(6)
+    pulling = pushing = 0
+    while pulling < 6 or pushing < 6:
+        args = random_impact(rng)
+        rx, ry, vx, vy, om, rho2 = args
+        if vy + om * rx >= 0.0:
+            continue
+        pn_sticking = sticking_impulse(*args)[1]
+        if pn_sticking >= 0.0:
+            if pushing >= 6:
+                continue
+            pushing += 1
+        else:
+            if pulling >= 6:
+                continue
+            pulling += 1
+        got = np.array(routh_stronge_impact(*args, 0.0, math.inf))
+        weights = np.array([1.0, 1.0, math.sqrt(rho2)])
+        errs = [(np.abs(got - routh(args, 0.0, mu, int(1e4 * mu))) * weights).max()
+                for mu in (1e3, 1e4)]
+        scale = abs(vx) + abs(vy) + math.sqrt(rho2) * abs(om)
+        assert errs[1] < 1e-3 * scale and errs[1] < max(0.5 * errs[0], 1e-4 * scale), errs
+        assert got[1] - vy >= 0.0                                      # never pulls
+        stick = np.array(sticking_impact(*args))
+        if pn_sticking >= 0.0:
+            assert got == pytest.approx(stick, rel=1e-10, abs=1e-12)
+        else:
+            assert (np.abs(got - stick) * weights).max() > 1e-3 * scale
+
+
+# ------------------------------------------------------------------ item 2: re-contact
+def test_restitution_to_zero_converges_to_the_sticking_model():
+    """
+    The issue's case: micro-bounces at x = 0.12671 must end in a plastic catch there.
+
+    With bounce_threshold 0 every rebound is a bounce; as e -> 0 f must tend to the base
+    (sticking) model's f(2, 0.15227) = (2, 0.16671, jog), for every e from 1e-2 down.
+    """
+    base = triangle().model
+    ref = base.f(2, 0.15227)
+    assert ref[0] == 2 and ref[2] == 'jog'
+    errors = []
+    for e in (1e-2, 1e-3, 1e-4, 1e-5, 1e-6):
+        model = triangle(contact={'restitution': e, 'bounce_threshold': 0.0},
+                         effects=['impact_restitution']).model
+        got = model.f(2, 0.15227)
+        assert got[0] == ref[0] and got[2] == ref[2], (e, got)
+        errors.append(abs(got[1] - ref[1]))
+        res = model.throw(2, 0.15227)
+        assert abs(res.impacts[1].x - res.impacts[0].x) < 1e-6    # re-contact where it hit
+    assert errors[-1] < 1e-9
+    assert all(b <= a * 1.01 + 1e-12 for a, b in zip(errors, errors[1:]))
+
+
+def test_restitution_to_zero_converges_over_many_states():
+    base = triangle().model
+    small = triangle(contact={'restitution': 1e-6, 'bounce_threshold': 0.0},
+                     effects=['impact_restitution']).model
+    rng = np.random.default_rng(2)
+    edges = rng.choice(base.part.stable_edges, 200)
+    radii = np.array([base.r_min(e) * 1.001 for e in edges]) + rng.uniform(0, 0.25, 200)
+    ref = base.f_batch(edges, radii)
+    got = small.f_batch(edges, radii)
+    ok = got['status'] == 0
+    assert ok.all()
+    assert (got['edge'] == ref['edge']).mean() > 0.99
+    same = got['edge'] == ref['edge']
+    assert np.median(np.abs(got['R'] - ref['R'])[same]) < 1e-9
+
+
+# ------------------------------------------------------------------ item 4: flat landing
+def test_flat_landing_records_the_spin_it_lands_with():
+    """In free flight (no body force) omega is constant: a flat landing after a bounce lands
+    with the spin the bounce left, not the release speed."""
+    model = triangle(contact={'restitution': 0.3, 'bounce_threshold': 0.0},
+                     effects=['impact_restitution']).model
+    rng = np.random.default_rng(0)
+    checked = 0
+    for _ in range(200):
+        edge = int(rng.choice(model.part.stable_edges))
+        R = float(model.r_min(edge) * 1.01 + rng.uniform(0, 0.25))
+        res = model.throw(edge, R)
+        for before, flat in zip(res.impacts, res.impacts[1:]):
+            if flat.kind == 'flat_landing' and before.kind == 'bounce':
+                checked += 1
+                assert flat.omega_before == pytest.approx(before.omega_after, rel=1e-12,
+                                                          abs=1e-15)
+                assert abs(flat.omega_before) < 0.5 * model.w
+    assert checked > 10
