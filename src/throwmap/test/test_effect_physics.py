@@ -45,12 +45,12 @@ def triangle(**sections):
 
 
 def routh(args, e, mu, steps):
-    """The brute-force Routh integration's post-impact (vx, vy, omega)."""
+    """Return the brute-force Routh integration's post-impact (vx, vy, omega)."""
     return np.array(routh_impact(*args, e, mu, steps=steps)[0])
 
 
 def converges_to(got, args, e, mu, tol):
-    """The brute-force result approaches ``got`` as the impulse step shrinks, to ``tol``."""
+    """Tell whether brute force approaches ``got`` as the impulse step shrinks, to ``tol``."""
     weights = np.array([1.0, 1.0, math.sqrt(args[5])])     # omega as a speed rho * omega
     scale = abs(args[2]) + abs(args[3]) + math.sqrt(args[5]) * abs(args[4])
     coarse = (np.abs(routh(args, e, mu, 100_000) - got) * weights).max()
@@ -117,10 +117,11 @@ def test_jam_with_zero_restitution_is_the_sticking_impact():
 # ------------------------------------------------------------------ item 6: mu -> inf
 def test_unbounded_friction_is_the_limit_of_routh_and_never_pulls():
     """
-    mu = inf is Routh's method as mu -> inf, not eqs 7-9 where those would pull.
+    Check mu = inf: Routh's method as mu -> inf, not eqs 7-9 where those would pull.
 
-    Brute-force Routh with mu = 1e3, 1e4 converges to the library's mu = inf impact; eqs 7-9 agree with it exactly where their normal impulse is >= 0, and
-    where they need a pulling (negative) normal impulse the library and Routh do not pull.
+    Brute-force Routh with mu = 1e3, 1e4 converges to the library's mu = inf impact; eqs 7-9
+    agree with it exactly where their normal impulse is >= 0, and where they need a pulling
+    (negative) normal impulse the library and Routh do not pull.
     """
     rng = np.random.default_rng(6)
     pulling = pushing = 0
@@ -194,8 +195,11 @@ def test_restitution_to_zero_converges_over_many_states():
 
 # ------------------------------------------------------------------ item 4: flat landing
 def test_flat_landing_records_the_spin_it_lands_with():
-    """In free flight (no body force) omega is constant: a flat landing after a bounce lands
-    with the spin the bounce left, not the release speed."""
+    """
+    Check the spin of a flat landing: in free flight (no body force) omega is constant.
+
+    A flat landing after a bounce lands with the spin the bounce left, not the release speed.
+    """
     model = triangle(contact={'restitution': 0.3, 'bounce_threshold': 0.0},
                      effects=['impact_restitution']).model
     rng = np.random.default_rng(0)
@@ -211,3 +215,99 @@ def test_flat_landing_records_the_spin_it_lands_with():
                                                           abs=1e-15)
                 assert abs(flat.omega_before) < 0.5 * model.w
     assert checked > 10
+
+
+# ------------------------------------------------------------------ item 3: interval domain
+def carry_scene(**carry):
+    return triangle(contact={'mu': 0.5}, effects=['finite_carry'],
+                    throw={'release_speed': 5.5851,
+                           'carry': dict({'release_angle_deg': 20}, **carry)})
+
+
+def test_finite_carry_domain_is_the_interval_a_dense_wrench_cone_scan_finds():
+    """Triangle, carry 20 deg, mu 0.5: the grasp holds on a bounded interval of R per edge."""
+    from reference_carry import carry_grasp_mask, mask_intervals
+    model = carry_scene().model
+    part = model.part
+    radii = np.linspace(0.0005, 1.2, 24_000)
+    step = radii[1] - radii[0]
+    for i in part.stable_edges:
+        mask = carry_grasp_mask(part.u_l[i], part.u_r[i], part.d[i], part.rho2, model.h,
+                                model.g, 0.5, model.w, math.radians(20), radii,
+                                time_samples=model.knobs.carry_samples)
+        ref = mask_intervals(radii, mask)
+        got = model.domain_intervals(i)
+        assert len(ref) == len(got) == 1
+        assert got[0][0] == pytest.approx(ref[0][0], abs=step)
+        assert got[0][1] == pytest.approx(ref[0][1], abs=step)
+        assert got[0][1] < 1.0                              # bounded above
+        assert model.r_min(i) == got[0][0] and model.r_max(i) == got[0][1]
+    # the lead's figures (cm): edge 0 [2.667, 78.377]
+    assert model.domain_intervals(0)[0] == pytest.approx((0.02667, 0.78377), abs=2e-5)
+    # every layer accepts a state f computes, and refuses one past the upper end
+    assert model.domain_error(0, 0.405) is None
+    assert model.f(0, 0.405)[0] == 1
+    edges, radii = model.orbits([0], [0.405], 1)[:2]
+    assert edges[0, 1] == 1
+    err = model.domain_error(0, 0.9)
+    assert err is not None and err.condition == 'carry_grasp' and '0.783' in str(err)
+    with pytest.raises(ValueError, match='carry'):
+        model.f(0, 0.9)
+
+
+def test_grids_and_starts_stay_inside_a_bounded_domain():
+    from throwmap import default_grid
+    model = carry_scene().model
+    edges, radii = default_grid(model, radii_per_edge=20, r_max=5.0)
+    assert all(model.domain_error(int(e), float(r)) is None for e, r in zip(edges, radii))
+    edge = 1
+    R = model.start_radius(edge)
+    assert model.r_min(edge) < R < model.r_max(edge)
+
+
+def test_scenes_without_finite_carry_keep_the_half_line_domain():
+    model = triangle().model
+    for i in model.part.stable_edges:
+        lo = max(model.r_grasp[i], -model.part.u_l[i])
+        assert model.domain_intervals(i) == [(lo, math.inf)]
+        assert model.r_min(i) == lo and model.r_max(i) == math.inf
+
+
+# ------------------------------------------------------------------ item 7: extreme regimes
+def test_a_plate_whose_drag_can_hold_the_part_is_refused_at_load():
+    """
+    Refuse mu_p cot(inclination) >= 1: Coulomb drag >= in-plane gravity.
+
+    The part would stop in mid-air; the model cannot represent it and says so, naming the field
+    and the fix.
+    """
+    from throwmap import InputError
+    with open(SCENES / 'experiment.yaml', encoding='utf-8') as fh:
+        data = yaml.safe_load(fh)
+    tan80 = math.tan(math.radians(80))
+    data['plate']['mu'] = 2.2 * tan80
+    with pytest.raises(InputError, match=r'plate\.mu.*2\.2 >= 1.*mid-air.*tan\(inclination\)'):
+        Scene(copy.deepcopy(data)).model
+    data['plate']['mu'] = 0.99 * tan80
+    model = Scene(copy.deepcopy(data)).model
+    assert model.f(1, 0.12)[2] in ('jog', 'flip')
+
+
+def test_loading_a_carry_scene_does_not_simulate_its_domain():
+    """
+    Find the carry's grasp domain without throwing (the wrench is affine in R).
+
+    Only the returning arm costs throws: at most STRIKE_SCAN per edge plus a bisection.
+    """
+    from throwmap.effects import finite_carry
+    calls = []
+    model = carry_scene(return_time=0.03).model
+    original = model.nominal_status
+
+    def counting(edges, radii):
+        calls.append(len(edges))
+        return original(edges, radii)
+    model.nominal_status = counting
+    finite_carry.domain(model, model.effects.modules()[0][2])
+    per_edge = sum(calls) / len(model.part.stable_edges)
+    assert per_edge <= finite_carry.STRIKE_SCAN + 40
