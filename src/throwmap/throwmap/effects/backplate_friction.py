@@ -29,9 +29,11 @@ as 1 / level^2 (docs/accuracy.md: level 4 was the default, 0.05 mm median error 
 rest the drag is regularised (accuracy.plate_v_reg, default 1e-4 m/s): while the fastest point
 moves slower than v_reg the exact drag is scaled by its speed / v_reg (a viscous creep instead
 of Coulomb chatter); the quadrature regularises each point as v / sqrt(|v|^2 + v_reg^2).
-While rolling about a fixed vertex P, v(r) = omega z x (r - P), so the drag is the torque -sign(omega) mu_p g_n
-<|r - P|> about P (plus a force, which the pivot takes). For the experiment (beta = 80 deg,
-mu_p = 0.1) the drag is 0.1 cot(80 deg) = 1.8 % of the in-plane gravity.
+While rolling about a fixed vertex P, v(r) = omega z x (r - P), so the drag is the torque
+-sign(omega) mu_p g_n <|r - P|> about P (plus a force, which the pivot takes). For the
+experiment (beta = 80 deg, mu_p = 0.1) the drag is 0.1 cot(80 deg) = 1.8 % of the in-plane
+gravity. A plate with mu_p cot(beta) >= 1 is refused at load: its drag could hold the part
+still against the in-plane gravity anywhere, in mid-air too, which the model cannot represent.
 
 Hooks: ``body_force`` (the drag, in flight and in every contact phase) and ``static_hold``
 (near the top of a roll the plate's friction can hold the part balanced on a corner: gravity's
