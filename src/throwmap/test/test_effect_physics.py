@@ -300,17 +300,22 @@ def test_loading_a_carry_scene_does_not_simulate_its_domain():
     Only the returning arm costs throws: at most STRIKE_SCAN per edge plus a bisection.
     """
     from throwmap.effects import finite_carry
-    calls = []
-    model = carry_scene(return_time=0.03).model
-    original = model.nominal_status
+    general = triangle(contact={'mu': 0.5, 'restitution': 0.0},
+                       effects=['finite_carry', 'impact_restitution'],
+                       throw={'release_speed': 5.5851,
+                              'carry': {'release_angle_deg': 20, 'return_time': 0.03}}).model
+    for model, cap in ((carry_scene(return_time=0.03).model, finite_carry.STRIKE_SCAN),
+                       (general, finite_carry.STRIKE_SCAN_GENERAL)):
+        calls = []
+        original = model.nominal_status
 
-    def counting(edges, radii):
-        calls.append(len(edges))
-        return original(edges, radii)
-    model.nominal_status = counting
-    finite_carry.domain(model, model.effects.modules()[0][2])
-    per_edge = sum(calls) / len(model.part.stable_edges)
-    assert per_edge <= finite_carry.STRIKE_SCAN + 40
+        def counting(edges, radii, original=original, calls=calls):
+            calls.append(len(edges))
+            return original(edges, radii)
+        model.nominal_status = counting
+        params = [p for n, _, p in model.effects.modules() if n == 'finite_carry'][0]
+        finite_carry.domain(model, params)
+        assert sum(calls) / len(model.part.stable_edges) <= cap + 40
 
 
 # ------------------------------------------------------------------ item 5: the plate drag
@@ -336,7 +341,9 @@ def test_plate_drag_is_the_exact_drag_of_a_uniform_lamina(vertices):
         edge = int(rng.integers(part.n))
         phi = rng.uniform(-3, 3)
         vx, vy = rng.uniform(-1, 1, 2)
-        om = rng.uniform(-20, 20) if rng.uniform() < 0.9 else 0.0
+        # |omega| >= 1 rad/s: the instantaneous centre within a metre (far out, both closed
+        # forms lose digits to cancellation: about 1e-7 at 200 m); 10 % pure translation
+        om = math.copysign(rng.uniform(1, 20), rng.uniform(-1, 1)) if rng.uniform() < 0.9 else 0.0
         got = plate_drag_exact(vx, vy, om, phi, ou[edge], ov[edge], cu[edge], cv[edge], size,
                                1.0, 0.0)
         c, s = math.cos(phi), math.sin(phi)

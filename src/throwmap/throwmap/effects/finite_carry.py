@@ -261,7 +261,11 @@ def check(outcome, release, edge, ctx, prm):
 
 
 # ------------------------------------------------------------------------------- Python level
-STRIKE_SCAN = 100      # throws per edge, at most, to find where the returning arm clears the part
+# Throws per edge, at most, to find where the returning arm clears the part: a 1 mm grid with
+# closed-form throws (microseconds each); a coarser one through the event simulator.
+STRIKE_STEP = 1e-3
+STRIKE_SCAN = 1000
+STRIKE_SCAN_GENERAL = 100
 
 
 def domain(model, params):
@@ -271,8 +275,9 @@ def domain(model, params):
     The carry's grasp holds on one interval of R per edge (:func:`carry_interval`, exact at the
     sampled instants; it can be bounded above: a fast carry's centripetal pull outgrows the
     friction cone). With a returning arm, the radii it strikes are cut from the interval's
-    lower end: a scan of at most STRIKE_SCAN throws over [lo, min(hi, 1 m)], then bisection to
-    1e-7 m (the throws are checked again one by one: f raises 'arm_strike').
+    lower end: a scan on a 1 mm grid over [lo, min(hi, 1 m)] (at most STRIKE_SCAN throws, or
+    STRIKE_SCAN_GENERAL when the throws need the event simulator), then bisection to 1e-7 m
+    (the throws are checked again one by one: f raises 'arm_strike').
     """
     part = model.part
     out = {}
@@ -293,7 +298,9 @@ def domain(model, params):
 def _strike_clear(model, edge, lo, hi):
     """Return the smallest R in [lo, hi] above which the returning arm clears the part."""
     top = min(hi, max(1.0, 2.0 * lo))
-    rs = np.linspace(lo, top, STRIKE_SCAN + 1)[1:]
+    cap = STRIKE_SCAN_GENERAL if model.effects.general else STRIKE_SCAN
+    count = max(2, min(cap, int(math.ceil((top - lo) / STRIKE_STEP))))
+    rs = np.linspace(lo, top, count + 1)[1:]
     rs[-1] = min(rs[-1], np.nextafter(top, -np.inf))
     st = model.nominal_status(np.full(rs.size, edge), rs)
     failing = np.flatnonzero(st == ERR_ARM_STRIKE)
