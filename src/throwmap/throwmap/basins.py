@@ -61,10 +61,15 @@ def default_grid(model, radii_per_edge=50, r_max=None):
         r_max = design_radii(model)['R_max_all']
     starts_e, starts_r = [], []
     for i in part.stable_edges:
-        lo = model.r_min(i)
+        lo, top = model.r_min(i), model.r_max(i)
+        if not lo < top:
+            continue        # no domain on this edge (finite_carry)
         hi = max(r_max, lo * 1.5)
         # Start 1 % of the range inside R_min: right at the toe-stub bound the hop, and with it
-        # the jog, shrinks to nothing (an unstable fixed point that takes ages to leave).
+        # the jog, shrinks to nothing (an unstable fixed point that takes ages to leave). A
+        # domain bounded above (finite_carry) ends 1 % inside its upper end.
+        if hi >= top:
+            hi = top - 0.01 * (top - lo)
         rs = np.linspace(lo + 0.01 * (hi - lo), hi, radii_per_edge)
         starts_e.extend([i] * radii_per_edge)
         starts_r.extend(rs.tolist())
@@ -162,18 +167,20 @@ def design_radii(model, samples=400, max_rounds=50):
     ``invariant`` says whether that succeeded and every flip lands inside some grasp range.
     """
     part = model.part
-    stable = part.stable_edges
+    # Edges on which f has no domain at all (finite_carry) can be landed on, never thrown from.
+    stable = [i for i in part.stable_edges if model.r_min(i) < model.r_max(i)]
     # R_min, moved 1e-12 m inside the domain where the toe-stub bound (an open end) binds.
     lo = {i: max(model.r_min(i), -part.u_l[i] + 1e-12) for i in stable}
     r_flip = {}
+    top = {i: model.r_max(i) for i in stable}
     for i in stable:
-        hi = max(lo[i] * 2, lo[i] + 4 * part.r)
+        hi = min(max(lo[i] * 2, lo[i] + 4 * part.r), top[i])
         found = None
         for _ in range(40):
             found, _ = _first_flip(model, i, lo[i], hi, samples)
-            if found is not None:
+            if found is not None or hi >= top[i]:
                 break
-            hi *= 2
+            hi = min(2 * hi, top[i])
         r_flip[i] = found if found is not None else math.inf
     r_max = {i: (r_flip[i] if math.isfinite(r_flip[i]) else lo[i]) for i in stable}
     invariant = True
@@ -196,12 +203,16 @@ def design_radii(model, samples=400, max_rounds=50):
             for j in stable:
                 sel = res['edge'] == j
                 if sel.any():
-                    top = float(res['R'][sel].max())
+                    high = float(res['R'][sel].max())
                     low = float(res['R'][sel].min())
                     if low < lo[j]:
                         escapes.append((i, j, low))
-                    if top > r_max[j] * (1 + 1e-12):
-                        r_max[j] = top
+                    if high > top[j]:
+                        # lands beyond the domain's upper end (finite_carry): f stops there
+                        escapes.append((i, j, high))
+                        high = top[j]
+                    if high > r_max[j] * (1 + 1e-12):
+                        r_max[j] = high
                         grew = True
             landed_unknown = ~np.isin(res['edge'][~lost], stable)
             if landed_unknown.any():   # pragma: no cover - settled edges are stable

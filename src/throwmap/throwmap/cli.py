@@ -112,7 +112,11 @@ def cmd_grasp(scene, args, out):
                'R_grasp': r_all, 'mu_min': mu_all,
                'domain_R_min': ({str(i): float(scene.model.r_min(i))
                                  for i in scene.part.stable_edges}
-                                if scene.model.domain_note() else None)}, out)
+                                if scene.model.domain_note() else None),
+               # intervals [lo, hi] of R per stable edge; hi null: unbounded
+               'domain': {str(i): [[lo, hi if math.isfinite(hi) else None]
+                                   for lo, hi in scene.model.domain_intervals(i)]
+                          for i in scene.part.stable_edges}}, out)
         return 0
     out.write(f'{scene.name}: dynamic grasp (impulse cone, constraints (1)-(4)), h = '
               f'{scene.h * 100:g} cm\n')

@@ -18,7 +18,7 @@ The throw map of a scene with effects: the ThrowModel interface over a composed 
 The named effects' hooks are composed into one compiled module (throwmap.compose); this class
 validates states, draws the random numbers, and turns statuses into results and errors, as
 ThrowModel does for the base model. It names no effect: what an effect changes at the Python
-level (the domain's lower end, the sensor's readings, why a part was lost) comes from the
+level (the domain's intervals, the sensor's readings, why a part was lost) comes from the
 effect module's optional functions (throwmap.effects). A scene without effects never gets
 here: its model is the base ThrowModel.
 """
@@ -115,9 +115,12 @@ class EffectModel(ThrowModel):
         self._one = None
         self._domain_effect = next(((n, m, p) for n, m, p in modules if hasattr(m, 'domain')),
                                    None)
+        self._domain = None
         if self._domain_effect is not None:
             _, module, params = self._domain_effect
-            self.r_grasp = module.domain(self, params)
+            self._domain = module.domain(self, params)
+            self.r_grasp = np.array([self._domain[i][0][0] if self._domain.get(i) else math.inf
+                                     for i in range(part.n)])
 
     # ------------------------------------------------------------------------- randomness
     def reseed(self, seed):
@@ -151,6 +154,11 @@ class EffectModel(ThrowModel):
         return read_sensor(self.part, edge, R, x, footprint, self._sensor_models, self.rng)
 
     # ------------------------------------------------------------------------- domain
+    def domain_intervals(self, edge):
+        if self._domain is None:
+            return ThrowModel.domain_intervals(self, edge)
+        return list(self._domain.get(int(edge), []))
+
     def domain_error(self, edge, R):
         err = ThrowModel.domain_error(self, edge, R)
         if self._domain_effect is None or (err is not None and err.condition in (

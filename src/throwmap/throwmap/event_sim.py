@@ -66,6 +66,7 @@ from .status import (ERR_NONFINITE, ERR_PAINLEVE, ERR_SETTLE_CAP, ERR_SIM_CAP, E
 ContactLaw = namedtuple('ContactLaw', ['mu', 'unilateral', 'sticking'])
 STICKING_CONTACT = ContactLaw(math.inf, False, True)
 
+EPS = 2.220446049250313e-16
 MODE_FLIGHT = 0
 MODE_CONTACT = 1
 MODE_FLAT = 2
@@ -121,6 +122,14 @@ def lowest_approaching(x, y, phi, vx, vy, om, bu, bv, skip):
             best = k
             best_f = f
     return best, low
+
+
+@njit
+def vertex_normal(y, phi, vy, om, bu_k, bv_k):
+    """Height over the arm and normal velocity of the vertex at (bu_k, bv_k) in the body frame."""
+    c = math.cos(phi)
+    s = math.sin(phi)
+    return y + s * bu_k + c * bv_k, vy + om * (c * bu_k - s * bv_k)
 
 
 @njit
@@ -207,6 +216,24 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         vy_new = vy + dt * (b1 + 2.0 * b2 + 2.0 * b3 + b4) / 6.0
         om_new = om + dt * (c1 + 2.0 * c2 + 2.0 * c3 + c4) / 6.0
         return x_new, y_new, p_new, vx_new, vy_new, om_new
+
+    @njit(cache=False)
+    def bounce_resolved(rx, ry, vx, vy, om, phi, g, rho2, root, scale, edge, prm):
+        """
+        Tell whether a bounce of the vertex at (rx, ry) is one the simulation can resolve.
+
+        The vertex leaves at normal speed u_n with the normal acceleration a_n of free flight;
+        when it would come back (a_n < 0) sooner than ``root`` or rise by less than a few ulps
+        of the coordinates (``scale``), the bounce is below resolution: a plastic contact. So
+        restitution e -> 0 tends to the sticking model instead of a train of unresolved
+        micro-bounces.
+        """
+        un = vy + om * rx
+        _, ay, alpha = flight_rhs(vx, vy, om, phi, g, rho2, edge, prm)
+        an = ay + alpha * rx - om * om * ry
+        if an >= 0.0:
+            return True
+        return -2.0 * un / an > root and -0.5 * un * un / an > 8.0 * EPS * scale
 
     @njit(cache=False)
     def contact_accel(xp, phi, vxp, om, sliding, sigma, bu_p, bv_p, g, rho2, mu, edge, prm):
@@ -371,8 +398,11 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         vxp = 0.0
         sliding = False
         sigma = 0.0
-        # the vertex that just left the arm is ignored in flight until it is seen above it
+        # The vertex that just left the arm is ignored in flight until it is seen above it, or,
+        # after a bounce (sep_rising: it left moving up), until it is seen coming down again:
+        # a re-contact within one step is then found by the bisection like any other.
         sep = -1
+        sep_rising = False
         # flat state
         j_flat = -1
         out_edge = -1
@@ -389,8 +419,10 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
                 if not (math.isfinite(y1) and math.isfinite(om1)):
                     return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
                             x_hi)
-                if sep >= 0 and y1 + math.sin(p1) * bu[sep] + math.cos(p1) * bv[sep] > 0.0:
-                    sep = -1
+                if sep >= 0:
+                    h1, un1 = vertex_normal(y1, p1, vy1, om1, bu[sep], bv[sep])
+                    if h1 > 0.0 or (sep_rising and un1 < 0.0):
+                        sep = -1
                 k, _ = lowest_approaching(x1, y1, p1, vx1, vy1, om1, bu, bv, sep)
                 if k < 0:
                     x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
@@ -440,19 +472,22 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
                     s = math.sin(phi)
                     x = xk - (c * bu[k] - s * bv[k])
                     y = d[j_flat]
+                    om_before = om
                     vx, om, vy = flat_impact(vx, vy, mu)
                     x_l = x + u_l[j_flat]
                     x_lo = min(x_lo, x_l)
                     x_hi = max(x_hi, x_l + edge_len[j_flat])
-                    nrec = _event(rec, nrec, EV_FLAT_LANDING, k, j_flat, xk, om0, 0.0, e_before,
-                                  energy(vx, vy, om, y, g, rho2))
+                    nrec = _event(rec, nrec, EV_FLAT_LANDING, k, j_flat, xk, om_before, 0.0,
+                                  e_before, energy(vx, vy, om, y, g, rho2))
                     continue
                 vxa, vya, oma, bounces = impact(rx, ry, vx, vy, om, rho2, prm)
-                if bounces:
+                if bounces and bounce_resolved(rx, ry, vxa, vya, oma, phi, g, rho2, root,
+                                               abs(x) + abs(y) + size, edge, prm):
                     nrec = _event(rec, nrec, EV_BOUNCE, k, -1, xk, om, oma, e_before,
                                   energy(vxa, vya, oma, y, g, rho2))
                     vx, vy, om = vxa, vya, oma
                     sep = k
+                    sep_rising = True
                     continue
                 vxa, vya, oma = remove_normal(rx, ry, vxa, vya, oma, rho2)
                 if not unilateral:
@@ -542,6 +577,7 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
                     nrec = _event(rec, nrec, EV_LIFTOFF, p, -1, xp, om, om, e_now, e_now)
                     mode = MODE_FLIGHT
                     sep = p
+                    sep_rising = False
                     continue
                 # Landing of vertex kk while rolling/sliding about p.
                 q = kk
@@ -587,12 +623,14 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
                         out_r = x
                         mode = MODE_DONE
                     continue
-                if bounces:
+                if bounces and bounce_resolved(rx, ry, vxa, vya, oma, phi, g, rho2, root,
+                                               abs(x) + abs(y) + size, edge, prm):
                     nrec = _event(rec, nrec, EV_BOUNCE, q, j, xq, om, oma, e_before,
                                   energy(vxa, vya, oma, y, g, rho2))
                     vx, vy, om = vxa, vya, oma
                     mode = MODE_FLIGHT
                     sep = q
+                    sep_rising = True
                     if first_stable and j >= 0 and stable[j]:
                         out_edge = j
                         out_r = (xq if j == q else xq - edge_len[j]) - u_l[j]

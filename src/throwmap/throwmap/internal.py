@@ -21,7 +21,7 @@ names what it reaches into, and a refactor sees it.
 * :func:`sticking_impact` (throwmap.catch): eqs 7-9.
 * :func:`routh_stronge_impact` (effect impact_restitution): the frictional impact law.
 * :func:`plate_drag` (effect backplate_friction): the plate's drag at one state, with the
-  quadrature of ``Part.area_quadrature``.
+  quadrature of ``Part.area_quadrature``; :func:`plate_drag_exact`: the same in closed form.
 * :func:`carry_release_state`, :func:`carry_margin` (effect finite_carry): the state at
   release and the wrench-cone margin along the carry.
 * :func:`composed_source` (throwmap.compose): the text of the module an effect set compiles.
@@ -29,9 +29,9 @@ names what it reaches into, and a refactor sees it.
 
 from .catch import sticking_impact
 from .compose import source as composed_source
-from .effects.backplate_friction import plate_drag
+from .effects.backplate_friction import plate_drag, plate_drag_exact
 from .effects.finite_carry import carry_margin, release_state as carry_release_state
 from .effects.impact_restitution import routh_stronge_impact
 
 __all__ = ['carry_margin', 'carry_release_state', 'composed_source', 'plate_drag',
-           'routh_stronge_impact', 'sticking_impact']
+           'plate_drag_exact', 'routh_stronge_impact', 'sticking_impact']

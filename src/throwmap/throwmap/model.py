@@ -208,12 +208,32 @@ class ThrowModel:
 
     def r_min(self, edge):
         """
-        Return the lower end of the domain of f on a stable edge.
+        Return the lower end of the domain of f on a stable edge (inf: no domain there).
 
         R_grasp, or the toe-stub bound -u_l (the left vertex must start right of the pivot)
-        when that is larger; an effect may move it (finite_carry: ``r_grasp`` is its own).
+        when that is larger; an effect may move it (:meth:`domain_intervals`).
         """
-        return max(float(self.r_grasp[edge]), float(-self.part.u_l[edge]))
+        spans = self.domain_intervals(edge)
+        return spans[0][0] if spans else math.inf
+
+    def r_max(self, edge):
+        """Return the upper end of the domain of f on a stable edge (inf: unbounded)."""
+        spans = self.domain_intervals(edge)
+        return spans[-1][1] if spans else -math.inf
+
+    def start_radius(self, edge):
+        """Return a radius well inside the domain: 1.5 R_min, or mid-interval if that is less."""
+        lo, hi = self.r_min(edge), self.r_max(edge)
+        return min(1.5 * lo, 0.5 * (lo + hi))
+
+    def domain_intervals(self, edge):
+        """
+        Return the domain of f on a stable edge as intervals of R, [(lo, hi), ...].
+
+        The base model's is one half-line [max(R_grasp, -u_l), inf); an effect may bound it
+        above or split it (finite_carry). Empty: no R on this edge can be thrown.
+        """
+        return [(max(float(self.r_grasp[edge]), float(-self.part.u_l[edge])), math.inf)]
 
     def domain_note(self):
         """Return a line on the domain beyond the impulse-cone grasp table, or None."""

@@ -387,6 +387,26 @@ class Part:
         return (np.ascontiguousarray(e @ rel.T), np.ascontiguousarray(normal @ rel.T),
                 np.ascontiguousarray(qw))
 
+    def outline_frames(self):
+        """
+        Return the outline in every edge frame F^i, from the CM, and the centroid's offset.
+
+        Returns OU, OV (shape (n, outline points)) and CU, CV (shape (n,)): what the exact
+        plate drag (backplate_friction) integrates over.
+        """
+        verts = self.vertices
+        e = np.roll(verts, -1, axis=0) - verts
+        e /= np.hypot(e[:, 0], e[:, 1])[:, None]
+        normal = np.stack([-e[:, 1], e[:, 0]], axis=1)
+        rel = np.asarray(self.outline, dtype=float) - self.cm
+        x, y = self.outline[:, 0], self.outline[:, 1]
+        xn, yn = np.roll(x, -1), np.roll(y, -1)
+        cross = x * yn - xn * y
+        centroid = np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (
+            3.0 * cross.sum()) - self.cm
+        return (np.ascontiguousarray(e @ rel.T), np.ascontiguousarray(normal @ rel.T),
+                np.ascontiguousarray(e @ centroid), np.ascontiguousarray(normal @ centroid))
+
     def shadow(self, edge):
         """(u_min, u_max): the part's extent along the arm, relative to R, resting on ``edge``."""
         return float(self.U[edge].min()), float(self.U[edge].max())

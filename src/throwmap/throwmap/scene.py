@@ -474,14 +474,14 @@ class Scene:
         Return the (edge, R) to start orbits from.
 
         The scene's ``start``, else the goal edge (or the first stable edge) at 1.5 x its
-        R_grasp.
+        R_min (mid-domain when the domain is bounded above closer than that).
         """
         edge = self.start_edge
         if edge is None:
             edge = self.goal_edge if self.goal_edge is not None else self.part.stable_edges[0]
         R = self.start_R
         if R is None:
-            R = 1.5 * self.model.r_min(edge)
+            R = self.model.start_radius(edge)
         return int(edge), float(R)
 
 

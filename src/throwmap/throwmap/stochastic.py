@@ -104,7 +104,7 @@ def sensor_probability(model, goal_edge, radius, footprint=0.0, start=None, thro
     readings go through the scene's sensor noise when the model has it.
     """
     if start is None:
-        start = (goal_edge, 1.5 * model.r_min(goal_edge))
+        start = (goal_edge, model.start_radius(goal_edge))
     hits = 0
     det = 0
     total = 0

@@ -36,10 +36,11 @@ scene's arm.length with finite_arm). Without return_time the arm is back at once
 model's assumption). The catch is on the horizontal arm, unchanged.
 
 Hooks: ``release`` (the grasp along the carry, the release state) and ``check`` (the returning
-arm). The lower end of the domain per edge moves: above it the carry keeps the grasp and the
-returning arm clears the part (:func:`domain`: a 1 mm scan up to 1 m, then bisection to
-1e-7 m). Limit: theta_r -> 0 gives the impulsive throw: the release state tends to eqs 5-6 and
-the grasp test to the impulse-cone bounds (1)-(4) (both tested).
+arm). The domain per edge is an interval of R (:func:`domain`): the carry keeps the grasp on
+one interval, which a fast carry bounds above (its centripetal pull outgrows the cone), and the
+returning arm's strikes cut its lower end. Limit: theta_r -> 0 gives the impulsive throw: the
+release state tends to eqs 5-6 and the grasp test to the impulse-cone bounds (1)-(4) (both
+tested).
 
 Scene: throw: {release_speed_deg: 320, carry: {profile: constant_acceleration,
 release_angle_deg: 5, return_time: 0.05}}; contact: {mu: 0.8}; effects: [finite_carry].
@@ -55,7 +56,7 @@ from ._common import check_keys, number
 from ..errors import DomainError, InputError
 from ..grasp import cone_margins
 from ..jit import njit
-from ..status import (bound_name, ERR_ARM_STRIKE, ERR_CARRY_GRASP, ERR_TOE_STUB, OK)
+from ..status import bound_name, ERR_ARM_STRIKE, ERR_CARRY_GRASP, OK
 
 NAME = 'finite_carry'
 SCHEMA = {'throw': ('carry',)}
@@ -164,6 +165,47 @@ def carry_margin(edge, R, w, h, g, mu, theta_r, samples, rho2, d, u_l, u_r):
 
 
 @njit
+def carry_interval(edge, w, h, g, mu, theta_r, samples, rho2, d, u_l, u_r):
+    """
+    Return (lo, hi): the radii at which the carry keeps the grasp at every sampled instant.
+
+    The wrench is affine in R, w = W0 + R W1, and each cone test w . n_c <= 0 is linear in w,
+    so every instant and constraint bounds R from one side: the grasp set is one interval
+    (possibly empty: lo > hi; possibly unbounded above: hi = inf). The toe-stub bound is not
+    applied here.
+    """
+    hd = h + d[edge]
+    a = w * w / (2.0 * theta_r)
+    tc = 2.0 * theta_r / w
+    lo = -math.inf
+    hi = math.inf
+    for k in range(samples + 1):
+        t = tc * k / samples
+        th = 0.5 * a * t * t
+        thd = a * t
+        w0 = (-a * hd - g * math.sin(th), -thd * thd * hd - g * math.cos(th), a * rho2)
+        w1 = (-thd * thd, a, 0.0)
+        m0 = cone_margins(u_l[edge], u_r[edge], -d[edge], mu, w0[0], w0[1], w0[2])
+        m1 = cone_margins(u_l[edge], u_r[edge], -d[edge], mu, w1[0], w1[1], w1[2])
+        n0 = math.sqrt(w0[0] * w0[0] + w0[1] * w0[1] + w0[2] * w0[2])
+        n1 = math.sqrt(w1[0] * w1[0] + w1[1] * w1[1])
+        if n0 == 0.0:
+            n0 = 1.0
+        if n1 == 0.0:
+            n1 = 1.0
+        for c in range(4):
+            A = m0[c] * n0      # margin (unnormalised) = A + B R
+            B = m1[c] * n1
+            if B > 0.0:
+                hi = min(hi, -A / B)
+            elif B < 0.0:
+                lo = max(lo, -A / B)
+            elif A > 0.0:
+                return math.inf, -math.inf
+    return lo, hi
+
+
+@njit
 def release(edge, R, w, h, ctx, prm):
     """Check the grasp along the carry, then return the state at release, y0 over the arm."""
     part = ctx.part
@@ -219,35 +261,62 @@ def check(outcome, release, edge, ctx, prm):
 
 
 # ------------------------------------------------------------------------------- Python level
-def domain(model, params, r_top=1.0, step=1e-3):
-    """
-    Return the lower end of the domain per stable edge (inf: none below r_top).
+# Throws per edge, at most, to find where the returning arm clears the part: a 1 mm grid with
+# closed-form throws (microseconds each); a coarser one through the event simulator.
+STRIKE_STEP = 1e-3
+STRIKE_SCAN = 1000
+STRIKE_SCAN_GENERAL = 100
 
-    Above it the carry keeps the dynamic grasp and the returning arm clears the part (on a
-    1 mm grid up to r_top, then bisection to 1e-7 m). The impulse-cone R_grasp does not apply.
+
+def domain(model, params):
+    """
+    Return the domain per edge as a list of intervals [(lo, hi), ...] (empty: none).
+
+    The carry's grasp holds on one interval of R per edge (:func:`carry_interval`, exact at the
+    sampled instants; it can be bounded above: a fast carry's centripetal pull outgrows the
+    friction cone). With a returning arm, the radii it strikes are cut from the interval's
+    lower end: a scan on a 1 mm grid over [lo, min(hi, 1 m)] (at most STRIKE_SCAN throws, or
+    STRIKE_SCAN_GENERAL when the throws need the event simulator), then bisection to 1e-7 m
+    (the throws are checked again one by one: f raises 'arm_strike').
     """
     part = model.part
-    out = np.full(part.n, np.inf)
-    bad = (ERR_CARRY_GRASP, ERR_ARM_STRIKE, ERR_TOE_STUB)
+    out = {}
     for i in part.stable_edges:
-        rs = np.arange(max(-part.u_l[i], 0.0) + step / 2, r_top, step)
-        st = model.nominal_status(np.full(rs.size, i), rs)
-        failing = np.flatnonzero(np.isin(st, bad))
-        if failing.size == 0:
-            out[i] = max(-part.u_l[i], 0.0)
+        lo, hi = carry_interval(int(i), model.w, model.h, model.g, params.mu,
+                                params.release_angle, model.knobs.carry_samples, part.rho2,
+                                part.d, part.u_l, part.u_r)
+        lo = max(lo, float(-part.u_l[i]), 0.0)
+        if not lo < hi:
+            out[int(i)] = []
             continue
-        k = int(failing[-1])
-        if k + 1 >= rs.size:
-            continue        # no domain on this edge below r_top
-        lo, hi = float(rs[k]), float(rs[k + 1])
-        while hi - lo > 1e-7:
-            mid = 0.5 * (lo + hi)
-            if model.nominal_status(np.array([i]), np.array([mid]))[0] in bad:
-                lo = mid
-            else:
-                hi = mid
-        out[i] = hi
+        if params.return_time > 0.0:
+            lo = _strike_clear(model, int(i), lo, hi)
+        out[int(i)] = [(float(lo), float(hi))] if lo < hi else []
     return out
+
+
+def _strike_clear(model, edge, lo, hi):
+    """Return the smallest R in [lo, hi] above which the returning arm clears the part."""
+    top = min(hi, max(1.0, 2.0 * lo))
+    cap = STRIKE_SCAN_GENERAL if model.effects.general else STRIKE_SCAN
+    count = max(2, min(cap, int(math.ceil((top - lo) / STRIKE_STEP))))
+    rs = np.linspace(lo, top, count + 1)[1:]
+    rs[-1] = min(rs[-1], np.nextafter(top, -np.inf))
+    st = model.nominal_status(np.full(rs.size, edge), rs)
+    failing = np.flatnonzero(st == ERR_ARM_STRIKE)
+    if failing.size == 0:
+        return lo
+    k = int(failing[-1])
+    if k + 1 >= rs.size:
+        return hi if top >= hi else top
+    a, b = float(rs[k]), float(rs[k + 1])
+    while b - a > 1e-7:
+        mid = 0.5 * (a + b)
+        if model.nominal_status(np.array([edge]), np.array([mid]))[0] == ERR_ARM_STRIKE:
+            a = mid
+        else:
+            b = mid
+    return b
 
 
 def domain_error(model, params, edge, R):
@@ -261,22 +330,33 @@ def domain_error(model, params, edge, R):
         return DomainError('carry_grasp', f'no dynamic grasp on edge {edge} at R = {R:.6g} m '
                            f'during the carry: constraint ({c}) ({bound_name(c, False)}) fails '
                            f'at t = {tc * k / model.knobs.carry_samples * 1000:.3f} ms of '
-                           f'{tc * 1000:.3f} ms (margin {margin:.3g}); throw from further out, '
-                           'or carry less abruptly (larger release angle)', margin=margin)
+                           f'{tc * 1000:.3f} ms (margin {margin:.3g}); the carry holds the part '
+                           f'on edge {edge} for R in {_spans(model.domain_intervals(edge))}',
+                           margin=margin)
     if not R + part.u_l[edge] > 0:
         return DomainError('toe_stub', f'the left vertex of edge {edge} is not right of the '
                            'pivot')
-    if R < model.r_grasp[edge]:
-        return DomainError('carry_domain', f'on edge {edge} the finite carry needs R >= '
-                           f'{model.r_grasp[edge]:.6g} m (below it the carry loses the grasp or '
-                           f'the returning arm meets the part); got R = {R:.6g} m',
-                           margin=model.r_grasp[edge] - R)
+    spans = model.domain_intervals(edge)
+    if spans and R < spans[0][0]:
+        return DomainError('carry_domain', f'on edge {edge} the returning arm meets the part '
+                           f'below R = {spans[0][0]:.6g} m; got R = {R:.6g} m (domain: '
+                           f'{_spans(spans)})', margin=spans[0][0] - R)
     return None
+
+
+def _spans(spans):
+    if not spans:
+        return ('no radius at all (the carry is too abrupt for contact.mu: carry over a larger '
+                'release angle, or give a larger mu)')
+    return ' and '.join(f'[{lo:.6g}, {hi:.6g}] m' for lo, hi in spans)
 
 
 def domain_note(model, params):
     """One line for ``throwmap grasp``: the carry's own domain next to the impulse cone's."""
+    spans = []
+    for i in model.part.stable_edges:
+        ranges = ' and '.join(f'[{lo * 100:.3f}, {hi * 100:.3f}] cm'
+                              for lo, hi in model.domain_intervals(i))
+        spans.append(f'E{i}: {ranges or "none"}')
     return (f'with the finite carry (release at {math.degrees(params.release_angle):g} deg, '
-            f'mu = {params.mu:g}): R >= '
-            + ', '.join(f'{model.r_grasp[i] * 100:.3f} cm on E{i}'
-                        for i in model.part.stable_edges))
+            f'mu = {params.mu:g}): ' + ', '.join(spans))

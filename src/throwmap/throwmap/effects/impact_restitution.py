@@ -42,8 +42,10 @@ negative).
 
 Hooks: ``impact`` (the law above, and whether the part bounces off) and the contact law (mu,
 the pivot model, and whether the law is the sticking one, for the event simulator's settling
-rule). Limit: e = 0 with mu = inf (or large enough that no impulse reaches the cone) is the
-sticking model; the throw map then equals the base model's (tested). mu is contact.mu, the same
+rule). Limit: e = 0 with mu = inf is the sticking model wherever eqs 7-9 give a normal impulse
+>= 0; where they would need a pulling one, a contact cannot pull and Routh's limit (tested
+against brute-force Routh with mu = 1e3) differs from them. On the throws of the shipped parts
+the throw map then equals the base model's (tested). mu is contact.mu, the same
 coefficient the grasp bounds (2) and (4) use; without it the arm's friction is unbounded.
 
 Scene: contact: {restitution: 0.3, mu: 0.8, bounce_threshold: 0.01, pivot: hinge};
@@ -117,9 +119,10 @@ def routh_stronge_impact(rx, ry, vx, vy, om, rho2, e, mu):
     """
     Frictional impact at a contact point r = (rx, ry) from the CM on the arm (normal +y).
 
-    Routh's method with Stronge's energetic restitution (module docstring). mu = inf stops slip
-    at once; with e = 0 the result is then the sticking impact of eqs 7-9. Returns
-    (vx, vy, om).
+    Routh's method with Stronge's energetic restitution (module docstring). mu = inf is the
+    limit mu -> inf: slip stops at zero normal impulse unless the approach stops first; with
+    e = 0 the result is the sticking impact of eqs 7-9 wherever that impulse pushes (>= 0).
+    Returns (vx, vy, om).
     """
     ut = vx - om * ry
     un = vy + om * rx
@@ -133,13 +136,16 @@ def routh_stronge_impact(rx, ry, vx, vy, om, rho2, e, mu):
     pn = 0.0
     eps = 1e-13 * (abs(ut) + abs(un))
     if math.isinf(mu) and ut != 0.0:
-        # unbounded friction: a tangential impulse stops the slip at once
+        # Unbounded friction (Routh as mu -> inf): a tangential impulse at zero normal impulse
+        # until the slip stops or, if sooner, the approach does (compression then ends with
+        # zero work, so restitution adds nothing and the point leaves still slipping).
         d_pt = -ut / ktt
+        if un + ktn * d_pt >= 0.0:
+            d_pt = -un / ktn
+            return vx + d_pt, vy, om - ry * d_pt * inv
         pt += d_pt
         ut = 0.0
         un += ktn * d_pt
-        if un >= 0.0:
-            return vx + pt, vy, om - ry * pt * inv
     work = 0.0
     compressing = True
     target = 0.0
@@ -165,17 +171,21 @@ def routh_stronge_impact(rx, ry, vx, vy, om, rho2, e, mu):
             step = -ut / dut
             ends_slip = True
         if compressing:
-            if dun <= 0.0:
-                # No normal impulse can stop the approach while slipping (Painleve jam): the
-                # contact sticks instead (the impulse that stops the point, as in eqs 7-9).
+            if dun > 0.0:
+                s_c = -un / dun
+                if s_c <= step:
+                    step = s_c
+                    ends_slip = False
+            elif not ends_slip:
+                # No normal impulse stops the approach and the slip never ends: cannot happen
+                # for a rigid lamina (a jam's slip dies out, below), kept as a guard: stick.
                 det = ktt * knn - ktn * ktn
                 pt -= (knn * ut - ktn * un) / det
                 pn -= (-ktn * ut + ktt * un) / det
                 return vx + pt, vy + pn, om + (rx * pn - ry * pt) * inv
-            s_c = -un / dun
-            if s_c <= step:
-                step = s_c
-                ends_slip = False
+            # Else a jam (Painleve): while slipping the approach speeds up, but the slip dies
+            # out first; the contact then sticks (|ktn| / ktt < knn / |ktn| <= mu) and
+            # compression ends with the point at rest; restitution follows as always.
         else:
             # W(p + s) = work + un s + dun s^2 / 2 reaches the target
             rem = target - work
