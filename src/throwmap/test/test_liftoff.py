@@ -12,15 +12,13 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Effect air_drag: its limit (drag 0 is the base model bit for bit), its physics, bad input."""
-
 """
 The pivot's normal force (issue 12) and effect liftoff.
 
 The closed form of throwmap.catch against a hand computation and a Newton-Euler integration of
 the rolling part (scipy); effect liftoff: bit-identical to the base model where every roll stays
-in the friction cone, energy never gained through a slip or a hop, agreement with the base
-model's count of pulling throws, and its errors.
+in the friction cone, energy never gained through a slip or a hop, and its parameters and
+conflicts.
 """
 
 import math

@@ -362,7 +362,7 @@ def _normal_note(low):
         return 'pivot normal force: not computed (the event simulator checks it while it rolls)'
     if math.isinf(low):
         return 'pivot normal force: no roll'
-    verdict = ('the roll needs the arm to PULL the part: the paper\'s rolling assumption fails '
+    verdict = ("the roll needs the arm to PULL the part: the paper's rolling assumption fails "
                '(effect liftoff simulates it)' if low < 0 else 'the arm pushes throughout')
     return f'smallest pivot normal force {low:.3f} m/s^2 per unit mass: {verdict}'
 

@@ -200,4 +200,3 @@ def pull_share(model, ls, throws=400):
     pulling = int(np.sum(low < 0.0))
     return {'throws': int(low.size), 'pulling': pulling, 'share': pulling / low.size,
             'worst': float(low.min())}
-

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Effect liftoff: the arm pushes the rolling part but never pulls it; where it would, the part leaves.
+Effect liftoff: the arm pushes the rolling part, never pulls it; where it would, the part leaves.
 
 Physics: the paper rolls the part about its contact vertex as about a hinge. Per unit mass the
 arm's forces on that vertex are, in closed form (throwmap.catch, docs/physics.md),
