@@ -209,6 +209,147 @@ def pymunk_rows(model, states, ref, configs):
     return rows
 
 
+# ----------------------------------------------------------------------------------- liftoff
+# Parts for the engine comparison: the paper's triangle and two others, base model physics
+# (sticking catch, no effect) at the triangle's section V.A parameters.
+LIFTOFF_PARTS = {
+    'triangle': {'vertices': [[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]], 'offset': -0.005},
+    'rectangle 5 x 2 cm': {'vertices': [[0, 0], [0.05, 0], [0.05, 0.02], [0, 0.02]],
+                           'offset': -0.003},
+    'house 4 x 5 cm': {'vertices': [[0, 0], [0.04, 0], [0.04, 0.03], [0.02, 0.05],
+                                    [0, 0.03]], 'offset': -0.012},
+}
+ENGINE_DT = 1e-5
+ENGINE_ITERATIONS = 30
+
+
+def liftoff_scene(name, effect, mu=None):
+    spec = LIFTOFF_PARTS[name]
+    data = {'name': name, 'part': {'vertices': spec['vertices']},
+            'arm': {'offset': spec['offset']}, 'throw': {'release_speed': 5.5851},
+            'gravity': -9.66}
+    if effect:
+        data['effects'] = ['liftoff']
+        if mu is not None:
+            data['liftoff'] = {'mu': mu}
+    return Scene(data)
+
+
+def pymunk_catch(part, edge, R, w, h, g, dt=ENGINE_DT, iterations=ENGINE_ITERATIONS, mu=1e6):
+    """pymunk_throw that also returns how high the lowest vertex rose after the first contact.
+
+    A rise above the engine's penetration scale (1e-5 m) after the part first touched the arm
+    is a hop: a catch that sticks and rolls never lifts its pivot.
+    """
+    import pymunk
+    space = pymunk.Space()
+    space.gravity = (0.0, g)
+    space.iterations = iterations
+    space.collision_slop = 1e-5
+    arm = pymunk.Segment(space.static_body, (-1.0, h), (2.0, h), 0.0)
+    arm.friction = mu            # pymunk's friction coefficient is the product of the two
+    arm.elasticity = 0.0
+    body = pymunk.Body(1.0, part.rho2)
+    verts = [(float(u), float(v)) for u, v in zip(part.U[edge], part.V[edge])]
+    shape = pymunk.Poly(body, verts, radius=0.0)
+    shape.friction = 1.0
+    shape.elasticity = 0.0
+    x0, y0, phi0, vx, vy, om = release_state(edge, R, w, h, 0.0, part.d)
+    body.position = (x0, y0)
+    body.angle = phi0
+    body.velocity = (vx, vy)
+    body.angular_velocity = om
+    space.add(arm, body, shape)
+    t = 0.0
+    quiet = 0.0
+    airborne = False       # the part starts on the arm: its flight must begin first
+    touched = False
+    hop = 0.0
+    u = [p[0] for p in verts]
+    v = [p[1] for p in verts]
+    while t < 4.0:
+        space.step(dt)
+        t += dt
+        a = body.angle
+        c, s = math.cos(a), math.sin(a)
+        low = body.position.y + min(s * ui + c * vi for ui, vi in zip(u, v)) - h
+        if touched:
+            hop = max(hop, low)
+        elif airborne and low < 1e-5:
+            touched = True
+        elif low > 1e-4:
+            airborne = True
+        vel = body.velocity
+        if math.hypot(vel.x, vel.y) < 1e-3 and abs(body.angular_velocity) < 0.02:
+            quiet += dt
+            if quiet >= 0.15:
+                break
+        else:
+            quiet = 0.0
+    ang = body.angle
+    best, err = -1, math.inf
+    for j in part.stable_edges:
+        target = part.rest_angle[j] - part.rest_angle[edge]
+        dev = abs(math.remainder(ang - target, 2 * math.pi))
+        if dev < err:
+            best, err = j, dev
+    return best, float(body.position.x), hop
+
+
+def liftoff_comparison(n_throws, mu, seed=3):
+    """Base model and effect liftoff against pymunk at dt 1e-5 s: |dR| for pushing / pulling."""
+    print(f'\n### Lift-off: the base model and effect liftoff (mu {mu:g}) against pymunk '
+          f'{__import__("pymunk").version} (dt {ENGINE_DT:g} s, {ENGINE_ITERATIONS} iterations, '
+          f'restitution 0, friction {mu:g}; {n_throws} random throws per part)\n')
+    print('| part | rolls | throws | edge differs (base / liftoff) | base: median, max abs dR '
+          '(mm) | liftoff: median, max abs dR (mm) | engine hops (> 0.01 mm) |')
+    print('|---|---|---:|---:|---:|---:|---:|')
+    for name in LIFTOFF_PARTS:
+        base = liftoff_scene(name, False).model
+        lift = liftoff_scene(name, True, mu).model
+        edges, radii = random_states(base, n_throws, seed=seed, r_hi=0.25)
+        rb = [base.throw(int(e), float(r)) for e, r in zip(edges, radii)]
+        rl = lift.f_batch(edges, radii)
+        eng = [pymunk_catch(base.part, int(e), float(r), base.w, base.h, base.g, mu=mu)
+               for e, r in zip(edges, radii)]
+        pull = np.array([x.min_normal_force < 0.0 for x in rb])
+        for label, sel in (('push throughout', ~pull), ('need a pull', pull)):
+            idx = np.flatnonzero(sel)
+            if not idx.size:
+                print(f'| {name} | {label} | 0 | - | - | - | - |')
+                continue
+            e_eng = np.array([eng[i][0] for i in idx])
+            r_eng = np.array([eng[i][1] for i in idx])
+            hops = sum(eng[i][2] > 1e-5 for i in idx)
+
+            def stats(e_m, r_m):
+                same = e_m == e_eng
+                d = np.abs(r_m[same] - r_eng[same]) * 1e3
+                return int(np.sum(~same)), (f'{np.median(d):.3f}, {d.max():.3f}' if d.size
+                                            else '-')
+            nb, sb = stats(np.array([rb[i].edge for i in idx]),
+                           np.array([rb[i].R for i in idx]))
+            nl, sl = stats(rl['edge'][idx], rl['R'][idx])
+            print(f'| {name} | {label} | {idx.size} | {nb} / {nl} | {sb} | {sl} | {hops} |')
+
+
+def orbit_pull_count(throws=400):
+    """On the triangle's orbit from (1, 12 cm): throws that need a pull, and engine hops."""
+    m = load('triangle').model
+    e, r, _ = m.orbit_arrays(1, 0.12, throws)
+    states = list(zip(e[:throws], r[:throws]))
+    low = np.array([m.throw(int(a), float(b)).min_normal_force for a, b in states])
+    hop = np.array([pymunk_catch(m.part, int(a), float(b), m.w, m.h, m.g)[2]
+                    for a, b in states])
+    print(f"\n### The triangle's orbit from (1, 12 cm), {throws} throws\n")
+    print(f'* need a pull (N < 0 in a roll): {int(np.sum(low < 0))}, worst N = '
+          f'{low.min():.3f} m/s^2')
+    for thr in (1e-6, 1e-5, 1e-4):
+        both = int(np.sum((hop > thr) & (low < 0)))
+        print(f'* pymunk: the lowest vertex rose more than {thr * 1e3:g} mm after the first '
+              f'contact in {int(np.sum(hop > thr))} throws ({both} of them need a pull)')
+
+
 # ----------------------------------------------------------------------------------- main
 def fmt(v, spec):
     if isinstance(v, str):
@@ -263,7 +404,16 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--quick', action='store_true', help='fewer states, knobs and throws')
     parser.add_argument('--out', default=str(ROOT / 'docs' / 'accuracy_pareto.png'))
+    parser.add_argument('--liftoff', action='store_true',
+                        help='only the lift-off comparison against pymunk at dt 1e-5 s')
+    parser.add_argument('--mu', type=float, nargs='+', default=[1e6, 1.0],
+                        help='arm friction coefficients of the lift-off comparison')
     args = parser.parse_args()
+    if args.liftoff:
+        for mu in args.mu:
+            liftoff_comparison(20 if args.quick else 100, mu)
+        orbit_pull_count(40 if args.quick else 400)
+        return
     quick = args.quick
     n_states = 100 if quick else 1000
     orbit_throws = 100 if quick else 300

@@ -34,7 +34,7 @@ import numpy as np
 
 from .basins import Basin, basin, default_grid, design_radii
 from .errors import ThrowmapError
-from .orbits import limit_set, LimitSet
+from .orbits import limit_set, LimitSet, pull_share
 from .sensor import sensor_design, SensorDesign
 from .stochastic import stochastic_summary
 
@@ -60,6 +60,7 @@ class Analysis:
     basin: Basin
     sensor: SensorDesign
     stochastic: dict = None     # noisy scenes: outcome distribution, P(goal | detection)
+    pull: dict = None           # limit-set throws whose rolls need a pull (orbits.pull_share)
 
     def as_dict(self):
         d = {'start': {'edge': self.start[0], 'R': self.start[1]},
@@ -67,6 +68,7 @@ class Analysis:
              'basin': self.basin.summary(), 'sensor': self.sensor.as_dict()}
         if self.stochastic is not None:
             d['stochastic'] = self.stochastic
+        d['pull'] = self.pull
         return d
 
 
@@ -96,7 +98,7 @@ def analyse(scene, throws=10_000, grid_radii=50, grid_throws=200, progress=None)
     if noisy:
         stoch = stochastic_summary(model, sensor, start, (e, r), throws=min(throws, 2000),
                                    grid_throws=grid_throws, seeds=8, reference=ls)
-    return Analysis(start, ls, radii, bas, sensor, stoch)
+    return Analysis(start, ls, radii, bas, sensor, stoch, pull_share(model, ls))
 
 
 def scene_analysis(scene, sensor_radius=0.0, analysis=None):

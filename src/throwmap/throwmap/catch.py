@@ -31,7 +31,7 @@ import math
 
 from .jit import njit
 from .status import (ERR_SETTLE_CAP, EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_LANDING,
-                     EV_TIP_FROM_REST, OK)
+                     EV_LIFTOFF, EV_TIP_FROM_REST, OK)
 
 HALF_PI = 0.5 * math.pi
 
@@ -285,3 +285,114 @@ def catch_at_contact(k, rot0, rx, ry, x_cm, xdot, ydot, om, e_flight, g_abs, par
     status, j1, r1, rot, imp, nrec, x_lo, x_hi = settle(k, alpha, omega, xk, g_abs, part, knobs,
                                                         rec, nrec)
     return status, j1, r1, rot0 + rot, imp + 1, nrec, x_lo, x_hi
+
+
+# --------------------------------------------------------------------------------- pivot force
+# Rolling about a pinned vertex P at distance l from the CM (inertia I = rho^2 + l^2 per unit
+# mass about P), the energy constant K = omega^2 + 2 |g| l sin(alpha) / I fixes omega at every
+# angle. The arm's normal force on the part per unit mass is then (docs/physics.md derives it)
+#     N(s) = |g| (1 - l^2 / I) + 3 |g| l^2 s^2 / I - l K s,     s = sin(alpha),
+# a convex quadratic in s: its smallest value over a segment is exact in closed form.
+
+
+@njit
+def pivot_normal(s, energy_k, lp, inertia, g_abs):
+    """Return the normal force per unit mass at the pivot when sin(alpha) = s (see above)."""
+    return (g_abs * (1.0 - lp * lp / inertia) + 3.0 * g_abs * lp * lp * s * s / inertia
+            - lp * energy_k * s)
+
+
+@njit
+def roll_pieces(alpha, omega, target, lp, inertia, g_abs):
+    """
+    Split a roll from alpha (rate omega) to target into pieces along which sin(alpha) is monotone.
+
+    Returns (energy constant K, peak sin, whether there is a second piece, the rate's sign on
+    the first piece and on the second): the first piece runs from sin(alpha) to the peak, the
+    second from the peak down to sin(target). A roll that turns back (omega against the
+    direction of target: settle's fall the other way) peaks where omega = 0.
+    """
+    energy_k = omega * omega + 2.0 * g_abs * lp * math.sin(alpha) / inertia
+    direction = 1.0 if target > alpha else -1.0
+    s0 = math.sin(alpha)
+    s1 = math.sin(target)
+    if omega * direction < 0.0:
+        peak = min(energy_k * inertia / (2.0 * g_abs * lp), 1.0)
+        return energy_k, peak, True, -direction, direction
+    if min(alpha, target) <= HALF_PI <= max(alpha, target):
+        return energy_k, 1.0, True, direction, direction
+    if s1 >= s0:
+        return energy_k, s1, False, direction, direction
+    return energy_k, s0, True, direction, direction
+
+
+@njit
+def roll_min_normal(alpha, omega, target, lp, rho2, g_abs):
+    """Return the smallest normal force per unit mass at the pivot over a roll (exact)."""
+    inertia = rho2 + lp * lp
+    energy_k, peak, _, _, _ = roll_pieces(alpha, omega, target, lp, inertia, g_abs)
+    s_lo = min(math.sin(alpha), math.sin(target))
+    s_v = energy_k * inertia / (6.0 * g_abs * lp)    # the parabola's vertex
+    s = min(max(s_v, s_lo), peak)
+    return pivot_normal(s, energy_k, lp, inertia, g_abs)
+
+
+@njit
+def roll_liftoff(alpha, omega, target, lp, rho2, g_abs):
+    """
+    Return (alpha, omega) where a roll first needs a pulling force (N < 0), else (nan, nan).
+
+    Along each monotone piece (roll_pieces) the first root of N(s) = 0 in the direction of
+    travel; a roll that needs a pull at its start lifts off there.
+    """
+    inertia = rho2 + lp * lp
+    energy_k, peak, two, sg1, sg2 = roll_pieces(alpha, omega, target, lp, inertia, g_abs)
+    s0 = math.sin(alpha)
+    s1 = math.sin(target)    # (a single piece ends at its peak, sin(target))
+    if pivot_normal(s0, energy_k, lp, inertia, g_abs) < 0.0:
+        return alpha, omega
+    a2 = 3.0 * g_abs * lp * lp / inertia
+    c0 = g_abs * (1.0 - lp * lp / inertia)
+    disc = lp * lp * energy_k * energy_k - 4.0 * a2 * c0
+    if disc <= 0.0:
+        return math.nan, math.nan
+    root = math.sqrt(disc)
+    r1 = (lp * energy_k - root) / (2.0 * a2)
+    r2 = (lp * energy_k + root) / (2.0 * a2)
+    s_lift = math.nan
+    first = True
+    if s0 < r1 <= peak:
+        s_lift = r1
+    elif two and s1 <= r2 < peak:
+        s_lift = r2
+        first = False
+    if math.isnan(s_lift):
+        return math.nan, math.nan
+    # Which side of the top: the first piece lies on alpha's side, the second on target's.
+    side = alpha if first else target
+    a_lift = math.asin(min(s_lift, 1.0))
+    if side > HALF_PI:
+        a_lift = math.pi - a_lift
+    w2 = max(energy_k - 2.0 * g_abs * lp * s_lift / inertia, 0.0)
+    return a_lift, (sg1 if first else sg2) * math.sqrt(w2)
+
+
+@njit
+def records_min_normal(rec, nrec, vrad, rho2, g_abs):
+    """
+    Return the smallest pivot normal force over the rolls in a catch's records, inf if none.
+
+    A roll is a landing or liftoff row that names its pivot (the closed-form catch's; the event
+    simulator's rows carry none).
+    """
+    low = math.inf
+    for i in range(min(nrec, rec.shape[0])):
+        kind = rec[i, 0]
+        if kind != EV_LANDING and kind != EV_LIFTOFF:
+            continue
+        p = rec[i, 8]
+        if not p >= 0.0:
+            continue
+        n = roll_min_normal(rec[i, 9], rec[i, 10], rec[i, 11], vrad[int(p)], rho2, g_abs)
+        low = min(low, n)
+    return low

@@ -31,7 +31,7 @@ from . import search as design_search
 from .analysis import analyse
 from .basins import basin, default_grid
 from .errors import ThrowmapError
-from .orbits import limit_set, orbit
+from .orbits import limit_set, orbit, pull_share
 from .scene import load_scene
 from .status import LOST, OK
 
@@ -348,6 +348,7 @@ def cmd_throw(scene, args, out):
             out.write(f'({res.edge0}, {res.R0 * 100:.4f} cm) -> ({res.edge}, '
                       f'{res.R * 100:.4f} cm): {res.kind}, flight {res.flight_time * 1000:.2f} '
                       f'ms, net rotation {math.degrees(res.net_rotation):.2f} deg\n')
+            out.write(f'  {_normal_note(res.min_normal_force)}\n')
         if not args.json:
             _table([{'impact': k, 'kind': i.kind, 'vertex': i.vertex,
                      'edge landed': i.edge if i.edge >= 0 else '-',
@@ -360,6 +361,23 @@ def cmd_throw(scene, args, out):
         return 0
     # Batch: one JSON object per line on stdin, one answer per line, in order.
     return throw_batch(model, sys.stdin, out, as_json=args.json)
+
+
+def _normal_note(low):
+    if math.isnan(low):
+        return 'pivot normal force: not computed (the event simulator checks it while it rolls)'
+    if math.isinf(low):
+        return 'pivot normal force: no roll'
+    verdict = ("the roll needs the arm to PULL the part: the paper's rolling assumption fails "
+               '(effect liftoff simulates it)' if low < 0 else 'the arm pushes throughout')
+    return f'smallest pivot normal force {low:.3f} m/s^2 per unit mass: {verdict}'
+
+
+def _pull_line(pull):
+    if pull is None:
+        return 'pulling force: not computed (the event simulator checks it while it rolls)'
+    return (f'{pull["pulling"]} of {pull["throws"]} limit-set throws ({pull["share"] * 100:.1f} '
+            f'%) need the arm to pull the rolling part (worst {pull["worst"]:.3f} m/s^2)')
 
 
 def _start(scene, args):
@@ -390,8 +408,10 @@ def cmd_orbit(scene, args, out):
 def cmd_limit_set(scene, args, out):
     edge, R = _start(scene, args)
     ls = limit_set(scene.model, edge, R, args.throws)
+    pull = pull_share(scene.model, ls)
     d = ls.as_dict()
-    d.update({'scene': scene.name, 'start': {'edge': edge, 'R': R}, 'throws': args.throws})
+    d.update({'scene': scene.name, 'start': {'edge': edge, 'R': R}, 'throws': args.throws,
+              'pull': pull})
     if args.json:
         _dump(d, out)
         return 0
@@ -401,6 +421,7 @@ def cmd_limit_set(scene, args, out):
     cl = d['cycle_length']
     out.write(f'  cycle length: {cl["min"]:.0f}..{cl["max"]:.0f} throws, mean {cl["mean"]:.2f}\n')
     out.write(f'  transient: {ls.transient} throws\n')
+    out.write(f'  {_pull_line(pull)}\n')
     _table([{'edge': e, 'R min (cm)': f'{lo * 100:.3f}', 'R max (cm)': f'{hi * 100:.3f}',
              'jogs per visit': '{}..{}'.format(*ls.jogs.get(e, ('-', '-')))}
             for e, (lo, hi) in sorted(ls.bands.items())],
@@ -455,6 +476,7 @@ def cmd_design(scene, args, out):
               f'{s.reach_radius * 100:.2f} cm\n')
     out.write(f'  sensor at {s.radius * 100:.2f} cm: fires on {s.detection_rate * 100:.1f} % of '
               f'limit-set throws; trust it after {s.warmup_throws} warm-up throws\n')
+    out.write(f'  {_pull_line(an.pull)}\n')
     if an.stochastic is not None:
         st = an.stochastic
         sp = st['sensor']

@@ -94,6 +94,8 @@ SLOT_CODE = {
     'static_hold': ('phi, om, turned, size, pu, pv, g, edge, prm', 'first_held',
                     'event_sim.no_hold'),
     'impact': ('rx, ry, vx, vy, om, rho2, prm', 'one', 'event_sim.sticking_law'),
+    'closed_motion': ('edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec', 'one',
+                      'pipeline.closed_motion'),
 }
 
 
@@ -156,8 +158,9 @@ def source(slots):
             text += _slot(slot, fillers[slot])
         text += ('simulate = event_sim.build(body_force, static_hold, impact)\n'
                  'motion = pipeline.event_motion(simulate)\n')
-    else:
-        text += 'motion = pipeline.closed_motion     # ballistic flight, the closed-form catch\n'
+    else:   # ballistic flight and the closed-form catch (or an effect's version of them)
+        text += _slot('closed_motion', fillers['closed_motion'])
+        text += 'motion = closed_motion\n'
     return text + ENTRIES
 
 

@@ -105,6 +105,7 @@ class EffectModel(ThrowModel):
                                                        settle_rule),
                            laws[0][1] if laws else STICKING_CONTACT)
         filled = {s for slots in self.slots.values() for s in slots}
+        self._event_motion = bool(filled & set(EVENT_SLOTS))    # compose: the event simulator
         self._draws = 'perturb' in filled
         self._sensor_models = [(m.read_sensor, p) for _, m, p in modules
                                if hasattr(m, 'read_sensor')]
@@ -233,9 +234,11 @@ class EffectModel(ThrowModel):
         traj = None
         if trajectory and st == OK and self._base_motion:
             traj = ThrowModel.throw(self, edge, R, trajectory=True, samples=samples).trajectory
+        low = math.nan if self._event_motion else self._min_normal(rec, nrec)
         return EffectThrowResult(int(edge), float(R), int(j), float(r1), kind, float(t),
                                  float(rot), int(k0), impacts_from_records(rows), float(e0),
-                                 traj, float(w), float(h), reason)
+                                 traj, min_normal_force=low, release_speed=float(w),
+                                 offset=float(h), lost_reason=reason)
 
     def f_batch(self, edges, radii):
         edges, radii, out = batch_buffers(edges, radii)

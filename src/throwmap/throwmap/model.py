@@ -22,7 +22,7 @@ import numpy as np
 
 from . import base_map, status
 from .accuracy import Accuracy, compiled_knobs, SETTLE_RULES
-from .catch import is_jog, throw_kind
+from .catch import is_jog, records_min_normal, throw_kind
 from .errors import DomainError, InputError
 from .grasp import edge_grasp, grasp_table
 from .jit import entry_point
@@ -67,13 +67,25 @@ class ThrowResult:
     impacts: tuple
     release_energy: float   # J/kg over the arm surface, right after release
     trajectory: object = field(default=None, compare=False)
+    # The smallest normal force per unit mass (m/s^2) the arm exerts on the pivot while the
+    # part rolls (catch.records_min_normal): negative, the roll needs the arm to pull, which a
+    # real arm cannot (the part hops; effect liftoff). inf: no roll; nan: not computed (the
+    # event simulator's catch, which checks the sign itself where its contact law lifts off).
+    min_normal_force: float = math.nan
+
+    @property
+    def needs_pull(self):
+        """Tell whether a roll of this throw needs the arm to pull the part (N < 0)."""
+        return self.min_normal_force < 0.0
 
     def as_dict(self):
         return {'edge0': self.edge0, 'R0': self.R0, 'edge': self.edge, 'R': self.R,
                 'kind': self.kind, 'flight_time': self.flight_time,
                 'net_rotation': self.net_rotation,
                 'first_contact_vertex': self.first_contact_vertex,
-                'impacts': [vars(i) for i in self.impacts]}
+                'impacts': [vars(i) for i in self.impacts],
+                'min_normal_force': (self.min_normal_force
+                                     if math.isfinite(self.min_normal_force) else None)}
 
 
 def _state_arrays(edges, radii):
@@ -324,7 +336,12 @@ class ThrowModel:
             traj = throw_trajectory(self, edge, R, t, rec[:nrec], samples)
         return ThrowResult(int(edge), float(R), int(j), float(r1), throw_kind(edge, j, rot),
                            float(t), float(rot), int(k0), impacts_from_records(rec[:nrec]),
-                           float(e0), traj)
+                           float(e0), traj, self._min_normal(rec, nrec))
+
+    def _min_normal(self, rec, nrec):
+        # Outside f: the hot path stays as fast as before (bench/throwmap_speed.py).
+        part = self.part.arrays
+        return float(records_min_normal(rec, nrec, part.vrad, part.rho2, -self.g))
 
     def f_batch(self, edges, radii):
         """

@@ -21,6 +21,7 @@ edge, the jog counts, the cycle lengths and the transient.
 """
 
 from dataclasses import dataclass
+import math
 
 import numpy as np
 
@@ -177,3 +178,25 @@ def limit_set(model, edge, R, throws=2000, tail_fraction=0.5):
                        f'{len(orb.edges) - 1}: there is no limit set; start elsewhere or '
                        'lengthen arm.length', after=len(orb.edges) - 2)
     return limit_set_from_orbit(orb.edges, orb.radii, orb.rotations, tail_fraction)
+
+
+def pull_share(model, ls, throws=400):
+    """
+    Count the limit set's throws whose rolls need the arm to pull (min_normal_force < 0).
+
+    The last ``throws`` states of the limit set's tail are thrown again (noise-free: the
+    deterministic map) with their full results. Returns {'throws', 'pulling', 'share', 'worst'
+    (the smallest normal force per unit mass, m/s^2)}, or None where the model's catch does not
+    carry the normal force (the event simulator's).
+    """
+    nominal = model.nominal()
+    edges = ls.tail_edges[-throws:]
+    radii = ls.tail_radii[-throws:]
+    if not edges.size or math.isnan(nominal.throw(int(edges[0]),
+                                                  float(radii[0])).min_normal_force):
+        return None
+    low = np.array([nominal.throw(int(e), float(r)).min_normal_force
+                    for e, r in zip(edges, radii)])
+    pulling = int(np.sum(low < 0.0))
+    return {'throws': int(low.size), 'pulling': pulling, 'share': pulling / low.size,
+            'worst': float(low.min())}

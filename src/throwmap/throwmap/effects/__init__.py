@@ -32,8 +32,10 @@ effect is one module of this package that owns its scene keys, its parsing and i
 ``slots(params)``
     the compiled hooks it fills with these parameters (none: the effect is the identity at
     these parameters, and no code of it is compiled). A slot is filled by a compiled function
-    of the module with the slot's name: ``perturb``, ``release``, ``check``
-    (throwmap.pipeline), ``body_force``, ``static_hold``, ``impact`` (throwmap.event_sim).
+    of the module with the slot's name: ``perturb``, ``release``, ``check``,
+    ``closed_motion`` (throwmap.pipeline; the last is the flight and catch when no effect
+    needs the event simulator), ``body_force``, ``static_hold``, ``impact``
+    (throwmap.event_sim).
 ``bundle(params, part, knobs)``
     the named tuple of compiled parameters its hooks receive as ``prm``.
 
@@ -58,13 +60,14 @@ REGISTRY = (
     'air_drag',
     'finite_carry',
     'impact_restitution',
+    'liftoff',
     'finite_arm',
     'release_noise',
     'sensor_noise',
 )
 MODULES = {name: importlib.import_module(f'{__name__}.{name}') for name in REGISTRY}
 NAMES = tuple(MODULES)
-SLOTS = ('perturb', 'release', 'body_force', 'static_hold', 'impact', 'check')
+SLOTS = ('perturb', 'release', 'body_force', 'static_hold', 'impact', 'check', 'closed_motion')
 EVENT_SLOTS = ('body_force', 'static_hold', 'impact')     # these need the event simulator
 
 

@@ -1,0 +1,270 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Effect liftoff: the arm pushes the rolling part, never pulls it; where it would, the part leaves.
+
+Physics: the paper rolls the part about its contact vertex as about a hinge. Per unit mass the
+arm's forces on that vertex are, in closed form (throwmap.catch, docs/physics.md),
+N(s) = |g| (1 - l^2/I) + 3 |g| l^2 s^2 / I - l K s and Ft = l cos(alpha) (3 |g| l s / I - K),
+with s = sin(alpha), alpha the angle of (CM - pivot) from the arm and K the roll's energy
+constant. A hinge could pull (N < 0); a real arm cannot. And where N reaches 0 the hinge still
+needs a tangential force Ft, which no friction can give at N = 0: there the free part's pivot
+vertex would accelerate INTO the arm (its free vertical acceleration is omega^2 l s - |g| < 0
+exactly where N = 0), so the part cannot simply fly off: it first slips, and lifts off when the
+normal force of the slipping contact turns negative (measured: docs/physics.md).
+
+Model: the closed-form catch (throwmap.catch) is run; the first roll that leaves the friction
+cone |Ft| <= mu N (N < 0 leaves it for every mu) is cut where it does (its path sampled, then
+bisection to 1e-14 rad), and from that rolling state the event simulator (throwmap.event_sim,
+no body force, the sticking impact law, a unilateral Coulomb contact with friction mu) slips,
+lifts off, flies, lands and settles. A throw whose rolls all stay in the cone is the base model's
+own, bit for bit (tested). mu: ``liftoff.mu``, else the scene's ``contact.mu``, else 1000 (the
+sticking limit: slip starts where N falls to |Ft| / 1000).
+
+With another effect that needs the event simulator (air_drag, backplate_friction), the whole
+throw runs there under this contact law. impact_restitution sets the contact law itself (its
+``contact.pivot: unilateral`` is this physics with restitution): a scene names one of them.
+
+Hooks: ``closed_motion``; Python: ``contact_law``. Scene: ``effects: [liftoff]``, optional
+``liftoff: {mu: 1000}``.
+"""
+
+from collections import namedtuple
+from dataclasses import dataclass
+import math
+
+import numpy as np
+
+from ._common import check_keys, number
+from .. import event_sim
+from ..ballistic import first_contact, state_at
+from ..catch import catch_at_contact, pivot_normal, record, roll_pieces
+from ..jit import njit
+from ..status import (ERR_SETTLE_CAP, EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_LANDING, EV_LIFTOFF,
+                      OK, REC_COLS)
+
+NAME = 'liftoff'
+SCHEMA = {'liftoff': ('mu',)}
+KNOBS = {}
+# The sticking limit: slip starts where |Ft| = MU_DEFAULT N, a 1e-3 fraction of N from its zero.
+MU_DEFAULT = 1000.0
+# Samples of a roll's path to find where it leaves the friction cone (then bisection).
+CONE_SAMPLES = 256
+# mu: the arm's friction while the part rolls on it; scratch: the closed-form catch writes its
+# events here to find the first roll that leaves the cone (f and f_batch pass no record
+# buffer), sized so that a catch under the impact cap always fits.
+LiftoffParams = namedtuple('LiftoffParams', ['mu', 'scratch'])
+SCRATCH_ROWS_MAX = 1 << 16
+
+
+@dataclass(frozen=True)
+class Liftoff:
+    """The arm's friction coefficient at the rolling vertex (large: the paper's sticking)."""
+
+    mu: float
+
+
+def parse(scene):
+    """From the scene's liftoff section (mu), else contact.mu, else MU_DEFAULT."""
+    sec = scene.section('liftoff')
+    check_keys(sec, set(SCHEMA['liftoff']), 'liftoff')
+    mu = number(sec, 'mu', 'liftoff', 'the friction coefficient of the rolling vertex (> 0)',
+                lo=0.0, lo_open=True)
+    if mu is None:
+        mu = scene.mu if scene.mu is not None else MU_DEFAULT
+    return Liftoff(float(mu))
+
+
+def slots(params):
+    """Fill the closed-form motion."""
+    return ('closed_motion',)
+
+
+def contact_law(params):
+    """For the event simulator: Coulomb friction mu, a pivot that may slip and lift off."""
+    return event_sim.ContactLaw(float(params.mu), True, True)
+
+
+def bundle(params, part, knobs):
+    """Return mu and the scratch record buffer (two rows per impact under the cap, and more)."""
+    rows = min(2 * int(getattr(knobs, 'max_impacts', SCRATCH_ROWS_MAX)) + 8, SCRATCH_ROWS_MAX)
+    return LiftoffParams(float(params.mu), np.zeros((rows, REC_COLS)))
+
+
+# After the cone: slip, flight, impacts under the sticking law, settling (no body force).
+simulate = event_sim.build()
+
+
+@njit
+def roll_forces(alpha, energy_k, lp, inertia, g_abs):
+    """Return the arm's normal and tangential force per unit mass on the pivot (N, Ft)."""
+    s = math.sin(alpha)
+    ft = lp * math.cos(alpha) * (3.0 * g_abs * lp * s / inertia - energy_k)
+    return pivot_normal(s, energy_k, lp, inertia, g_abs), ft
+
+
+@njit
+def _path(u, alpha, a_turn, target):
+    # The angle at arc length u along a roll from alpha (through a_turn) to target.
+    first = abs(a_turn - alpha)
+    if u <= first:
+        return alpha + math.copysign(u, a_turn - alpha), True
+    return a_turn + math.copysign(u - first, target - a_turn), False
+
+
+@njit
+def roll_cone_exit(alpha, omega, target, lp, rho2, g_abs, mu):
+    """
+    Return (alpha, omega) where a roll first leaves the friction cone |Ft| <= mu N, else nan.
+
+    N < 0 is outside it for every mu. The path (roll_pieces: through the turning point of a
+    roll that turns back) is sampled at CONE_SAMPLES points, the first one outside is refined
+    by bisection to 1e-14 rad.
+    """
+    inertia = rho2 + lp * lp
+    energy_k, peak, two, sg1, sg2 = roll_pieces(alpha, omega, target, lp, inertia, g_abs)
+    a_turn = alpha
+    if two and omega * (target - alpha) < 0.0:     # turns back where omega = 0
+        a_turn = math.asin(peak)
+        if alpha > 0.5 * math.pi:
+            a_turn = math.pi - a_turn
+    length = abs(a_turn - alpha) + abs(target - a_turn)
+    lo = 0.0
+    hi = -1.0
+    for i in range(CONE_SAMPLES + 1):
+        u = length * i / CONE_SAMPLES
+        a, _ = _path(u, alpha, a_turn, target)
+        n, ft = roll_forces(a, energy_k, lp, inertia, g_abs)
+        if n < 0.0 or abs(ft) > mu * n:
+            hi = u
+            break
+        lo = u
+    if hi < 0.0:
+        return math.nan, math.nan
+    if hi > 0.0:
+        for _ in range(200):
+            if hi - lo <= 1e-14:
+                break
+            mid = 0.5 * (lo + hi)
+            a, _ = _path(mid, alpha, a_turn, target)
+            n, ft = roll_forces(a, energy_k, lp, inertia, g_abs)
+            if n < 0.0 or abs(ft) > mu * n:
+                hi = mid
+            else:
+                lo = mid
+    a, first = _path(hi, alpha, a_turn, target)
+    w2 = max(energy_k - 2.0 * g_abs * lp * math.sin(a) / inertia, 0.0)
+    return a, (sg1 if first else sg2) * math.sqrt(w2)
+
+
+@njit
+def _touch(lo, hi, x):
+    if math.isfinite(x):
+        return min(lo, x), max(hi, x)
+    return lo, hi
+
+
+@njit
+def _copy_row(dst, i, src, k):
+    for c in range(src.shape[1]):
+        dst[i, c] = src[k, c]
+
+
+@njit
+def closed_motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec):
+    """
+    Fly and catch in closed form until a roll leaves the friction cone, then simulate events.
+
+    From there the event simulator slips, lifts off, flies, lands (sticking) and settles.
+
+    Returns the pipeline's motion tuple (throwmap.pipeline.closed_motion).
+    """
+    part = ctx.part
+    knobs = ctx.knobs
+    g = ctx.g
+    g_abs = -g
+    scratch = prm.scratch
+    nan = math.nan
+    status, t, k = first_contact(edge, y0, phi0, vy, om, g, part, knobs)
+    if status != OK:
+        return status, -1, nan, nan, nan, 0, -1, 0, math.inf, -math.inf
+    rx, ry, x_cm, xdot, ydot, phi, energy = state_at(t, edge, k, x0, y0, phi0, vx, vy, om, g,
+                                                     part)
+    st, j, r1, rot, imp, ns, lo, hi = catch_at_contact(k, phi, rx, ry, x_cm, xdot, ydot, om,
+                                                       energy, g_abs, part, knobs, scratch)
+    lift = -1
+    a_lift = nan
+    w_lift = nan
+    if st == OK:
+        for i in range(min(ns, scratch.shape[0])):
+            if scratch[i, 0] == EV_LANDING:
+                a_lift, w_lift = roll_cone_exit(scratch[i, 9], scratch[i, 10], scratch[i, 11],
+                                                part.vrad[int(scratch[i, 8])], part.rho2, g_abs,
+                                                prm.mu)
+                if not math.isnan(a_lift):
+                    lift = i
+                    break
+    if lift < 0:
+        for i in range(min(ns, scratch.shape[0])):
+            if i < rec.shape[0]:
+                _copy_row(rec, i, scratch, i)
+        return st, j, r1, t, rot, imp, k, ns, lo, hi
+    # Keep the events before the roll that leaves the cone; it ends there.
+    nrec = 0
+    impacts = 0
+    x_lo = math.inf
+    x_hi = -math.inf
+    rot_lift = rot
+    for i in range(ns):
+        kind = scratch[i, 0]
+        if i < lift:
+            if kind == EV_FLIGHT_IMPACT or kind == EV_FLAT_LANDING or kind == EV_LANDING:
+                impacts += 1
+            x_lo, x_hi = _touch(x_lo, x_hi, scratch[i, 3])
+            x_lo, x_hi = _touch(x_lo, x_hi, scratch[i, 12])
+            if kind == EV_FLAT_LANDING:   # the edge that landed flat: both its ends
+                jf = int(scratch[i, 2])
+                x_other = scratch[i, 3] + (part.edge_len[jf] if jf == int(scratch[i, 1])
+                                           else -part.edge_len[jf])
+                x_lo, x_hi = _touch(x_lo, x_hi, x_other)
+            if nrec < rec.shape[0]:
+                _copy_row(rec, nrec, scratch, i)
+            nrec += 1
+        elif kind == EV_LANDING:
+            rot_lift -= scratch[i, 11] - scratch[i, 9]
+    p = int(scratch[lift, 8])
+    xp = scratch[lift, 12]
+    a0 = scratch[lift, 9]
+    lp = part.vrad[p]
+    ca = math.cos(a_lift)
+    sa = math.sin(a_lift)
+    e_lift = 0.5 * (part.rho2 + lp * lp) * w_lift * w_lift + g_abs * lp * sa
+    nrec = record(rec, nrec, EV_LIFTOFF, p, -1, xp, w_lift, w_lift, e_lift, e_lift, p, a0,
+                  scratch[lift, 10], a_lift, xp)
+    # The rolling state where the cone is left, in the start edge's frame, handed to the
+    # event simulator (its records go to the scratch buffer, then after ours).
+    st, j, r1, _, rot, imp2, _, ns, lo, hi = simulate(
+        edge, xp + lp * ca, lp * sa, rot_lift + (a_lift - a0), -w_lift * lp * sa,
+        w_lift * lp * ca, w_lift, g, part, knobs, ctx.law, prm, scratch)
+    for i in range(min(ns, scratch.shape[0])):
+        if nrec < rec.shape[0]:
+            _copy_row(rec, nrec, scratch, i)
+        nrec += 1
+    impacts += imp2
+    if impacts > knobs.max_impacts and st == OK:
+        st = ERR_SETTLE_CAP
+    if st != OK:
+        return st, -1, nan, t, nan, impacts, k, nrec, x_lo, x_hi
+    return OK, j, r1, t, rot, impacts, k, nrec, min(x_lo, lo), max(x_hi, hi)
