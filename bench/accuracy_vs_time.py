@@ -140,12 +140,11 @@ def floor_row(group, model, ref, start, orbit_throws, band_throws):
 
 
 # ----------------------------------------------------------------------------------- pymunk
-def pymunk_throw(part, edge, R, w, h, g, dt, iterations, t_max=4.0, still=0.15):
-    """Throw and catch in pymunk from the impulsive release state of eqs 5-6.
+def pymunk_space(part, edge, R, w, h, g, iterations, arm_friction, part_friction):
+    """A pymunk space with the arm (static segment) and the part at eqs 5-6's release state.
 
-    The part is a convex Poly (mass 1, moment rho^2), the arm a static segment, friction 1e3
-    (effectively sticking) and elasticity 0. Returns (edge, R, time simulated) once the part
-    has been still (|v| < 1 mm/s, |omega| < 0.02 rad/s) for ``still`` seconds.
+    pymunk's friction coefficient of a contact is the product of the two shapes' frictions.
+    Returns (space, body, verts): verts are the outline in the body frame.
     """
     import pymunk
     space = pymunk.Space()
@@ -153,12 +152,12 @@ def pymunk_throw(part, edge, R, w, h, g, dt, iterations, t_max=4.0, still=0.15):
     space.iterations = iterations
     space.collision_slop = 1e-5          # m; the default 0.1 is meant for pixels
     arm = pymunk.Segment(space.static_body, (-1.0, h), (2.0, h), 0.0)
-    arm.friction = 1000.0
+    arm.friction = arm_friction
     arm.elasticity = 0.0
     body = pymunk.Body(1.0, part.rho2)
     verts = [(float(u), float(v)) for u, v in zip(part.U[edge], part.V[edge])]
     shape = pymunk.Poly(body, verts, radius=0.0)
-    shape.friction = 1000.0
+    shape.friction = part_friction
     shape.elasticity = 0.0
     x0, y0, phi0, vx, vy, om = release_state(edge, R, w, h, 0.0, part.d)
     body.position = (x0, y0)
@@ -166,6 +165,17 @@ def pymunk_throw(part, edge, R, w, h, g, dt, iterations, t_max=4.0, still=0.15):
     body.velocity = (vx, vy)
     body.angular_velocity = om
     space.add(arm, body, shape)
+    return space, body, verts
+
+
+def pymunk_throw(part, edge, R, w, h, g, dt, iterations, t_max=4.0, still=0.15):
+    """Throw and catch in pymunk from the impulsive release state of eqs 5-6.
+
+    The part is a convex Poly (mass 1, moment rho^2), the arm a static segment, friction 1e3
+    (effectively sticking) and elasticity 0. Returns (edge, R, time simulated) once the part
+    has been still (|v| < 1 mm/s, |omega| < 0.02 rad/s) for ``still`` seconds.
+    """
+    space, body, verts = pymunk_space(part, edge, R, w, h, g, iterations, 1000.0, 1000.0)
     t = 0.0
     quiet = 0.0
     while t < t_max:
@@ -241,25 +251,7 @@ def pymunk_catch(part, edge, R, w, h, g, dt=ENGINE_DT, iterations=ENGINE_ITERATI
     A rise above the engine's penetration scale (1e-5 m) after the part first touched the arm
     is a hop: a catch that sticks and rolls never lifts its pivot.
     """
-    import pymunk
-    space = pymunk.Space()
-    space.gravity = (0.0, g)
-    space.iterations = iterations
-    space.collision_slop = 1e-5
-    arm = pymunk.Segment(space.static_body, (-1.0, h), (2.0, h), 0.0)
-    arm.friction = mu            # pymunk's friction coefficient is the product of the two
-    arm.elasticity = 0.0
-    body = pymunk.Body(1.0, part.rho2)
-    verts = [(float(u), float(v)) for u, v in zip(part.U[edge], part.V[edge])]
-    shape = pymunk.Poly(body, verts, radius=0.0)
-    shape.friction = 1.0
-    shape.elasticity = 0.0
-    x0, y0, phi0, vx, vy, om = release_state(edge, R, w, h, 0.0, part.d)
-    body.position = (x0, y0)
-    body.angle = phi0
-    body.velocity = (vx, vy)
-    body.angular_velocity = om
-    space.add(arm, body, shape)
+    space, body, verts = pymunk_space(part, edge, R, w, h, g, iterations, mu, 1.0)
     t = 0.0
     quiet = 0.0
     airborne = False       # the part starts on the arm: its flight must begin first
