@@ -166,7 +166,7 @@ def run(args, scene_path, out, procs, t0):
     goal, radius = an.sensor.goal_edge, an.sensor.radius
     rclpy.init()
     node = rclpy.create_node('feeder_demo')
-    got = {k: [] for k in ('status', 'edge', 'radius', 'kind', 'ready')}
+    got = {k: [] for k in ('status', 'edge', 'radius', 'kind', 'ready', 'verdict')}
     diags = {}
 
     def keep(key):
@@ -181,6 +181,10 @@ def run(args, scene_path, out, procs, t0):
     node.create_subscription(Float64, '/feeder/predicted/radius', keep('radius'), reliable)
     node.create_subscription(String, '/feeder/predicted/throw_kind', keep('kind'), reliable)
     node.create_subscription(Bool, '/feeder/edge1_ready', keep('ready'), latched)
+    # One verdict per judged cycle, with its seq (edge1_ready is the latched state, which the
+    # monitor also republishes while idle: it cannot be matched to cycles by counting).
+    node.create_subscription(DiagnosticStatus, '/feeder/edge1_verdict', keep('verdict'),
+                             reliable)
     node.create_subscription(DiagnosticArray, '/diagnostics', on_diag, reliable)
 
     def spin_until(cond, timeout, what):
@@ -215,8 +219,13 @@ def run(args, scene_path, out, procs, t0):
         if not fut.result().success:
             raise SystemExit(f'demo_graph: enable {on} refused: {fut.result().message}')
 
-    base = len(got['ready'])            # the latched initial false
     printed = [0]
+
+    def seq_of(msg):
+        return int({kv.key: kv.value for kv in msg.values}['seq'])
+
+    def ready_of(msg):
+        return {kv.key: kv.value for kv in msg.values}.get('ready') == 'true'
 
     def states():
         """(edge, R) per cycle; a lost part (edge -1) has no predicted/radius (R None)."""
@@ -229,16 +238,15 @@ def run(args, scene_path, out, procs, t0):
         return out
 
     def report():
-        verdicts = got['ready'][base:]
-        offset = len(got['status']) - len(verdicts)    # cycles before the monitor listened
+        verdicts = got['verdict']
+        index = {seq_of(m): k for k, m in enumerate(got['status'])}
         known = states()
         while printed[0] < len(verdicts):
-            j = printed[0]
-            k = j + max(offset, 0)
-            if k >= len(known):
+            seq = seq_of(verdicts[printed[0]])
+            k = index.get(seq)
+            if k is None or k >= len(known):
                 break
-            if verdicts[j].data:
-                seq = int({kv.key: kv.value for kv in got['status'][k].values}['seq'])
+            if ready_of(verdicts[printed[0]]):
                 edge, R = known[k]
                 where = 'no part on the arm' if R is None else f'R = {100 * R:6.2f} cm'
                 print(f'  cycle {seq:4d}: edge1_ready  {where}, edge {edge}', flush=True)
@@ -266,15 +274,16 @@ def run(args, scene_path, out, procs, t0):
     # one whose part is not seen on the goal edge; a miss, a detection (the bit the sensor
     # sent: a noisy sensor's may differ from the geometry) on the goal edge not reported.
     n = len(got['status'])
-    verdicts = [m.data for m in got['ready'][base:]]
-    offset = n - len(verdicts)
+    verdict_of = {seq_of(m): ready_of(m) for m in got['verdict']}
+    judged = [k for k, m in enumerate(got['status']) if seq_of(m) in verdict_of]
+    first = judged[0] if judged else n      # cycles before it are ones the monitor missed
     rows, false_ready, missed, goal_seen = [], 0, 0, 0
     for k, (edge, R) in enumerate(states()[:n]):
         seen = edge >= 0 and bool(sees(scene.part, edge, R, radius, an.sensor.footprint))
         values = {kv.key: kv.value for kv in got['status'][k].values}
         bit = values.get('sensor') == '1'
-        j = k - offset
-        verdict = verdicts[j] if 0 <= j < len(verdicts) else None
+        j = k - first
+        verdict = verdict_of.get(int(values['seq']))
         if verdict and not (seen and edge == goal):
             false_ready += 1
         if bit and edge == goal and j + 1 >= an.sensor.warmup_throws:
