@@ -168,6 +168,17 @@ def pymunk_space(part, edge, R, w, h, g, iterations, arm_friction, part_friction
     return space, body, verts
 
 
+def resting_edge(part, edge, angle):
+    """The stable edge whose rest pose is nearest to a body angle (thrown from ``edge``)."""
+    best, err = -1, math.inf
+    for j in part.stable_edges:
+        target = part.rest_angle[j] - part.rest_angle[edge]
+        dev = abs(math.remainder(angle - target, 2 * math.pi))
+        if dev < err:
+            best, err = j, dev
+    return best
+
+
 def pymunk_throw(part, edge, R, w, h, g, dt, iterations, t_max=4.0, still=0.15):
     """Throw and catch in pymunk from the impulsive release state of eqs 5-6.
 
@@ -188,15 +199,7 @@ def pymunk_throw(part, edge, R, w, h, g, dt, iterations, t_max=4.0, still=0.15):
                 break
         else:
             quiet = 0.0
-    # Resting edge: the rest pose whose angle is nearest to the body's angle.
-    ang = body.angle
-    best, err = -1, math.inf
-    for j in part.stable_edges:
-        target = part.rest_angle[j] - part.rest_angle[edge]
-        dev = abs(math.remainder(ang - target, 2 * math.pi))
-        if dev < err:
-            best, err = j, dev
-    return best, float(body.position.x), t
+    return resting_edge(part, edge, body.angle), float(body.position.x), t
 
 
 def pymunk_rows(model, states, ref, configs):
@@ -278,14 +281,7 @@ def pymunk_catch(part, edge, R, w, h, g, dt=ENGINE_DT, iterations=ENGINE_ITERATI
                 break
         else:
             quiet = 0.0
-    ang = body.angle
-    best, err = -1, math.inf
-    for j in part.stable_edges:
-        target = part.rest_angle[j] - part.rest_angle[edge]
-        dev = abs(math.remainder(ang - target, 2 * math.pi))
-        if dev < err:
-            best, err = j, dev
-    return best, float(body.position.x), hop
+    return resting_edge(part, edge, body.angle), float(body.position.x), hop
 
 
 def liftoff_comparison(n_throws, mu, seed=3):
