@@ -618,6 +618,13 @@ def cmd_design_search(scene, args, out):
         _table([_cand_row(res.chosen)], cols, out)
     for cand, what in ((res.chosen, 'chosen'), (res.reference, 'scene design')):
         rb = (cand.robustness or {}) if cand is not None else {}
+        if 'audit_samples' in rb:
+            bound = rb['audit_miss_bound_95']
+            verdict = (f'missed fraction < {bound:.2g} with 95 % confidence' if rb['audit_misses']
+                       == 0 else 'the sampled verdict is not confirmed there')
+            out.write(f'  {what}: cell map audited at s {rb["joint_fraction"]:.4f} on '
+                      f'{rb["audit_samples"]} random samples of cell x box: '
+                      f'{rb["audit_misses"]} misses ({verdict})\n')
         if 'vertex_tolerance' in rb:
             out.write(f'  {what}: vertex tolerance {rb["vertex_tolerance"] * 1000:.2f} mm (every '
                       f'one of {rb["vertex_samples"]} perturbed parts per level keeps the limit '

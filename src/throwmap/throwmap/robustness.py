@@ -122,6 +122,87 @@ def build_cells(h, w, dh, dw, g, mu, part, knobs, rec, r_top, m, k_r, lo, hi, su
                 succ_lo[e, c, e] = max(succ_lo[e, c, e], c)
 
 
+@njit
+def audit_cells(h, w, dh, dw, g, mu, part, knobs, rec, lo, hi, succ_lo, succ_hi, escape,
+                progress, edges, cells, u_r, u_w, u_h, r_grasp, out):
+    """
+    Throw random interior samples of cell x box and count where the cell map is wrong.
+
+    Sample k: state (edges[k], R at fraction u_r[k] of cell cells[k]), speed w + dw u_w[k],
+    offset h + dh u_h[k] (u in [-1, 1]). A miss: the throw fails, lands outside the covered
+    range or on an edge the cell has no successor on, lands in a cell outside the cell's
+    successor range, or (a cell taken as jogging outwards) stays on its edge without moving
+    out. out[0] = samples thrown, out[1] = misses, out[2] = samples below R_min (skipped).
+    """
+    n = part.n
+    m = escape.shape[1]
+    out[0] = 0
+    out[1] = 0
+    out[2] = 0
+    for k in range(edges.size):
+        e = edges[k]
+        c = cells[k]
+        hh = h + dh * u_h[k]
+        ww = w + dw * u_w[k]
+        R = lo[e] + (c + u_r[k]) * (hi[e] - lo[e]) / m
+        for j in range(n):
+            _, r_grasp[j] = _r_min(j, hh, mu, part)
+        r_low, _ = _r_min(e, hh, mu, part)
+        if R < r_low:
+            out[2] += 1
+            continue
+        out[0] += 1
+        st, j, r1, _, rot, _, _, _ = throw_one(e, R, ww, g, hh, r_grasp, part, knobs, rec)
+        if st != OK or not (lo[j] <= r1 <= hi[j]) or succ_lo[e, c, j] < 0:
+            out[1] += 1
+            continue
+        cc = int(math.floor((r1 - lo[j]) / ((hi[j] - lo[j]) / m)))
+        if not (succ_lo[e, c, j] <= cc <= succ_hi[e, c, j]):
+            out[1] += 1
+        elif (j == e and cc == c and progress[e, c] > 0.0
+              and not (abs(rot) < math.pi and r1 > R)):
+            out[1] += 1
+
+
+@dataclass(frozen=True)
+class Audit:
+    """audit()'s answer: random samples of cell x box checked against the cell map."""
+
+    samples: int                # thrown
+    misses: int                 # images the map does not contain
+    skipped: int                # drawn below R_min at their offset
+    miss_bound_95: float        # with 95 % confidence the missed fraction is below this
+
+    def as_dict(self):
+        return {'audit_samples': self.samples, 'audit_misses': self.misses,
+                'audit_miss_bound_95': self.miss_bound_95}
+
+
+def audit(part, g, mu, knobs, h, w, dh, dw, cmap, samples=2000, seed=0):
+    """
+    Check the cell map on random samples of cell x box.
+
+    The samples are uniform over its cells (every stable edge, every cell the map does not
+    already mark as escaping) and over the error box. The cell map is sampled, not an
+    enclosure of f; this says how much of cell x box it can miss: with no miss in N samples,
+    the missed fraction (of the uniform measure on cell x box) is below 1 - 0.05^(1/N) (about
+    3 / N) with 95 % confidence. Deterministic for a seed.
+    """
+    lo, hi, succ_lo, succ_hi, escape, progress = cmap
+    nodes = np.argwhere(~escape & np.asarray(part.stable)[:, None])
+    rng = np.random.default_rng(seed)
+    pick = nodes[rng.integers(0, len(nodes), samples)]
+    out = np.zeros(3, dtype=np.int64)
+    audit_cells(float(h), float(w), float(dh), float(dw), float(g), float(mu), part.arrays,
+                knobs, np.empty((0, REC_COLS)), lo, hi, succ_lo, succ_hi, escape, progress,
+                pick[:, 0].astype(np.int64), pick[:, 1].astype(np.int64),
+                rng.random(samples), rng.uniform(-1.0, 1.0, samples),
+                rng.uniform(-1.0, 1.0, samples), np.empty(part.n), out)
+    thrown, misses = int(out[0]), int(out[1])
+    bound = 1.0 - 0.05 ** (1.0 / thrown) if thrown and not misses else math.nan
+    return Audit(thrown, misses, int(out[2]), bound)
+
+
 @dataclass(frozen=True)
 class GraphVerdict:
     """check_graph's answer: ``ok`` and, if not, the first reason; A* and the transient bound."""
@@ -277,13 +358,17 @@ class Robustness:
     nominal_verdict: GraphVerdict
     cells: int
     samples: int
+    audit: Audit = None         # the joint box's cell map on random samples (None: nominal fails)
 
     def as_dict(self):
-        return {'speed_error': self.speed_error, 'offset_error': self.offset_error,
-                'joint_fraction': self.joint_fraction,
-                'transient_bound': self.joint_verdict.transient_bound,
-                'nominal_ok': self.nominal_verdict.ok, 'nominal_reason':
-                self.nominal_verdict.reason, 'cells': self.cells, 'samples': self.samples}
+        d = {'speed_error': self.speed_error, 'offset_error': self.offset_error,
+             'joint_fraction': self.joint_fraction,
+             'transient_bound': self.joint_verdict.transient_bound,
+             'nominal_ok': self.nominal_verdict.ok, 'nominal_reason':
+             self.nominal_verdict.reason, 'cells': self.cells, 'samples': self.samples}
+        if self.audit is not None:
+            d.update(self.audit.as_dict())
+        return d
 
 
 def robust_check(part, g, mu, knobs, h, w, dh, dw, limit, cells=120, samples=5,
@@ -322,15 +407,17 @@ def largest_error(check, s_max=0.2, steps=10):
     return a
 
 
-def robustness(part, g, mu, knobs, h, w, limit, cells=120, samples=5, s_max=0.2, steps=10):
+def robustness(part, g, mu, knobs, h, w, limit, cells=120, samples=5, s_max=0.2, steps=10,
+               audit_samples=20000):
     """
     Largest errors: speed alone (+-s w), offset alone (+-s d_min), both at once (s).
 
     Errors are found on a bisection of s (10 steps: to s_max / 1024) assuming the property
-    is monotone in the box (a larger box only adds samples and so edges to the graph).
+    is monotone in the box (a larger box only adds samples and so edges to the graph). The
+    joint box's cell map is then audited on ``audit_samples`` random samples (:func:`audit`).
     """
-    def at(dh, dw):
-        return robust_check(part, g, mu, knobs, h, w, dh, dw, limit, cells, samples)
+    def at(dh, dw, with_map=False):
+        return robust_check(part, g, mu, knobs, h, w, dh, dw, limit, cells, samples, with_map)
 
     nominal = at(0.0, 0.0)
     if not nominal.ok:
@@ -339,4 +426,6 @@ def robustness(part, g, mu, knobs, h, w, limit, cells=120, samples=5, s_max=0.2,
     s_w = largest_error(lambda s: at(0.0, s * w), s_max, steps)
     s_h = largest_error(lambda s: at(s * d, 0.0), s_max, steps)
     s_j = largest_error(lambda s: at(s * d, s * w), min(s_w, s_h), steps)
-    return Robustness(s_w * w, s_h * d, s_j, at(s_j * d, s_j * w), nominal, cells, samples)
+    joint, cmap = at(s_j * d, s_j * w, with_map=True)
+    checked = audit(part, g, mu, knobs, h, w, s_j * d, s_j * w, cmap, audit_samples)
+    return Robustness(s_w * w, s_h * d, s_j, joint, nominal, cells, samples, checked)
