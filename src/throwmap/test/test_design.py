@@ -302,3 +302,17 @@ def test_dask_catalogue_on_two_local_workers_equals_the_serial_path(tmp_path):
         a.pop('seconds')
         b.pop('seconds')
         assert a == b
+
+
+def test_throws_per_start_lets_a_long_cycle_part_prove_its_goal(capsys):
+    """The bracket's cycle is 26-30 throws: 120 per start leave some start without a ready."""
+    bracket = str(SCENES / 'bracket.yaml')
+    assert main(['design-search', bracket, '--grid', '10x10', '--json', '--quiet']) == 1
+    assert json.loads(capsys.readouterr().out)['chosen'] is None
+    assert main(['design-search', bracket, '--grid', '10x10', '--throws', '400', '--json',
+                 '--quiet']) == 0
+    chosen = json.loads(capsys.readouterr().out)['chosen']
+    # Eligible: every start proves the goal edge within the throws it was given.
+    assert 120 < chosen['figures']['first_ready_max'] <= 400
+    assert main(['design-search', bracket, '--throws', '5']) == 2
+    assert 'throws: must be an integer >= 10' in capsys.readouterr().err

@@ -570,6 +570,7 @@ def cmd_design_search(scene, args, out):
     fractions = _fractions(args.sensor_fraction)
     res = design_search.search(scene, h, w, n_h, n_w, goals=goals, fractions=fractions,
                                floor=args.robust, top=args.top, workers=args.workers,
+                               options=design_kernel.eval_options(scene, throws=args.throws),
                                progress=Progress('design-search', args.quiet))
     g = res.grid
     if args.vertex_tolerance:
@@ -648,7 +649,7 @@ def cmd_catalogue(args, out):
     results = design_search.run_catalogue(paths, ranges, n_h, n_w,
                                           _fractions(args.sensor_fraction), args.robust,
                                           args.top, scheduler=args.scheduler,
-                                          workers=args.workers or 2)
+                                          workers=args.workers or 2, throws=args.throws)
     seconds = time.perf_counter() - t0
     if args.json:
         _dump({'catalogue': args.scene, 'seconds': seconds, 'results': results}, out)
@@ -716,6 +717,9 @@ def build_parser():
     p.add_argument('--robust', type=float, default=0.0, help='robustness floor s: every throw '
                    'within +-s of the speed and +-s d_min of the offset (default 0)')
     p.add_argument('--top', type=int, default=8, help='designs assessed for robustness')
+    p.add_argument('--throws', type=int, default=120, help='throws per basin start (default '
+                   '120; a part with a long cycle needs more: every start must show a proven '
+                   'ready within them)')
     p.add_argument('--robust-stride', type=int, default=0, help='robustness heat map on every '
                    'N-th offset and speed (0: none)')
     p.add_argument('--vertex-tolerance', action='store_true', help='also the largest vertex '

@@ -318,11 +318,11 @@ def write_scene(data, path):
 
 # --------------------------------------------------------------------------------- catalogue
 def catalogue_task(path, h_range, w_range, n_h, n_w, fractions=(0.25,), floor=0.0, top=4,
-                   refine=3):
+                   refine=3, throws=120):
     """Search one scene file (one Dask task; also the serial path): a JSON-ready summary."""
     scene = load_scene(path)
     res = search(scene, h_range, w_range, n_h, n_w, fractions=fractions, floor=floor, top=top,
-                 refine=refine, workers=1)
+                 refine=refine, options=D.eval_options(scene, throws=throws), workers=1)
     return summary(scene, res, path)
 
 
@@ -338,7 +338,7 @@ def summary(scene, res, path=None):
 
 
 def run_catalogue(paths, ranges, n_h, n_w, fractions=(0.25,), floor=0.0, top=4, refine=3,
-                  scheduler=None, workers=2, client=None):
+                  scheduler=None, workers=2, client=None, throws=120):
     """
     Search every scene of ``paths`` on Dask: ``scheduler`` an address, else a LocalCluster.
 
@@ -358,7 +358,7 @@ def run_catalogue(paths, ranges, n_h, n_w, fractions=(0.25,), floor=0.0, top=4, 
             client = Client(own)
     try:
         futures = [client.submit(catalogue_task, p, tuple(hr), tuple(wr), n_h, n_w,
-                                 tuple(fractions), floor, top, refine, pure=False)
+                                 tuple(fractions), floor, top, refine, throws, pure=False)
                    for p, (hr, wr) in zip(paths, ranges)]
         return client.gather(futures)
     finally:
