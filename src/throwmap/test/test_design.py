@@ -314,5 +314,6 @@ def test_throws_per_start_lets_a_long_cycle_part_prove_its_goal(capsys):
     chosen = json.loads(capsys.readouterr().out)['chosen']
     # Eligible: every start proves the goal edge within the throws it was given.
     assert 120 < chosen['figures']['first_ready_max'] <= 400
-    assert main(['design-search', bracket, '--throws', '5']) == 2
-    assert 'throws: must be an integer >= 10' in capsys.readouterr().err
+    for bad in ('5', '1000000000'):
+        assert main(['design-search', bracket, '--throws', bad]) == 2
+        assert 'throws: must be an integer in [10, 10000]' in capsys.readouterr().err

@@ -459,11 +459,14 @@ def check_scene(scene):
 def eval_options(scene, radii_per_edge=20, throws=120, ref_throws=1500, zmax_samples=48,
                  cycle=None):
     """Return the kernel's EvalOptions for ``scene`` (its footprint, arm length, mu, cycle)."""
-    for name, value, least in (('radii_per_edge', radii_per_edge, 2), ('throws', throws, 10),
-                               ('ref_throws', ref_throws, 20), ('zmax_samples', zmax_samples, 8)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < least:
-            raise InputError(name, f'must be an integer >= {least}, got {value!r}',
-                             f'give at least {least}')
+    # The upper limits keep the per-thread orbit buffers (starts x throws) far below memory.
+    for name, value, least, most in (('radii_per_edge', radii_per_edge, 2, 1000),
+                                     ('throws', throws, 10, 10000),
+                                     ('ref_throws', ref_throws, 20, 100000),
+                                     ('zmax_samples', zmax_samples, 8, 10000)):
+        if isinstance(value, bool) or not isinstance(value, int) or not least <= value <= most:
+            raise InputError(name, f'must be an integer in [{least}, {most}], got {value!r}',
+                             f'give {least} to {most}')
     cycle = cycle or CycleTime.from_scene(scene)
     mu = scene.model.mu
     arm = scene.arm_length if scene.arm_length is not None else math.inf
