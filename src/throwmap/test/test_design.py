@@ -317,3 +317,19 @@ def test_throws_per_start_lets_a_long_cycle_part_prove_its_goal(capsys):
     for bad in ('5', '1000000000'):
         assert main(['design-search', bracket, '--throws', bad]) == 2
         assert 'throws: must be an integer in [10, 10000]' in capsys.readouterr().err
+
+
+@pytest.mark.parametrize('option, message', [
+    (['--grid', '100000x100000'], '--grid: 10,000,000,000 designs is more than 1,000,000'),
+    (['--robust', '-1'], '--robust: the floor s must lie in [0, 0.2]'),
+    (['--robust', 'nan'], '--robust: the floor s must lie in [0, 0.2]'),
+    (['--robust', '0.3'], '--robust: the floor s must lie in [0, 0.2]'),
+    (['--top', '0'], '--top: at least 1 design'),
+    (['--robust-stride', '-1'], '--robust-stride: 0 (no map) or a positive stride'),
+    (['--workers', '0'], '--workers: 1 to 256 threads'),
+    (['--workers', '1000'], '--workers: 1 to 256 threads'),
+])
+def test_design_search_refuses_options_it_would_swallow(option, message, capsys):
+    assert main(['design-search', str(SCENES / 'triangle.yaml'), *option]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count('\n') == 1

@@ -32,6 +32,7 @@ from .analysis import analyse
 from .basins import basin, default_grid
 from .errors import ThrowmapError
 from .orbits import limit_set, orbit, pull_share
+from .robustness import S_MAX
 from .scene import load_scene
 from .status import LOST, OK
 
@@ -520,6 +521,10 @@ def _range(text, name):
     return a, b
 
 
+# A million designs take about 45 min on two quiet cores; more is a typo, not a search.
+MAX_DESIGNS = 1_000_000
+
+
 def _grid(text):
     try:
         n_h, n_w = (int(x) for x in text.lower().split('x'))
@@ -527,7 +532,25 @@ def _grid(text):
         raise ThrowmapError(f'--grid: expected NHxNW (e.g. 40x40), got {text!r}') from None
     if n_h < 2 or n_w < 2:
         raise ThrowmapError(f'--grid: need at least 2x2, got {text!r}')
+    if n_h * n_w > MAX_DESIGNS:
+        raise ThrowmapError(f'--grid: {n_h * n_w:,} designs is more than {MAX_DESIGNS:,}; '
+                            'search a coarse grid first, then a narrower --h/--speed range')
     return n_h, n_w
+
+
+def _search_options(args):
+    """Refuse design-search options that would be swallowed or could never be met."""
+    if not 0.0 <= args.robust <= S_MAX:
+        raise ThrowmapError(f'--robust: the floor s must lie in [0, {S_MAX}] '
+                            f'(errors are searched up to s = {S_MAX}), got '
+                            f'{args.robust}')
+    if args.top < 1:
+        raise ThrowmapError(f'--top: at least 1 design must be assessed, got {args.top}')
+    if args.robust_stride < 0:
+        raise ThrowmapError(f'--robust-stride: 0 (no map) or a positive stride, got '
+                            f'{args.robust_stride}')
+    if args.workers is not None and not 1 <= args.workers <= 256:
+        raise ThrowmapError(f'--workers: 1 to 256 threads, got {args.workers}')
 
 
 def _search_ranges(scene, args):
@@ -743,6 +766,8 @@ def main(argv=None, out=None):
     args = build_parser().parse_args(argv)
     try:
         _positive(args)
+        if args.command == 'design-search':
+            _search_options(args)
         if args.command == 'design-search' and os.path.isdir(args.scene):
             return cmd_catalogue(args, out)
         with warnings.catch_warnings():

@@ -393,7 +393,12 @@ class LimitSpec:
     r_top: float            # covered range: up to this (above the grid, room to move)
 
 
-def largest_error(check, s_max=0.2, steps=10):
+# The largest error searched for, as a fraction (of w and of d_min): beyond 20 % a feeder is
+# no longer the design it was computed for.
+S_MAX = 0.2
+
+
+def largest_error(check, s_max=S_MAX, steps=10):
     """Largest s in [0, s_max] with check(s).ok, by bisection (check(0) must hold)."""
     if check(s_max).ok:
         return s_max
@@ -407,7 +412,7 @@ def largest_error(check, s_max=0.2, steps=10):
     return a
 
 
-def robustness(part, g, mu, knobs, h, w, limit, cells=120, samples=5, s_max=0.2, steps=10,
+def robustness(part, g, mu, knobs, h, w, limit, cells=120, samples=5, s_max=S_MAX, steps=10,
                audit_samples=20000):
     """
     Largest errors: speed alone (+-s w), offset alone (+-s d_min), both at once (s).
