@@ -81,3 +81,15 @@ def test_the_chosen_design_feeds_as_predicted_with_no_false_ready(graph, ros, tm
     assert report.false_readies == 0 and report.missing_truth == 0
     assert report.readies > 0
     assert report.consistent, report.line()
+
+
+def test_a_truth_log_needs_hardware_mode_and_a_writable_path(graph, tmp_path):
+    pred = graph.start('feeder_sim', 'sim_node', '--ros-args', '-p', f'scene:={DESIGN}', '-p',
+                       f'truth_log:={tmp_path / "truth.jsonl"}')
+    hw = sim_as_hardware(graph, f'truth_log:={tmp_path / "missing" / "truth.jsonl"}',
+                         scene=str(DESIGN))
+    assert pred.wait(timeout=60) == 2
+    assert 'only hardware mode has a true part' in graph.log(pred)
+    assert hw.wait(timeout=60) == 2
+    assert 'cannot open it for writing' in graph.log(hw)
+    assert not (tmp_path / 'truth.jsonl').exists()
