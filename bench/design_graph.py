@@ -95,7 +95,7 @@ class Listener:
 
 
 def kernel_prediction(scene):
-    """The design search's own figure (throwmap.design): proven readies per throw."""
+    """Return the design search's own figure (throwmap.design): proven readies per throw."""
     from throwmap import design as D
     res = D.evaluate_grid(scene, [scene.h], [scene.release_speed], [scene.goal_edge], [0.25],
                           workers=1)

@@ -98,7 +98,7 @@ def judge_feed(verdicts, truth, goal_edge, predicted, warmup, z=1.96):
 
 
 def truth_from_throw(edge, seen):
-    """A truth record of a throw computed in-process (library-level runs)."""
+    """Return the truth record of a throw computed in-process (library-level runs)."""
     return {'edge': int(edge), 'seen': bool(seen)}
 
 

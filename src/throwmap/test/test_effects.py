@@ -219,7 +219,7 @@ def test_release_noise_off_is_exact_and_on_is_seeded(base):
 
 @pytest.mark.parametrize('distribution', ['uniform', 'corner'])
 def test_bounded_release_noise_stays_in_its_box(base, distribution):
-    """docs/design.md section 3: every throw anywhere within +-dw, +-dh (corner: on its corners)."""
+    """docs/design.md section 3: every throw within +-dw, +-dh (corner: on the corners)."""
     e, r = states(base, 200, 8)
     zero = scene(noise={'distribution': distribution, 'release_speed_bound': 0.0,
                         'offset_bound_cm': 0}, effects=['release_noise']).model
