@@ -24,13 +24,10 @@ prediction (a 99.7 % Wilson interval that fails when the rate is off by about 40
 The long run: bench/design_graph.py.
 """
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common.messages import parse_cycle_status
 from feeder_monitor.feed_check import design_prediction, judge_feed
-from feeder_nodes import (Collector, LATCHED, monitor, REPO, run_cycles, sim_as_hardware,
-                          Verdicts, wait_for_monitor, wait_for_readers)
+from feeder_nodes import monitor, REPO, run_cycles, sim_as_hardware, watch_monitor
 from feeder_sim.truth import read_truth_log
-from std_msgs.msg import Bool
 from throwmap import load_scene
 from throwmap.search import noisy_design_scene, write_scene
 
@@ -48,14 +45,7 @@ def test_the_chosen_design_feeds_as_predicted_with_no_false_ready(graph, ros, tm
     sim_as_hardware(graph, f'cycle_period:={PERIOD}', f'truth_log:={truth_path}',
                     scene=str(noisy))
     monitor(graph, scene=str(DESIGN))
-    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
-    verdict_stream = Verdicts(ros)
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
-    wait_for_monitor(ros, ready)
-    verdict_stream.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 2)
-    wait_for_readers(ros, '/feeder/proximity', 1)
-    ros.spin_for(0.5)
+    _, verdict_stream, statuses = watch_monitor(ros)
     run_cycles(ros, CYCLES, statuses, PERIOD)
     ros.spin_for(1.5)
 
