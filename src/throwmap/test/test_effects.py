@@ -245,6 +245,8 @@ def test_bounded_release_noise_stays_in_its_box(base, distribution):
     assert alone[:2] == (t.edge, t.R)
     again = scene(noise=dict(bounds, seed=5), effects=['release_noise']).model
     assert [again.throw(1, 0.12).R for _ in range(20)] == [t.R for t in throws[:20]]
+    # The nominal model (zero draws, e.g. the analysis's design radii) is the base map.
+    assert (noisy.nominal().f_batch(e, r)['R'] == base.f_batch(e, r)['R']).all()
 
 
 def test_sensor_noise_rates(base):

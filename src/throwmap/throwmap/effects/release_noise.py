@@ -22,7 +22,8 @@ the errors instead: w_k = w + dw u1, h_k = h + dh u2 with u = erf(z / sqrt 2) un
 [-1, 1] (the same normal draws mapped through their distribution function), every throw within
 +-dw, +-dh: the bounded nondeterminism of docs/design.md section 3. ``distribution: corner``
 puts every throw on a corner of that box (u = sign z, each corner equally likely), the throws
-of the robustness brute force. h_k is the arm surface for that
+of the robustness brute force. Both map a zero draw to zero: ``model.nominal()`` (zero draws)
+is the noise-free map. h_k is the arm surface for that
 whole throw (release and catch). The grasp bounds are evaluated at the throw's own h_k, so a
 noisy throw near R_grasp can leave the domain. The throw map becomes a random map: basins
 become distributions of outcomes over seeds and the sensor guarantee a probability
@@ -118,7 +119,7 @@ def perturb(w, h, z0, z1, prm):
     if prm.kind == 1:       # uniform in [-1, 1]: 2 Phi(z) - 1
         z0 = math.erf(z0 / math.sqrt(2.0))
         z1 = math.erf(z1 / math.sqrt(2.0))
-    elif prm.kind == 2:     # a corner of the box
-        z0 = 1.0 if z0 >= 0.0 else -1.0
-        z1 = 1.0 if z1 >= 0.0 else -1.0
+    elif prm.kind == 2:     # a corner of the box; a zero draw (model.nominal()) stays nominal
+        z0 = 1.0 if z0 > 0.0 else (-1.0 if z0 < 0.0 else 0.0)
+        z1 = 1.0 if z1 > 0.0 else (-1.0 if z1 < 0.0 else 0.0)
     return w + prm.speed_sd * z0, h + prm.offset_sd * z1
