@@ -129,6 +129,24 @@ def wait_for_publishers(ros, topic, count):
                    f'{count} publishers of {topic}')
 
 
+def watch_monitor(ros):
+    """
+    Collect edge1_ready, edge1_verdict and cycle_status beside one monitor and the stand-in.
+
+    Returns (ready, verdicts, statuses) once the monitor's latched edge1_ready came, its
+    verdict writer matched, and cycle_status and proximity have their readers.
+    """
+    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    verdicts = Verdicts(ros)
+    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    wait_for_monitor(ros, ready)
+    verdicts.wait_matched()
+    wait_for_readers(ros, '/feeder/cycle_status', 2)    # the monitor's and ours
+    wait_for_readers(ros, '/feeder/proximity', 1)
+    ros.spin_for(0.5)
+    return ready, verdicts, statuses
+
+
 def run_cycles(ros, cycles, statuses, period):
     """Enable cycling until ``statuses`` holds ``cycles`` messages, then disable it."""
     res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True))

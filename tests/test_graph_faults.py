@@ -27,7 +27,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common.messages import cycle_status, proximity
 from feeder_nodes import (Collector, Diagnostics, LATCHED, monitor, predictor, RELIABLE,
                           STARTUP_TIMEOUT, sim_as_hardware, status_values, TRIANGLE, Verdicts,
-                          wait_for_monitor, wait_for_readers)
+                          wait_for_monitor, wait_for_readers, watch_monitor)
 import pytest
 from rclpy.duration import Duration
 from rclpy.event_handler import SubscriptionEventCallbacks
@@ -54,14 +54,7 @@ def trigger_until_ready(ros, verdicts, limit=600):
 def test_a_forged_cycle_beside_the_driver_is_never_ready(graph, ros):
     sim_as_hardware(graph, f'cycle_period:={PERIOD}')
     monitor(graph)
-    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
-    verdicts = Verdicts(ros)
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
-    wait_for_monitor(ros, ready)
-    verdicts.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 2)
-    wait_for_readers(ros, '/feeder/proximity', 1)
-    ros.spin_for(0.5)
+    ready, verdicts, statuses = watch_monitor(ros)
     trigger_until_ready(ros, verdicts)
     last = verdicts.parsed[-1]
 

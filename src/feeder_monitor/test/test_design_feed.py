@@ -15,7 +15,7 @@
 """
 A design's predicted feed rate against the monitor's verdicts, with bounded throw errors.
 
-Library level (no DDS; the graph run of issue 11 item 6 is open, docs/design.md): the part is
+Library level (no DDS; the graph run is tests/test_graph_design.py, docs/design.md): the part is
 thrown with every release speed and offset drawn uniformly within +-s of the design (s below
 its robustness), the sensor bit is the sensor geometry, and the monitor's ReadinessMonitor
 (the rules the node derives from the scene) judges each cycle. Readies per cycle must match
@@ -25,10 +25,11 @@ edge.
 
 import pathlib
 
-from feeder_monitor.readiness import limit_set_orbit, ReadinessMonitor, rules_from_analysis
+from feeder_monitor.feed_check import design_prediction, judge_feed, truth_from_throw
+from feeder_monitor.readiness import ReadinessMonitor
 import numpy as np
 import pytest
-from throwmap import load_scene, scene_analysis, sees
+from throwmap import load_scene, sees
 from throwmap.model import ThrowModel
 
 TRIANGLE = pathlib.Path(__file__).resolve().parents[3] / 'scenes' / 'triangle.yaml'
@@ -37,8 +38,7 @@ TRIANGLE = pathlib.Path(__file__).resolve().parents[3] / 'scenes' / 'triangle.ya
 @pytest.fixture(scope='module')
 def triangle():
     scene = load_scene(str(TRIANGLE))
-    an = scene_analysis(scene)
-    return scene, an, rules_from_analysis(scene, an, limit_set_orbit(scene, an, 3000))
+    return (scene,) + design_prediction(scene)
 
 
 @pytest.mark.parametrize('s', [0.0, 0.004])
@@ -51,17 +51,16 @@ def test_readies_per_cycle_match_the_prediction_and_none_is_false(triangle, s):
     dh, dw = s * part.d_min, s * w
     rng = np.random.default_rng(11)
     edge, R = scene.default_start()
-    cycles, readies, false, anomalies = 4000, 0, 0, 0
-    for seq in range(cycles):
+    verdicts, truth = {}, {}
+    for seq in range(1, 4001):
         model = ThrowModel(part, h + dh * rng.uniform(-1, 1), w + dw * rng.uniform(-1, 1), g)
         edge, R, _ = model.f(edge, R)
-        verdict = monitor.completed(seq, bool(sees(part, edge, R, an.sensor.radius,
-                                                   an.sensor.footprint)))
-        readies += verdict.ready
-        false += verdict.ready and edge != an.sensor.goal_edge
-        anomalies += verdict.anomaly is not None
-    predicted = an.sensor.detection_rate
-    print(f's = {s}: {readies / cycles:.4f} readies per cycle, predicted {predicted:.4f}; '
-          f'{false} false, {anomalies} anomalies')
-    assert false == 0
-    assert readies / cycles == pytest.approx(predicted, rel=0.15)
+        seen = bool(sees(part, edge, R, an.sensor.radius, an.sensor.footprint))
+        verdict = monitor.completed(seq, seen)
+        verdicts[seq] = (verdict.ready, verdict.anomaly)
+        truth[seq] = truth_from_throw(edge, seen)
+    report = judge_feed(verdicts, truth, an.sensor.goal_edge, an.sensor.detection_rate,
+                        rules.warmup_cycles)
+    print(f's = {s}: {report.line()}')
+    assert report.false_readies == 0 and report.missing_truth == 0
+    assert report.rate == pytest.approx(report.predicted, rel=0.15)

@@ -46,6 +46,9 @@ SIM_PARAMS = (
     ParamSpec('seed', -1, "seed of the scene's random effects (release_noise, sensor_noise) for "
               "the throws and readings of hardware mode; -1: the scene's noise.seed",
               minimum=-1, maximum=2 ** 31 - 1, read_only=True),
+    ParamSpec('truth_log', '', 'hardware mode: file for one JSON line per cycle with the '
+              "part's true state (feeder_sim/truth.py), to count false readies against; '': "
+              'none', read_only=True, constraints='a writable path; hardware mode only'),
     ParamSpec('sensor_range_m', 0.02, 'hardware mode: fixed distance of the proximity ranger, '
               "m (Range.min_range = max_range), as the driver's parameter", minimum=0.001,
               maximum=10.0),

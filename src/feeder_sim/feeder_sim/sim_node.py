@@ -53,6 +53,7 @@ from visualization_msgs.msg import MarkerArray
 from .marker_msgs import marker_array
 from .markers import state_markers, static_markers
 from .params import check_changes, check_start, SIM_PARAMS
+from .truth import TruthLog, TruthLogError
 
 HARDWARE_ID = 'sim'
 
@@ -69,6 +70,7 @@ class SimNode(FeederLifecycleNode):
         self._base_analysis = None
         self._analysis = None
         self._predictor = None
+        self._truth = None              # hardware mode: the part's true state, per cycle
         self._pubs = {}
         self._sub = None
         self._cycle_timer = None
@@ -183,6 +185,17 @@ class SimNode(FeederLifecycleNode):
             self.configure_error = f'scene {scene.source}: {exc}'
             self.get_logger().error(f'configure failed: {self.configure_error}')
             return TransitionCallbackReturn.FAILURE
+        truth_log = self._param('truth_log')
+        if truth_log:
+            try:
+                if not self._hardware:
+                    raise TruthLogError(f'truth_log {truth_log!r}: only hardware mode has a '
+                                        "true part; set hardware_mode:=true or truth_log:=''")
+                self._truth = TruthLog(truth_log, self._truth_header())
+            except TruthLogError as exc:
+                self.configure_error = str(exc)
+                self.get_logger().error(f'configure failed: {exc}')
+                return TransitionCallbackReturn.FAILURE
         pub = self.create_lifecycle_publisher
         if self._hardware:
             self._pubs = {
@@ -244,8 +257,19 @@ class SimNode(FeederLifecycleNode):
         self._predictor = None
         self._analysis = None
         self._static_markers = None
+        if self._truth is not None:
+            self._truth.close()
+            self._truth = None
 
     # ------------------------------------------------------------------ hardware mode
+    def _truth_header(self):
+        sensor, scene = self._analysis.sensor, self._scene
+        return {'scene': scene.source, 'goal_edge': sensor.goal_edge,
+                'sensor_radius': sensor.radius, 'footprint': sensor.footprint,
+                'warmup_throws': sensor.warmup_throws, 'detection_rate': sensor.detection_rate,
+                'seed': self._param('seed') if self._param('seed') >= 0 else scene.seed,
+                'start': list(self._predictor.state)}
+
     def _refusal(self):
         return (f'refused: node is {self.lifecycle_state}, not active (ros2 lifecycle set '
                 f'{self.get_fully_qualified_name()} activate, or start it with '
@@ -301,6 +325,8 @@ class SimNode(FeederLifecycleNode):
             pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
             pubs['cycle_status'].publish(cycle_status(self._seq, False, str(exc), None, stamp,
                                                       HARDWARE_ID))
+            if self._truth is not None:
+                self._truth.cycle(self._seq, stamp, error=exc)
             self.get_logger().error(f'cycle {self._seq} failed: {exc}',
                                     throttle_duration_sec=5.0)
             return self._seq, str(exc)
@@ -308,6 +334,8 @@ class SimNode(FeederLifecycleNode):
             self._report_lost(self._seq, throw)
         self._counts['completed'] += 1
         self._last_throw = throw
+        if self._truth is not None:
+            self._truth.cycle(self._seq, stamp, throw, self._predictor.sees())
         # proximity and cycle_status back to back: the monitor decides on both.
         pubs['proximity'].publish(proximity(stamp, throw.detected,
                                             self._param('sensor_range_m')))

@@ -37,7 +37,7 @@ from throwmap.accuracy import compiled_knobs
 from throwmap.analysis import scene_analysis
 from throwmap.catch import is_jog
 from throwmap.cli import main
-from throwmap.errors import InputError
+from throwmap.errors import InputError, ThrowmapError
 from throwmap.model import ThrowModel
 from throwmap.sensor import sees
 from throwmap_testing import SCENES
@@ -269,6 +269,21 @@ def test_chosen_design_is_a_scene_every_command_loads(triangle, tmp_path):
     an = scene_analysis(scene, scene.sensor_radius)      # what the sim and the monitor call
     assert an.sensor.radius == pytest.approx(chosen['figures']['sensor_radius'])
     assert main(['design', str(path), '--json'], out=io.StringIO()) == 0
+
+
+def test_a_scene_design_without_a_limit_set_is_not_robust_and_no_error():
+    """The house part's own design (h -1.2 cm): its orbit leaves the domain of f."""
+    scene = load_scene(str(SCENES.parent / 'docs' / 'design' / 'house_base.yaml'))
+    opt = D.eval_options(scene)
+    own = D.evaluate_grid(scene, [scene.h], [scene.release_speed], [scene.goal_edge], [0.25],
+                          opt, 1)
+    cand = S.Candidate(scene.h, scene.release_speed, scene.goal_edge, 0.25,
+                       S._figures(own, 0, 0, 0), stage='scene')
+    with pytest.raises(ThrowmapError, match='left the domain'):
+        S.limit_spec(scene, cand, opt)
+    S.assess(scene, cand, opt)
+    assert cand.robust() == 0.0 and not cand.robustness['nominal_ok']
+    assert 'no limit set' in cand.robustness['nominal_reason']
 
 
 def test_cli_refuses_bad_ranges_and_effect_scenes(capsys):

@@ -217,6 +217,38 @@ def test_release_noise_off_is_exact_and_on_is_seeded(base):
     assert res.release_speed != base.w and res.offset != base.h
 
 
+@pytest.mark.parametrize('distribution', ['uniform', 'corner'])
+def test_bounded_release_noise_stays_in_its_box(base, distribution):
+    """docs/design.md section 3: every throw within +-dw, +-dh (corner: on the corners)."""
+    e, r = states(base, 200, 8)
+    zero = scene(noise={'distribution': distribution, 'release_speed_bound': 0.0,
+                        'offset_bound_cm': 0}, effects=['release_noise']).model
+    assert (zero.f_batch(e, r)['R'] == base.f_batch(e, r)['R']).all()      # bound 0: base
+    dw, dh = 0.01 * PAPER_W, 0.01 * base.part.d_min
+    bounds = {'distribution': distribution, 'release_speed_bound': dw, 'offset_bound': dh}
+    noisy = scene(noise=dict(bounds, seed=5), effects=['release_noise']).model
+    throws = [noisy.throw(1, 0.12) for _ in range(1500)]
+    u = np.array([((t.release_speed - base.w) / dw, (t.offset - base.h) / dh) for t in throws])
+    assert np.abs(u).max() <= 1.0 + 1e-9
+    if distribution == 'corner':
+        assert np.allclose(np.abs(u), 1.0)
+        assert 0.45 < (u > 0).mean() < 0.55
+    else:
+        # Uniform on [-1, 1]: mean 0 (sd 0.015 over 1,500), variance 1/3, both ends reached.
+        assert abs(u.mean(axis=0)).max() < 0.06
+        assert u.var(axis=0) == pytest.approx([1 / 3, 1 / 3], abs=0.03)
+        assert (u.min(axis=0) < -0.99).all() and (u.max(axis=0) > 0.99).all()
+        assert ((np.abs(u) < 0.5).mean(axis=0) == pytest.approx([0.5, 0.5], abs=0.05))
+    # The throw is the base model's at its own drawn speed and offset.
+    t = throws[-1]
+    alone = ThrowModel(base.part, t.offset, t.release_speed, base.g).f(1, 0.12)
+    assert alone[:2] == (t.edge, t.R)
+    again = scene(noise=dict(bounds, seed=5), effects=['release_noise']).model
+    assert [again.throw(1, 0.12).R for _ in range(20)] == [t.R for t in throws[:20]]
+    # The nominal model (zero draws, e.g. the analysis's design radii) is the base map.
+    assert (noisy.nominal().f_batch(e, r)['R'] == base.f_batch(e, r)['R']).all()
+
+
 def test_sensor_noise_rates(base):
     part = base.part
     e, r = states(base, 400, 9)
@@ -319,6 +351,18 @@ def test_scan_contact_finder_misses_what_advancement_finds(base):
     ({'effects': ['release_noise']}, 'noise', 'release_speed_sd'),
     ({'noise': {'release_speed_sd': -1}, 'effects': ['release_noise']},
      'noise.release_speed_sd', '>= 0'),
+    ({'noise': {'distribution': 'gauss', 'release_speed_sd': 1}, 'effects': ['release_noise']},
+     'noise.distribution', 'normal, uniform, corner'),
+    ({'noise': {'distribution': 'uniform', 'release_speed_sd': 1},
+      'effects': ['release_noise']}, 'noise.release_speed_sd', 'release_speed_bound'),
+    ({'noise': {'offset_bound_cm': 0.1}, 'effects': ['release_noise']},
+     'noise.offset_bound_cm', 'distribution uniform'),
+    ({'noise': {'distribution': 'uniform'}, 'effects': ['release_noise']}, 'noise',
+     'release_speed_bound'),
+    ({'noise': {'distribution': 'corner', 'offset_bound': -0.001},
+      'effects': ['release_noise']}, 'noise.offset_bound', '>= 0'),
+    ({'noise': {'release_speed_bound': 0.1}}, 'noise.release_speed_bound',
+     'add release_noise'),
     ({'noise': {'seed': -2}}, 'noise.seed', 'integer >= 0'),
     ({'sensor': {'false_positive': 2}, 'effects': ['sensor_noise']}, 'sensor.false_positive',
      '<= 1'),

@@ -41,7 +41,8 @@ from .part import Part
 from .part_on_arm import PartOnArm, resting_pose, Throw, wrap_angle
 from .scene import load_scene, Scene
 from .sensor import read_sensor, sees, sensor_design, SensorDesign
-from .stochastic import basin_distribution, sensor_probability, SensorProbability
+from .stochastic import (basin_distribution, sensor_probability, SensorProbability,
+                         wilson_interval)
 
 __all__ = ['Accuracy', 'analyse', 'Analysis', 'analysis_json', 'basin', 'Basin',
            'basin_distribution', 'default_grid', 'design_radii', 'DomainError', 'edge_grasp',
@@ -51,4 +52,5 @@ __all__ = ['Accuracy', 'analyse', 'Analysis', 'analysis_json', 'basin', 'Basin',
            'Part', 'PartLost', 'PartOnArm', 'read_sensor', 'resting_pose', 'Scene',
            'scene_analysis', 'sees', 'sensor_design', 'sensor_probability', 'SensorDesign',
            'SensorDesignError', 'SensorProbability', 'SimulatorAccuracy', 'Throw',
-           'ThrowmapError', 'ThrowModel', 'ThrowResult', 'wrap_angle', 'wrench_cone_margins']
+           'ThrowmapError', 'ThrowModel', 'ThrowResult', 'wilson_interval', 'wrap_angle',
+           'wrench_cone_margins']

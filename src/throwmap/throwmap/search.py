@@ -35,7 +35,7 @@ import yaml
 from . import design as D
 from .accuracy import compiled_knobs
 from .catch import is_jog
-from .errors import InputError
+from .errors import InputError, ThrowmapError
 from .model import ThrowModel
 from .orbits import limit_set
 from .robustness import LimitSpec, robustness
@@ -113,7 +113,16 @@ def limit_spec(scene, cand, opt):
 def assess(scene, cand, opt, cells=120):
     """Fill ``cand.robustness`` (throwmap.robustness) and return the candidate."""
     knobs = compiled_knobs(scene.model.accuracy, None, scene.model.settle_rule)
-    spec = limit_spec(scene, cand, opt)
+    try:
+        spec = limit_spec(scene, cand, opt)
+    except ThrowmapError as exc:
+        # No limit set to be robust about (e.g. a scene's own design whose orbit leaves the
+        # domain of f): not robust to any error, reported with the reason, not a crash.
+        cand.robustness = {'speed_error': 0.0, 'offset_error': 0.0, 'joint_fraction': 0.0,
+                           'transient_bound': None, 'nominal_ok': False,
+                           'nominal_reason': f'no limit set: {exc}', 'cells': cells,
+                           'samples': 0}
+        return cand
     rb = robustness(scene.part, scene.model.g, opt.mu, knobs, cand.h, cand.w, spec, cells=cells)
     cand.robustness = rb.as_dict()
     return cand
@@ -304,6 +313,28 @@ def design_scene(scene, cand, name=None):
     if start:
         # The old start may lie outside the new design's grasp domain: start on the goal edge.
         data['start'] = {'edge': int(cand.goal)}
+    return data
+
+
+def noisy_design_scene(scene, s, distribution='uniform', seed=0):
+    """
+    Return the scene data of ``scene`` (a design) with its release errors bounded at joint s.
+
+    Every throw's release speed and offset within +-s w and +-s d_min (docs/design.md section
+    3, the robustness floor's box) by effect release_noise with a bounded ``distribution``
+    (uniform or corner), seeded: the design run as a real feeder would throw it.
+    """
+    if not (isinstance(s, (int, float)) and math.isfinite(s) and s >= 0):
+        raise InputError('robustness floor', f'must be a number >= 0, got {s!r}',
+                         'give the joint s of --robust, e.g. 0.005')
+    if scene.effects:
+        raise InputError('effects', f'the design scene already has effects '
+                         f'{", ".join(scene.effects.names)}', 'give a base-model design scene')
+    data = copy.deepcopy(scene.data)
+    data['effects'] = ['release_noise']
+    data['noise'] = {'seed': int(seed), 'distribution': distribution,
+                     'release_speed_bound': float(s * scene.release_speed),
+                     'offset_bound': float(s * scene.part.d_min)}
     return data
 
 

@@ -85,7 +85,8 @@ class SensorProbability:
         return dict(vars(self))
 
 
-def _wilson(k, n, z=1.96):
+def wilson_interval(k, n, z=1.96):
+    """Return (k / n, lo, hi): the Wilson score interval of a binomial rate (z = 1.96: 95 %)."""
     if n == 0:
         return math.nan, 0.0, 1.0
     p = k / n
@@ -123,7 +124,7 @@ def sensor_probability(model, goal_edge, radius, footprint=0.0, start=None, thro
         det += int(seen.sum())
         hits += int((seen & (edges == goal_edge)).sum())
         total += edges.size
-    p, lo, hi = _wilson(hits, det)
+    p, lo, hi = wilson_interval(hits, det)
     effects = getattr(model, 'effects', None)
     noise = effects.get('sensor_noise') if effects else None
     return SensorProbability(int(goal_edge), float(radius), float(footprint), p, lo, hi, det,

@@ -17,16 +17,23 @@ Effect release_noise: seeded random release speed and offset per throw.
 
 Physics: every throw draws w_k = w + sd_w z1 and h_k = h + sd_h z2 with z1, z2 standard
 normal from a numpy Generator seeded by noise.seed (or the CLI's --seed): the spring's
-tension and the foam's compression vary from throw to throw. h_k is the arm surface for that
+tension and the foam's compression vary from throw to throw. ``distribution: uniform`` bounds
+the errors instead: w_k = w + dw u1, h_k = h + dh u2 with u = erf(z / sqrt 2) uniform in
+[-1, 1] (the same normal draws mapped through their distribution function), every throw within
++-dw, +-dh: the bounded nondeterminism of docs/design.md section 3. ``distribution: corner``
+puts every throw on a corner of that box (u = sign z, each corner equally likely), the throws
+of the robustness brute force. Both map a zero draw to zero: ``model.nominal()`` (zero draws)
+is the noise-free map. h_k is the arm surface for that
 whole throw (release and catch). The grasp bounds are evaluated at the throw's own h_k, so a
 noisy throw near R_grasp can leave the domain. The throw map becomes a random map: basins
 become distributions of outcomes over seeds and the sensor guarantee a probability
 (throwmap.stochastic).
 
-Hook: ``perturb``. With both sd = 0 the effect fills no hook and draws nothing: the
-deterministic map bit for bit (tested).
+Hook: ``perturb``. With both sd (or both bounds) = 0 the effect fills no hook and draws
+nothing: the deterministic map bit for bit (tested).
 
-Scene: noise: {seed: 1, release_speed_sd_deg: 5, offset_sd_cm: 0.02}; effects: [release_noise].
+Scene: noise: {seed: 1, release_speed_sd_deg: 5, offset_sd_cm: 0.02}, or noise: {distribution:
+uniform, release_speed_bound_deg: 1.2, offset_bound_cm: 0.05}; effects: [release_noise].
 """
 
 from collections import namedtuple
@@ -38,46 +45,81 @@ from ..errors import InputError
 from ..jit import njit
 
 NAME = 'release_noise'
-SCHEMA = {'noise': ('release_speed_sd', 'release_speed_sd_deg', 'offset_sd', 'offset_sd_cm')}
+SCHEMA = {'noise': ('distribution', 'release_speed_sd', 'release_speed_sd_deg', 'offset_sd',
+                    'offset_sd_cm', 'release_speed_bound', 'release_speed_bound_deg',
+                    'offset_bound', 'offset_bound_cm')}
 KNOBS = {}
 STOCHASTIC = True
 
-NoiseParams = namedtuple('NoiseParams', ['speed_sd', 'offset_sd'])
+# distribution -> the code the compiled hook branches on
+DISTRIBUTIONS = {'normal': 0, 'uniform': 1, 'corner': 2}
+_SD_KEYS = ('release_speed_sd', 'release_speed_sd_deg', 'offset_sd', 'offset_sd_cm')
+_BOUND_KEYS = ('release_speed_bound', 'release_speed_bound_deg', 'offset_bound',
+               'offset_bound_cm')
+
+NoiseParams = namedtuple('NoiseParams', ['speed_sd', 'offset_sd', 'kind'])
 
 
 @dataclass(frozen=True)
 class ReleaseNoise:
-    """Parameters: standard deviations of the release speed and of the arm offset."""
+    """
+    Parameters: the distribution and the scale of the release speed's and offset's errors.
+
+    speed_sd and offset_sd are standard deviations (normal) or the bounds dw, dh (uniform,
+    corner).
+    """
 
     speed_sd: float     # rad/s
     offset_sd: float    # m
+    distribution: str = 'normal'
 
 
 def parse(scene):
     """From the scene's noise section."""
     noise = scene.section('noise')
-    sd_w = number(noise, 'release_speed_sd', 'noise', 'a standard deviation >= 0', lo=0.0,
-                  scale_keys=[('release_speed_sd', 1.0),
-                              ('release_speed_sd_deg', math.pi / 180.0)])
-    sd_h = number(noise, 'offset_sd', 'noise', 'a standard deviation >= 0', lo=0.0,
-                  scale_keys=[('offset_sd', 1.0), ('offset_sd_cm', 0.01)])
-    if sd_w is None and sd_h is None:
-        raise InputError('noise', 'effect release_noise needs release_speed_sd(_deg) and/or '
-                         'offset_sd(_cm)', 'give e.g. noise: {release_speed_sd_deg: 5}')
-    return ReleaseNoise(sd_w or 0.0, sd_h or 0.0)
+    dist = noise.get('distribution', 'normal')
+    if dist not in DISTRIBUTIONS:
+        raise InputError('noise.distribution', f'unknown distribution {dist!r}',
+                         f'give one of {", ".join(DISTRIBUTIONS)}')
+    bounded = dist != 'normal'
+    scale, wrong = ('bound', _SD_KEYS) if bounded else ('sd', _BOUND_KEYS)
+    what = 'a bound >= 0' if bounded else 'a standard deviation >= 0'
+    for key in wrong:
+        if key in noise:
+            raise InputError(f'noise.{key}', f'does not apply to distribution {dist}',
+                             'give release_speed_bound(_deg) / offset_bound(_cm) with '
+                             'distribution uniform or corner, release_speed_sd(_deg) / '
+                             'offset_sd(_cm) with distribution normal (the default)')
+    d_w = number(noise, f'release_speed_{scale}', 'noise', what, lo=0.0,
+                 scale_keys=[(f'release_speed_{scale}', 1.0),
+                             (f'release_speed_{scale}_deg', math.pi / 180.0)])
+    d_h = number(noise, f'offset_{scale}', 'noise', what, lo=0.0,
+                 scale_keys=[(f'offset_{scale}', 1.0), (f'offset_{scale}_cm', 0.01)])
+    if d_w is None and d_h is None:
+        raise InputError('noise', f'effect release_noise needs release_speed_{scale}(_deg) '
+                         f'and/or offset_{scale}(_cm)',
+                         f'give e.g. noise: {{release_speed_{scale}_deg: 5}}')
+    return ReleaseNoise(d_w or 0.0, d_h or 0.0, dist)
 
 
 def slots(params):
-    """Fill perturb, unless both deviations are 0."""
+    """Fill perturb, unless both deviations (bounds) are 0."""
     return ('perturb',) if (params.speed_sd > 0.0 or params.offset_sd > 0.0) else ()
 
 
 def bundle(params, part, knobs):
     """Return the compiled parameters."""
-    return NoiseParams(float(params.speed_sd), float(params.offset_sd))
+    return NoiseParams(float(params.speed_sd), float(params.offset_sd),
+                       DISTRIBUTIONS[params.distribution])
 
 
 @njit
 def perturb(w, h, z0, z1, prm):
     """Return this throw's release speed and arm offset from two standard normal draws (hook)."""
+    if prm.kind == 1:       # uniform in [-1, 1]: 2 Phi(z) - 1
+        z0 = math.erf(z0 / math.sqrt(2.0))
+        z1 = math.erf(z1 / math.sqrt(2.0))
+    elif prm.kind == 2:     # a corner of the box; a zero draw (model.nominal()) stays nominal
+        z0 = 1.0 if z0 > 0.0 else (-1.0 if z0 < 0.0 else 0.0)
+        z1 = 1.0 if z1 > 0.0 else (-1.0 if z1 < 0.0 else 0.0)
     return w + prm.speed_sd * z0, h + prm.offset_sd * z1

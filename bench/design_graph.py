@@ -1,0 +1,218 @@
+#!/usr/bin/env python3
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Issue 11 item 6: chosen designs proven on the node graph, with bounded release noise. Not in CI.
+
+For each design scene written by `throwmap design-search` (default: the triangle's,
+docs/design/triangle_design.yaml, at the floor 0.005 of its search, and the house part's,
+docs/design/house_base_design.yaml, at its search's floor 0.0005): the sim stands in for the
+hardware on the design plus release errors within the floor's box (every throw's speed within
++-s w and offset within +-s d_min, effect release_noise with distribution uniform or corner,
+throwmap.search.noisy_design_scene) and writes its truth log; a predictor and the monitor run on
+the noise-free design scene, as beside a real feeder. Processes on loopback DDS, own
+ROS_DOMAIN_ID. After N cycles the edge1_verdict stream is judged against the truth
+(feeder_monitor.feed_check): readies per cycle after the warm-up with a 95 % Wilson interval
+against the prediction (the monitor's analysis: the sensor's detection rate in the limit set;
+the design kernel's figure printed beside it), false readies (must be 0), anomalies.
+
+Usage (after ``. scripts/setup.sh``):
+
+    python bench/design_graph.py [--cycles 3000] [--period 0.01] [--distribution uniform]
+        [--seed 1] [--out DIR] [DESIGN.yaml:FLOOR ...]
+
+Exit status 0 when no run has a false ready or a cycle without truth and every run ran, else
+1 (a node that fails, e.g. the stand-in whose analysis of the noisy scene leaves the domain of
+f, is reported with its log and the next design runs). The interval
+treats cycles as independent draws; the orbit's cycles are correlated (a limit set is close to
+periodic), so it is a guide, not a test.
+"""
+
+import argparse
+import os
+import pathlib
+import sys
+import tempfile
+import time
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / 'scripts'))
+
+from demo_graph import Processes  # noqa: E402
+from feeder_testing import claim_domain_id  # noqa: E402
+
+DEFAULT_RUNS = (f'{REPO}/docs/design/triangle_design.yaml:0.005',
+                f'{REPO}/docs/design/house_base_design.yaml:0.0005')
+
+
+class Listener:
+    """The bench's node: collects cycle_status and edge1_verdict, enables the stand-in."""
+
+    def __init__(self, rclpy):
+        from diagnostic_msgs.msg import DiagnosticStatus
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        self.rclpy = rclpy
+        self.node = rclpy.create_node('feeder_design_graph')
+        qos = QoSProfile(depth=10_000, reliability=ReliabilityPolicy.RELIABLE)
+        self.statuses, self.verdicts = [], []
+        self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
+                                      self.statuses.append, qos)
+        self.node.create_subscription(DiagnosticStatus, '/feeder/edge1_verdict',
+                                      self.verdicts.append, qos)
+
+    def spin_until(self, cond, timeout, what, procs=None):
+        end = time.monotonic() + timeout
+        while not cond():
+            if time.monotonic() > end:
+                raise SystemExit(f'design_graph: timed out waiting for {what}')
+            if procs is not None:
+                procs.check()
+            self.rclpy.spin_once(self.node, timeout_sec=0.1)
+
+    def enable(self, on, procs):
+        from std_srvs.srv import SetBool
+        client = self.node.create_client(SetBool, '/feeder/feeder_driver/enable')
+        self.spin_until(client.service_is_ready, 120, 'the stand-in', procs)
+        fut = client.call_async(SetBool.Request(data=on))
+        self.spin_until(fut.done, 10, 'enable', procs)
+        if not fut.result().success:
+            raise SystemExit(f'design_graph: enable {on} refused: {fut.result().message}')
+        self.node.destroy_client(client)
+
+    def close(self):
+        self.node.destroy_node()
+
+
+def kernel_prediction(scene):
+    """Return the design search's own figure (throwmap.design): proven readies per throw."""
+    from throwmap import design as D
+    res = D.evaluate_grid(scene, [scene.h], [scene.release_speed], [scene.goal_edge], [0.25],
+                          workers=1)
+    return float(res.column('readies_per_throw', 0, 0)[0])
+
+
+def run_one(rclpy, design_path, floor, args, out):
+    from feeder_common.messages import parse_edge_verdict
+    from feeder_monitor.feed_check import design_prediction, judge_feed
+    from feeder_sim.truth import read_truth_log
+    from throwmap import load_scene
+    from throwmap.search import noisy_design_scene, write_scene
+    design = load_scene(str(design_path))
+    an, rules = design_prediction(design)
+    name = design.name
+    noisy = out / f'{name}_noisy.yaml'
+    write_scene(noisy_design_scene(design, floor, args.distribution, args.seed), noisy)
+    truth_path = out / f'{name}_truth.jsonl'
+    logs = out / name
+    logs.mkdir(exist_ok=True)
+    procs = Processes(logs)
+    lis = Listener(rclpy)
+    ns = ['-r', '__ns:=/feeder']
+    try:
+        procs.start('sim_hw', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-r',
+                    '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p',
+                    f'scene:={noisy}', '-p', f'cycle_period:={args.period}', '-p',
+                    f'truth_log:={truth_path}')
+        procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-p',
+                    f'scene:={design_path}')
+        procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
+                    f'scene:={design_path}')
+        lis.spin_until(lambda: lis.node.count_subscribers('/feeder/cycle_status') >= 3, 120,
+                       'the readers of cycle_status', procs)
+        lis.spin_until(lambda: lis.node.count_publishers('/feeder/edge1_verdict') >= 1, 120,
+                       'the monitor', procs)
+        end = time.monotonic() + 2.0
+        lis.spin_until(lambda: time.monotonic() > end, 10, 'discovery')
+        t0 = time.monotonic()
+        lis.enable(True, procs)
+        lis.spin_until(lambda: len(lis.statuses) >= args.cycles,
+                       60 + 3 * args.cycles * args.period, f'{args.cycles} cycles', procs)
+        lis.enable(False, procs)
+        wall = time.monotonic() - t0
+        lis.spin_until(lambda: len(lis.verdicts) >= len(lis.statuses), 20, 'the last verdicts',
+                       procs)
+        end = time.monotonic() + 1.0
+        lis.spin_until(lambda: time.monotonic() > end, 10, 'late messages')
+    finally:
+        lis.close()
+        procs.stop_all()
+    header, truth = read_truth_log(truth_path)
+    verdicts = {}
+    for msg in lis.verdicts:
+        v = parse_edge_verdict(msg)
+        verdicts[v.seq] = (v.ready, v.anomaly)
+    report = judge_feed(verdicts, truth, an.sensor.goal_edge, an.sensor.detection_rate,
+                        rules.warmup_cycles)
+    kernel = kernel_prediction(design)
+    fired = len(truth)
+    print(f'\n{name}: h {design.h * 100:.4f} cm, {design.release_speed * 57.29578:.2f} deg/s, '
+          f'goal edge {an.sensor.goal_edge}, sensor {an.sensor.radius * 100:.2f} cm, warm-up '
+          f'{rules.warmup_cycles} cycles; release errors {args.distribution} within '
+          f'+-{floor * design.release_speed * 57.29578:.3f} deg/s, '
+          f'+-{floor * design.part.d_min * 1000:.3f} mm (s = {floor})')
+    print(f'  {fired} cycles fired in {wall:.1f} s, {len(verdicts)} verdicts')
+    print(f'  {report.line()}')
+    print(f'  predicted: monitor analysis {report.predicted:.4f}, design kernel {kernel:.4f} '
+          'readies per throw')
+    return report
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0].strip())
+    ap.add_argument('runs', nargs='*', default=list(DEFAULT_RUNS), metavar='DESIGN:FLOOR',
+                    help='design scene and the joint robustness floor s of its search')
+    ap.add_argument('--cycles', type=int, default=3000)
+    ap.add_argument('--period', type=float, default=0.01, help='cycle_period of the stand-in')
+    ap.add_argument('--distribution', choices=('uniform', 'corner'), default='uniform')
+    ap.add_argument('--seed', type=int, default=1)
+    ap.add_argument('--out', type=pathlib.Path, default=None,
+                    help='directory for scenes, truth logs and node logs (default: temporary)')
+    args = ap.parse_args()
+    runs = []
+    for spec in args.runs:
+        path, _, floor = spec.rpartition(':')
+        try:
+            runs.append((pathlib.Path(path).resolve(), float(floor)))
+        except ValueError:
+            ap.error(f'{spec!r}: give DESIGN.yaml:FLOOR, e.g. docs/design/triangle_design.yaml'
+                     ':0.005')
+    out = (args.out or pathlib.Path(tempfile.mkdtemp(prefix='feeder-design-graph-'))).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    domain, lock = claim_domain_id()
+    os.environ['ROS_DOMAIN_ID'] = str(domain)
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    load = ', '.join(f'{x:.1f}' for x in os.getloadavg())
+    print(f'design_graph: {args.cycles} cycles per design at cycle_period {args.period} s, '
+          f'ROS_DOMAIN_ID={domain} (loopback), load average {load}, output in {out}',
+          flush=True)
+    import rclpy
+    rclpy.init()
+    bad = 0
+    try:
+        for path, floor in runs:
+            try:
+                report = run_one(rclpy, path, floor, args, out)
+            except SystemExit as exc:     # a node failed: say which and why, go on
+                print(f'\n{path.name} at s = {floor}: the run failed: {exc}', flush=True)
+                bad += 1
+                continue
+            bad += report.false_readies + report.missing_truth
+    finally:
+        rclpy.shutdown()
+        lock.close()
+    return 1 if bad else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
