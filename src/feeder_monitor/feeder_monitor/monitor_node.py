@@ -208,9 +208,12 @@ class MonitorNode(Node):
         for c in cycles:
             # A second publisher costs one graph lookup per cycle to see; the full identity
             # check (GIDs) runs before a detection is judged, the only cycles that can be ready.
-            distrust = self._guard.crowded()
-            if distrust is None and c.completed and c.detected:
+            # It sees a second publisher too, so a detection skips the cheap lookup: the
+            # lookups lie between the cycle_status and edge1_ready (bench/monitor_hop.py).
+            if c.completed and c.detected:
                 distrust = self._guard.check()
+            else:
+                distrust = self._guard.crowded()
             if distrust is not None:
                 v = self._monitor.untrusted(c.seq, distrust)
             elif c.completed:
