@@ -132,18 +132,38 @@ class Probe:
         self.node.destroy_node()
 
 
+# SCHED_FIFO priority of the sim, monitor and predictor (--realtime-priority; 0: normal)
+REALTIME_PRIORITY = 0
+# ... and of the probe and the baseline's echo (--probe-realtime)
+PROBE_PRIORITY = 0
+
+
+def probe_realtime():
+    """
+    Run this process's threads at PROBE_PRIORITY, once its node exists.
+
+    rmw creates the DDS participant and its threads with the first node: set it after that.
+    Not inherited: the nodes started from here run as their parameter says, and a busy process
+    that inherited SCHED_FIFO would starve this one on its core.
+    """
+    if PROBE_PRIORITY:
+        from feeder_common.realtime import set_realtime_priority
+        set_realtime_priority(PROBE_PRIORITY, inherit=False)
+
+
 def start(procs, which, period):
+    rt = ('-p', f'realtime_priority:={REALTIME_PRIORITY}') if REALTIME_PRIORITY else ()
     if 'sim' in which:
         procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
                     '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p',
-                    f'scene:={SCENE}', '-p', f'cycle_period:={period}')
+                    f'scene:={SCENE}', '-p', f'cycle_period:={period}', *rt)
     if 'monitor' in which:
         procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', '-r',
-                    '__ns:=/feeder', '-p', f'scene:={SCENE}')
+                    '__ns:=/feeder', '-p', f'scene:={SCENE}', *rt)
     if 'predictor' in which:
         procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', '-r',
                     '__ns:=/feeder/predictor', '-r', 'cycle_status:=/feeder/cycle_status',
-                    '-p', f'scene:={SCENE}')
+                    '-p', f'scene:={SCENE}', *rt)
     if 'recorder' in which:
         bag = pathlib.Path(procs.log_dir) / 'bag'
         shutil.rmtree(bag, ignore_errors=True)
@@ -163,6 +183,7 @@ def wait_graph(probe, which):
 def latency(rclpy, log_dir, cycles, period=0.01):
     procs = Processes(log_dir)
     probe = Probe(rclpy)
+    probe_realtime()
     try:
         start(procs, ('sim', 'monitor'), period)
         wait_graph(probe, ('sim', 'monitor'))
@@ -205,10 +226,14 @@ def latency(rclpy, log_dir, cycles, period=0.01):
 
 
 ECHO = """
+import sys
 import rclpy
 from std_msgs.msg import Float64
 rclpy.init()
 node = rclpy.create_node('feeder_bench_echo')
+if int(sys.argv[1]):
+    from feeder_common.realtime import set_realtime_priority
+    set_realtime_priority(int(sys.argv[1]))
 pub = node.create_publisher(Float64, '/bench/pong', 10)
 node.create_subscription(Float64, '/bench/ping', pub.publish, 10)
 try:
@@ -223,8 +248,9 @@ def echo_baseline(rclpy, cycles, period):
     import subprocess
     from demo_graph import node_env
     from std_msgs.msg import Float64
-    proc = subprocess.Popen([sys.executable, '-c', ECHO], env=node_env())
+    proc = subprocess.Popen([sys.executable, '-c', ECHO, str(PROBE_PRIORITY)], env=node_env())
     node = rclpy.create_node('feeder_bench_ping')
+    probe_realtime()
     got = []
     pub = node.create_publisher(Float64, '/bench/ping', 10)
     node.create_subscription(Float64, '/bench/pong', lambda m, i: got.append(i), 10)
@@ -296,6 +322,12 @@ def cpu(rclpy, log_dir, seconds, period):
         procs.stop_all()
 
 
+def busy_load(n):
+    """Start ``n`` processes that spin at nice 0 until killed: both cores busy on demand."""
+    import subprocess
+    return [subprocess.Popen([sys.executable, '-c', 'while True: pass']) for _ in range(n)]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0].strip())
     ap.add_argument('--latency-cycles', type=int, default=1000)
@@ -309,7 +341,24 @@ def main():
                     'e.g. a build of another commit, to compare before/after)')
     ap.add_argument('--executor', choices=('events', 'single'), default=None,
                     help="the nodes' executor (FEEDER_EXECUTOR; default: the nodes' own)")
+    ap.add_argument('--load', type=int, default=0, metavar='N',
+                    help='start N busy-looping processes (nice 0) for the whole run: a load '
+                    'that can be reproduced, unlike other jobs (default 0)')
+    ap.add_argument('--realtime-priority', type=int, default=0, metavar='P',
+                    help="the sim's, monitor's and predictor's realtime_priority parameter "
+                    '(SCHED_FIFO 1-99; needs the right to it; default 0: normal scheduler)')
+    ap.add_argument('--probe-realtime', action='store_true',
+                    help='run the probe (the consumer of edge1_ready) and the baseline echo at '
+                    '--realtime-priority too; default: normal, a consumer without the right')
     args = ap.parse_args()
+    if not 0 <= args.load <= 64:
+        ap.error(f'--load must be 0-64 busy processes, got {args.load}')
+    if not 0 <= args.realtime_priority <= 99:
+        ap.error(f'--realtime-priority must be 0-99, got {args.realtime_priority}')
+    if args.probe_realtime and not args.realtime_priority:
+        ap.error('--probe-realtime needs --realtime-priority P')
+    global REALTIME_PRIORITY
+    REALTIME_PRIORITY = args.realtime_priority
     if args.install is not None:
         import demo_graph
         demo_graph.INSTALL = args.install.resolve()
@@ -321,6 +370,9 @@ def main():
     import rclpy
     rclpy.init()
     log_dir = pathlib.Path(tempfile.mkdtemp(prefix='feeder-bench-'))
+    burners = busy_load(args.load)
+    global PROBE_PRIORITY
+    PROBE_PRIORITY = args.realtime_priority if args.probe_realtime else 0
     rows = []
 
     def row(*cells):
@@ -332,8 +384,10 @@ def main():
         import demo_graph
         executor = os.environ.get('FEEDER_EXECUTOR', "the nodes' default")
         print(f'graph_bench: ROS_DOMAIN_ID={domain} (loopback), {os.cpu_count()} cores, load '
-              f'average {load} (other work on the machine skews latency), logs in {log_dir}; '
-              f'nodes from {demo_graph.INSTALL}, executor: {executor}', flush=True)
+              f'average {load} (other work on the machine skews latency), {args.load} busy '
+              f'processes started, realtime_priority {args.realtime_priority}'
+              f'{" (probe too)" if args.probe_realtime else ""}, logs in {log_dir}; nodes from {demo_graph.INSTALL}, '
+              f'executor: {executor}', flush=True)
         if args.only in (None, 'latency'):
             series = latency(rclpy, log_dir, args.latency_cycles, args.latency_period)
             for k, (label, xs) in enumerate(series.items()):
@@ -360,6 +414,9 @@ def main():
                     row(f'CPU of {name} at {label} cycling', f'{secs:.0f} s',
                         f'{use:.2f} % of a core', '< 3 %' if period == 1.0 else '')
     finally:
+        for b in burners:
+            b.kill()
+            b.wait()
         rclpy.shutdown()
         lock.close()
     load = ', '.join(f'{x:.1f}' for x in os.getloadavg())

@@ -92,11 +92,13 @@ class Graph:
             pytest.fail(f'{path} is missing: build the workspace first (. scripts/setup.sh)')
         return path
 
-    def start(self, pkg, exe, *args, name=None):
+    def start(self, pkg, exe, *args, name=None, wrapper=()):
+        """Start a node; ``wrapper`` is a command that runs it (e.g. setpriv with options)."""
         name = name or exe
         log_path = self.log_dir / f'{name}-{len(self.procs)}.log'
         log = open(log_path, 'w')
-        proc = subprocess.Popen([str(self.executable(pkg, exe)), *map(str, args)], stdout=log,
+        proc = subprocess.Popen([*wrapper, str(self.executable(pkg, exe)), *map(str, args)],
+                                stdout=log,
                                 stderr=subprocess.STDOUT, env=_process_env(), cwd=REPO,
                                 start_new_session=True)
         log.close()

@@ -38,13 +38,13 @@ EXPERIMENT = str(REPO / 'scenes' / 'experiment.yaml')
 SHORT_ARM = str(REPO / 'tests' / 'scenes' / 'short_arm.yaml')
 
 
-def sim_as_hardware(graph, *params, scene=TRIANGLE, ns='/feeder'):
+def sim_as_hardware(graph, *params, scene=TRIANGLE, ns='/feeder', wrapper=()):
     """sim_node in place of the driver: /feeder/feeder_driver with hardware_mode."""
     args = ['--ros-args', '-r', f'__ns:={ns}', '-r', '__node:=feeder_driver',
             '-p', 'hardware_mode:=true', '-p', f'scene:={scene}']
     for p in params:
         args += ['-p', p]
-    return graph.start('feeder_sim', 'sim_node', *args, name='sim_hw')
+    return graph.start('feeder_sim', 'sim_node', *args, name='sim_hw', wrapper=wrapper)
 
 
 def predictor(graph, *params, scene=TRIANGLE, ns='/feeder'):
@@ -55,11 +55,11 @@ def predictor(graph, *params, scene=TRIANGLE, ns='/feeder'):
     return graph.start('feeder_sim', 'sim_node', *args, name='predictor')
 
 
-def monitor(graph, *params, scene=TRIANGLE, ns='/feeder'):
+def monitor(graph, *params, scene=TRIANGLE, ns='/feeder', wrapper=()):
     args = ['--ros-args', '-r', f'__ns:={ns}', '-p', f'scene:={scene}']
     for p in params:
         args += ['-p', p]
-    return graph.start('feeder_monitor', 'monitor_node', *args, name='monitor')
+    return graph.start('feeder_monitor', 'monitor_node', *args, name='monitor', wrapper=wrapper)
 
 
 class Collector:

@@ -133,10 +133,25 @@ def test_the_plans_start_what_the_issue_asks(support):
     ('plan_sim', {'rviz': 'yes'}, 'rviz:=yes: use one of true, false'),
     ('plan_sim', {'port': '/dev/ttyACM0'}, "unknown launch arguments ['port']"),
     ('plan_feeders', {'namespaces': 'a,a'}, 'names one twice'),
+    ('plan_sim', {'realtime_priority': '100'}, 'realtime_priority:=100 must be an integer in '
+     '[0, 99]'),
+    ('plan_hardware', {'realtime_priority': 'high'}, 'realtime_priority:=high must be an '
+     'integer'),
 ])
 def test_bad_launch_arguments_say_what_to_give(support, planner, given, words):
     with pytest.raises(support.LaunchArgumentError, match=words.replace('[', r'\[')):
         getattr(support, planner)(given)
+
+
+@pytest.mark.parametrize('planner', ['plan_sim', 'plan_hardware', 'plan_feeders'])
+def test_realtime_priority_reaches_every_feeder_node_and_only_when_asked(support, planner):
+    def feeder_nodes(plan):
+        return [s for s in plan if s.package.startswith('feeder_') and s.ros]
+    asked = feeder_nodes(getattr(support, planner)({'realtime_priority': '40'}))
+    assert len(asked) >= 3
+    assert all(s.parameters[-1]['realtime_priority'] == 40 for s in asked)
+    default = feeder_nodes(getattr(support, planner)({}))
+    assert all('realtime_priority' not in s.parameters[-1] for s in default)
 
 
 def test_reading_an_undeclared_argument_is_an_error(support):

@@ -47,6 +47,8 @@ COMMON_ARGUMENTS = {
               'triangle, bracket, experiment, house, rectangle, hard/<name>) or a path'),
     'namespace': ('feeder', 'namespace of the feeder (every topic, service and node in it)'),
     'cycle_period': ('1.0', 's between cycles while enabled'),
+    'realtime_priority': ('0', "SCHED_FIFO priority (1-99) of the feeder's nodes (needs an "
+                          'rtprio limit or CAP_SYS_NICE); 0: the normal scheduler'),
     'sensor_radius': ('auto', "m; auto: throwmap's sensor design for the scene"),
     'record': ('', 'a new directory: record the feeder to a rosbag2 MCAP bag there'),
     'robot_state_publisher': ('auto', 'auto: start it where it is installed; true; false'),
@@ -158,6 +160,20 @@ def number(args, name, minimum=None):
     return value
 
 
+def integer(args, name, minimum, maximum):
+    text = args[name].strip()
+    if not text.lstrip('-').isdigit() or not minimum <= int(text) <= maximum:
+        raise LaunchArgumentError(f'{name}:={args[name]} must be an integer in '
+                                  f'[{minimum}, {maximum}]')
+    return int(text)
+
+
+def _realtime_parameter(args):
+    """{'realtime_priority': P} for every feeder node when asked for, else {}."""
+    priority = integer(args, 'realtime_priority', 0, 99)
+    return {'realtime_priority': priority} if priority else {}
+
+
 def flag(args, name, choices=('true', 'false')):
     value = args[name].strip().lower()
     if value not in choices:
@@ -224,12 +240,14 @@ def _sensor_parameter(args):
 def _common_nodes(args, ns, scene):
     """Predictor, monitor, recorder, robot_state_publisher, rviz2 of one feeder."""
     sensor = _sensor_parameter(args)
+    rt = _realtime_parameter(args)
     nodes = [
         NodeSpec('feeder_sim', 'sim_node', 'feeder_sim', ns,
-                 [str(share('feeder_sim') / 'config' / 'sim.yaml'), {'scene': scene, **sensor}]),
+                 [str(share('feeder_sim') / 'config' / 'sim.yaml'),
+                  {'scene': scene, **sensor, **rt}]),
         NodeSpec('feeder_monitor', 'monitor_node', 'feeder_monitor', ns,
                  [str(share('feeder_monitor') / 'config' / 'monitor.yaml'),
-                  {'scene': scene, **sensor}]),
+                  {'scene': scene, **sensor, **rt}]),
     ]
     if args['record']:
         nodes.append(NodeSpec('feeder_monitor', 'bag_recorder', 'feeder_bag_recorder', ns,
@@ -259,7 +277,7 @@ def plan_sim(given):
                         [str(share('feeder_sim') / 'config' / 'sim.yaml'),
                          {'scene': scene, 'hardware_mode': True,
                           'cycle_period': number(args, 'cycle_period', 0.005),
-                          **_sensor_parameter(args)}])
+                          **_sensor_parameter(args), **_realtime_parameter(args)}])
     return [hardware] + _common_nodes(args, ns, scene)
 
 
@@ -281,7 +299,8 @@ def plan_hardware(given):
                               ros=False))
     nodes.append(NodeSpec('feeder_driver', 'driver_node', 'feeder_driver', ns,
                           [str(share('feeder_driver') / 'config' / 'driver.yaml'),
-                           {'port': port, 'cycle_period': number(args, 'cycle_period', 0.01)}]))
+                           {'port': port, 'cycle_period': number(args, 'cycle_period', 0.01),
+                            **_realtime_parameter(args)}]))
     return nodes + _common_nodes(args, ns, scene)
 
 

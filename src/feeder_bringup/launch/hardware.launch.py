@@ -19,7 +19,7 @@ The real feeder: driver_node on a serial port, the predictor and the monitor.
     ros2 launch feeder_bringup hardware.launch.py emulator:=true   # controller emulator on a pty
 
 Other arguments as sim.launch.py's (namespace, cycle_period, sensor_radius, record, rviz,
-robot_state_publisher, arm_length).
+robot_state_publisher, arm_length, realtime_priority).
 """
 
 from feeder_bringup.launch_actions import from_plan

@@ -39,6 +39,7 @@ from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
 from rclpy.signals import SignalHandlerOptions
 
 from .parameters import ParameterError
+from .realtime import RealtimeError, set_realtime_priority
 
 # The executor every node spins in (bench/graph_bench.py compares them; the environment
 # variable FEEDER_EXECUTOR=single|events overrides it, for such comparisons).
@@ -226,8 +227,10 @@ def _run(make_node, prog, stop, context):
     executor = None
     try:
         try:
+            if node.has_parameter('realtime_priority'):
+                set_realtime_priority(node.get_parameter('realtime_priority').value)
             autostart(node)
-        except StartupError as exc:
+        except (StartupError, RealtimeError) as exc:
             print(f'{prog}: error: {exc}', file=sys.stderr)
             return 2
         executor = make_executor(getattr(node, 'executor_kind', None), context)

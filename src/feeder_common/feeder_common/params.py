@@ -122,6 +122,15 @@ class ParamSpec:
         return (None, reason) if reason else (value, None)
 
 
+# Every node on the path of a cycle (driver or its stand-in, monitor, predictor) takes it: run
+# at start-up by feeder_common.node.run_node (feeder_common.realtime says why).
+REALTIME_PRIORITY = ParamSpec(
+    'realtime_priority', 0, 'SCHED_FIFO priority (1-99) of every thread of the node, so that '
+    'other work on busy cores cannot delay a cycle; needs an rtprio limit or CAP_SYS_NICE (the '
+    'node refuses to start without it); 0: the normal scheduler', minimum=0, maximum=99,
+    read_only=True)
+
+
 def by_name(specs):
     """Map names to specs; a name given twice is an error in the table."""
     out = {}

@@ -22,7 +22,7 @@ ranges (a test checks both).
 """
 
 from feeder_common.frames import FRAME_ID_MAX_LENGTH
-from feeder_common.params import by_name, ParamSpec
+from feeder_common.params import by_name, ParamSpec, REALTIME_PRIORITY
 
 BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 500000,
               921600, 1000000, 2000000)
@@ -36,6 +36,7 @@ SPECS = (
               read_only=True, choices=BAUD_RATES),
     ParamSpec('autostart', True, 'configure and activate at start-up; false: wait for '
               '~/change_state (ros2 lifecycle set)', read_only=True),
+    REALTIME_PRIORITY,
     ParamSpec('cycle_period', 1.0, 'seconds between FIREs while ~/enable is true (the next '
               'cycle never starts before the previous one ended)', 0.01, 3600.0),
     ParamSpec('ack_timeout_s', 0.5, 'a cycle fails if no ACK (or REL/SENS) arrives within this '

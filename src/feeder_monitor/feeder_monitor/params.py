@@ -14,11 +14,12 @@
 
 """Parameter table of monitor_node (ROS-free; the spec type is feeder_common's)."""
 
-from feeder_common.params import ParamSpec
+from feeder_common.params import ParamSpec, REALTIME_PRIORITY
 
 MONITOR_PARAMS = (
     ParamSpec('scene', '', "scene YAML the feeder runs (the same file as the sim's); must load",
               read_only=True, constraints='a file throwmap.load_scene accepts'),
+    REALTIME_PRIORITY,
     ParamSpec('sensor_radius', 0.0, 'arm coordinate x of the proximity sensor, m; 0: the '
               "analysis's choice (as the sim's default)", minimum=0.0, maximum=10.0),
     ParamSpec('warmup_cycles', -1, 'completed throws after a (re)start before a detection '

@@ -22,12 +22,13 @@ the domain of f. Each check returns the reason of a rejection, or None.
 
 import math
 
-from feeder_common.params import check_scene, ParamSpec
+from feeder_common.params import check_scene, ParamSpec, REALTIME_PRIORITY
 
 
 SIM_PARAMS = (
     ParamSpec('autostart', True, 'configure and activate at start-up; false: wait for '
               '~/change_state (ros2 lifecycle set)', read_only=True),
+    REALTIME_PRIORITY,
     ParamSpec('scene', '', 'scene YAML (throwmap format, e.g. scenes/triangle.yaml); must load',
               read_only=True, constraints='a file throwmap.load_scene accepts'),
     ParamSpec('hardware_mode', False, 'true: stand in for the driver, with exactly its '
