@@ -33,8 +33,9 @@ PRIORITY_MAX = 99
 
 # What a user must do when the kernel refuses (EPERM): grant the priority, or do without it.
 GRANT_HINT = ('grant it (run as a user with an rtprio limit of at least that, e.g. '
-              "'@realtime - rtprio 98' in /etc/security/limits.conf, or give the executable "
-              'CAP_SYS_NICE) or set realtime_priority:=0 for the normal scheduler')
+              "'@realtime - rtprio 98' in /etc/security/limits.conf; in a container "
+              '--ulimit rtprio=98 or --cap-add=SYS_NICE) or set realtime_priority:=0 for the '
+              'normal scheduler')
 
 
 class RealtimeError(OSError):
