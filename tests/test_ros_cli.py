@@ -19,6 +19,7 @@ The ``ros2`` tests run where the CLI exists (tests/ros_cli.py) and are skipped e
 the reason; three feeders side by side also run as plain processes everywhere.
 """
 
+import os
 import signal
 import time
 
@@ -165,6 +166,28 @@ def test_an_integer_for_a_double_in_launch_xml(cli, ros, tmp_path, launches):
     finally:
         proc.send_signal(signal.SIGINT)
         assert proc.wait(timeout=30) == 0, log.read_text()
+
+
+def test_realtime_priority_through_ros2_launch(cli, ros, tmp_path, launches):
+    from test_graph_realtime import may_use_fifo, threads
+    if not may_use_fifo():
+        pytest.skip('this user may not use SCHED_FIFO here (no rtprio limit, no CAP_SYS_NICE)')
+    launch = Launch(cli, tmp_path, 'hardware.launch.py', 'emulator:=true',
+                    f'emulator_link:={tmp_path / "tty"}', 'namespace:=rt',
+                    'realtime_priority:=5')
+    launches.append(launch)
+    wait_nodes(ros, ['/rt/feeder_driver', '/rt/feeder_sim', '/rt/feeder_monitor'])
+    pids = {int(line.rsplit('[', 1)[1].rstrip(']')): line.split('[')[2].split(']')[0]
+            for line in launch.log.splitlines() if 'process started with pid' in line}
+    nodes = {pid: exe for pid, exe in pids.items() if not exe.startswith('controller_emulator')}
+    assert sorted(exe.rsplit('-', 1)[0] for exe in nodes.values()) == \
+        ['driver_node', 'monitor_node', 'sim_node'], launch.log
+    for pid, exe in nodes.items():
+        assert set(threads(pid).values()) == {(os.SCHED_FIFO, 5)}, exe
+    emulator = next(pid for pid, exe in pids.items() if exe.startswith('controller_emulator'))
+    assert os.sched_getscheduler(emulator) == os.SCHED_OTHER   # not a ROS node: untouched
+    assert launch.stop() == 0, launch.log
+    assert 'process has died' not in launch.log, launch.log
 
 
 # ---- several feeders side by side --------------------------------------------------------
