@@ -83,7 +83,7 @@ class SimNode(FeederLifecycleNode):
         self._rate_mark = (0, self.get_clock().now())
         self._last_followed_seq = None
         self._static_markers = None     # Marker messages that only change with the analysis
-        self._markers_timer = None      # one-shot: sends markers that were due
+        self._markers_timer = None      # re-armed one-shot: sends markers that were due
         self._markers_sent = None       # time of the last markers message
         self._params = ParameterGate(self, SIM_PARAMS, self._validate, self._apply)
         p = self._params
@@ -427,8 +427,19 @@ class SimNode(FeederLifecycleNode):
         wait = 0.0 if force or self._markers_sent is None else \
             period - (now - self._markers_sent).nanoseconds * 1e-9
         if wait > 0.0:
-            if self._markers_timer is None:
-                self._markers_timer = self.create_timer(wait, self._flush_markers)
+            # One timer per activation, re-armed for each wait: rclpy's callback group keeps a
+            # dead reference to every timer ever created, so a timer per wait (10 per second
+            # while cycling fast) grew the predictor by 5 KB per 1000 cycles (bench/mem_trace.py).
+            # Re-armed, it fires one markers_period after the first state that had to wait:
+            # still within a period of that state, and never sooner than a period after the
+            # last markers.
+            timer = self._markers_timer
+            if timer is None:
+                self._markers_timer = self.create_timer(period, self._flush_markers)
+            elif timer.is_canceled():
+                if timer.timer_period_ns != int(period * 1e9):
+                    timer.timer_period_ns = int(period * 1e9)
+                timer.reset()
             return
         self._markers_sent = now
         stamp = stamp or now.to_msg()
@@ -444,10 +455,11 @@ class SimNode(FeederLifecycleNode):
         self._pubs['markers'].publish(MarkerArray(markers=self._static_markers + state.markers))
 
     def _flush_markers(self):
-        self.destroy_timer(self._markers_timer)
-        self._markers_timer = None
+        self._markers_timer.cancel()
         if self._predictor is not None:
-            self._publish_markers(force=True)
+            # Not forced: the events executor can run a timer's callback once more just after
+            # it was re-armed; a flush that is not due re-arms the timer instead of sending.
+            self._publish_markers()
 
     def _publish_latched(self):
         if not self._active or self._hardware:

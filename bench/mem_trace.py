@@ -1,0 +1,151 @@
+#!/usr/bin/env python3
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+What a node's memory grows by while cycling: tracemalloc in-process (issue 10's soak).
+
+    python bench/mem_trace.py --node predictor|recorder [--seconds 120] [--period 0.005]
+
+The sim runs as the hardware (a process, as in bench/soak.py); the traced node (the predictor:
+feeder_sim's SimNode; or the bag recorder, recording the soak's topics) runs in this process
+under tracemalloc, started after a warm-up. Prints the Python allocations still alive at the
+end that were made after the warm-up, by line, per 1000 cycles, beside the process's RSS
+growth: Python objects that grow are a leak or an index; RSS growth without them is C-level
+(rclpy, Fast DDS, the allocator). For the recorder it also prints the bag's size and its chunk
+index count. Figures, not assertions.
+"""
+
+import argparse
+import os
+import pathlib
+import sys
+import tempfile
+import time
+import tracemalloc
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / 'scripts'))
+sys.path.insert(0, str(REPO / 'bench'))
+
+from demo_graph import Processes  # noqa: E402
+from feeder_testing import claim_domain_id  # noqa: E402
+from soak import rss_kb, SCENE, TOPICS  # noqa: E402
+
+
+def make_node(which, context, out):
+    from rclpy.parameter import Parameter
+    if which == 'predictor':
+        from feeder_common.node import autostart
+        from feeder_sim.sim_node import SimNode
+        node = SimNode(context=context, namespace='/feeder',
+                       parameter_overrides=[Parameter('scene', value=SCENE)])
+        autostart(node)
+        return node, None
+    from feeder_monitor.bag import BagWriter
+    from feeder_monitor.bag_recorder import BagRecorder
+    writer = BagWriter(out / 'bag')
+    return BagRecorder(writer, list(TOPICS), context=context, namespace='/feeder'), writer
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0].strip())
+    ap.add_argument('--node', choices=('predictor', 'recorder'), required=True)
+    ap.add_argument('--seconds', type=float, default=120.0, help='traced time (default 120)')
+    ap.add_argument('--warmup', type=float, default=20.0, help='untraced start (default 20)')
+    ap.add_argument('--period', type=float, default=0.005)
+    ap.add_argument('--top', type=int, default=12)
+    args = ap.parse_args()
+    out = pathlib.Path(tempfile.mkdtemp(prefix='feeder-memtrace-'))
+    domain, lock = claim_domain_id()
+    os.environ['ROS_DOMAIN_ID'] = str(domain)
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from std_srvs.srv import SetBool
+    procs = Processes(out)
+    procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
+                '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p', f'scene:={SCENE}',
+                '-p', f'cycle_period:={args.period}')
+    context = Context()
+    rclpy.init(context=context)
+    node, writer = make_node(args.node, context, out)
+    ctl = rclpy.create_node('feeder_mem_trace', context=context)
+    ex = SingleThreadedExecutor(context=context)
+    ex.add_node(node)
+    ex.add_node(ctl)
+    seq = {'n': 0}
+    from diagnostic_msgs.msg import DiagnosticStatus
+    ctl.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
+                            lambda m: seq.__setitem__('n', seq['n'] + 1), 1000)
+
+    def spin(seconds):
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            procs.check()
+            ex.spin_once(timeout_sec=0.05)
+
+    try:
+        client = ctl.create_client(SetBool, '/feeder/feeder_driver/enable')
+        end = time.monotonic() + 120
+        while not client.service_is_ready() and time.monotonic() < end:
+            spin(0.1)
+        spin(3.0)
+        fut = client.call_async(SetBool.Request(data=True))
+        while not fut.done():
+            spin(0.05)
+        spin(args.warmup)
+        tracemalloc.start(6)
+        n0, rss0, t0 = seq['n'], rss_kb(os.getpid()), time.monotonic()
+        spin(args.seconds)
+        snap = tracemalloc.take_snapshot()
+        n1, rss1, t1 = seq['n'], rss_kb(os.getpid()), time.monotonic()
+        traced, _ = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        fut = client.call_async(SetBool.Request(data=False))
+        while not fut.done():
+            spin(0.05)
+    finally:
+        procs.stop_all()
+    cycles = n1 - n0
+    per = 1000.0 / max(cycles, 1)
+    print(f'mem_trace {args.node}: {cycles} cycles traced in {t1 - t0:.0f} s '
+          f'({cycles / (t1 - t0):.0f} cycles/s), load average '
+          f'{", ".join(f"{x:.1f}" for x in os.getloadavg())}')
+    print(f'RSS {rss0} -> {rss1} KB: {(rss1 - rss0) * per:+.2f} KB per 1000 cycles')
+    print(f'Python allocations made while traced and still alive: {traced / 1024:.0f} KB, '
+          f'{traced / 1024 * per:.2f} KB per 1000 cycles; by traceback:')
+    stats = snap.filter_traces([tracemalloc.Filter(False, tracemalloc.__file__)]) \
+        .statistics('traceback')
+    for st in stats[:args.top]:
+        print(f'  {st.size / 1024:9.1f} KB in {st.count:7d} blocks '
+              f'({st.size / 1024 * per:7.2f} KB per 1000 cycles)')
+        for line in st.traceback.format()[-6:]:
+            print('      ' + line)
+    if writer is not None:
+        log = writer._log
+        size = sum(p.stat().st_size for p in (out / 'bag').glob('*.mcap'))
+        print(f'bag: {writer.total} messages, {size / 1024:.0f} KB, '
+              f'{len(log.chunk_indexes)} chunk indexes')
+    node.destroy_node()
+    ctl.destroy_node()
+    context.try_shutdown()
+    lock.close()
+    print(f'(logs and bag in {out})')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
