@@ -208,6 +208,74 @@ def test_the_cycle_a_signal_aborts_reaches_cycle_status(graph, ros, tmp_path, si
     assert emu.poll() is None
 
 
+# A reader in a process of its own: one line per cycle_status it takes.
+SLOW_READER = """
+import sys
+import rclpy
+from diagnostic_msgs.msg import DiagnosticStatus
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+rclpy.init()
+node = rclpy.create_node('slow_reader')
+def on(msg):
+    print(msg.message, flush=True)
+node.create_subscription(DiagnosticStatus, '/feeder/cycle_status', on,
+                         QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+print('ready', flush=True)
+try:
+    rclpy.spin(node)
+except BaseException:
+    pass
+"""
+
+
+def test_the_aborted_cycle_reaches_a_reader_that_is_slow_to_acknowledge(graph, ros, tmp_path):
+    """
+    The driver waits for its readers before its writers go (issue 10, item 6).
+
+    While a reader is stopped (SIGSTOP) the driver reports the aborted cycle and waits for the
+    acknowledgement (up to its flush timeout) instead of destroying its writers at once, which
+    can lose the report for that reader; once the reader goes on (SIGCONT), it gets the report
+    and the driver leaves. The driver before commit 8028cd5 (no flush) fails it: it leaves at
+    once.
+    """
+    import subprocess
+    import sys
+    from conftest import _process_env
+    emu, drv = start_emulator_and_driver(graph, tmp_path, '--cycle-time', '20')
+    out = tmp_path / 'reader.out'
+    with open(out, 'w') as fh:
+        reader = subprocess.Popen([sys.executable, '-c', SLOW_READER], stdout=fh,
+                                  stderr=subprocess.STDOUT, env=_process_env())
+    try:
+        wait_for_readers(ros, '/feeder/cycle_status', 1)
+        ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') >= 1, 60.0,
+                       'the driver')
+        res = wait_for_handshake(ros)        # fires cycle 1; it takes 20 s
+        assert 'seq 1' in res.message, res.message
+        ros.spin_for(0.5)
+        reader.send_signal(signal.SIGSTOP)
+        drv.send_signal(signal.SIGINT)
+        # A driver that waits for its readers is still waiting 0.3 s later (for up to
+        # FLUSH_TIMEOUT_S, 0.5 s, after its report); one that does not is gone by then.
+        try:
+            drv.wait(0.3)
+            left_early = True
+        except subprocess.TimeoutExpired:
+            left_early = False
+        reader.send_signal(signal.SIGCONT)
+        assert drv.wait(10) == 0, graph.log(drv)
+        assert not left_early, 'the driver left before its reader acknowledged the report'
+        end = time.monotonic() + 5.0
+        while 'aborted' not in out.read_text() and time.monotonic() < end:
+            time.sleep(0.05)
+        assert 'aborted: interrupted (SIGINT)' in out.read_text(), \
+            (out.read_text(), graph.log(drv))
+    finally:
+        reader.send_signal(signal.SIGCONT)
+        reader.send_signal(signal.SIGINT)
+        reader.wait(10)
+
+
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_while_cycling_reports_every_fired_cycle(graph, ros, tmp_path, sig):
     """At 100 Hz, a signal aborts the cycle in flight: it is the last cycle_status."""
