@@ -23,7 +23,7 @@ import os
 import signal
 import time
 
-from diagnostic_msgs.msg import DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from feeder_common.messages import cycle_status, proximity
 from feeder_nodes import (Collector, Diagnostics, LATCHED, monitor, predictor, RELIABLE,
                           STARTUP_TIMEOUT, sim_as_hardware, status_values, TRIANGLE, Verdicts,
@@ -208,24 +208,37 @@ def test_the_cycle_a_signal_aborts_reaches_cycle_status(graph, ros, tmp_path, si
     assert emu.poll() is None
 
 
-# A reader in a process of its own: one line per cycle_status it takes.
+# A reliable reader in a process of its own (so that it can be stopped): one line per
+# message it takes, the message text of a cycle_status or of each status of a /diagnostics.
+# Deep, so that nothing is lost on its side while it catches up.
 SLOW_READER = """
 import sys
 import rclpy
-from diagnostic_msgs.msg import DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 rclpy.init()
 node = rclpy.create_node('slow_reader')
+topic = sys.argv[1]
 def on(msg):
-    print(msg.message, flush=True)
-node.create_subscription(DiagnosticStatus, '/feeder/cycle_status', on,
-                         QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
-print('ready', flush=True)
+    for status in (msg.status if topic == '/diagnostics' else [msg]):
+        print(status.message, flush=True)
+node.create_subscription(DiagnosticArray if topic == '/diagnostics' else DiagnosticStatus,
+                         topic, on, QoSProfile(depth=5000,
+                                               reliability=ReliabilityPolicy.RELIABLE))
 try:
     rclpy.spin(node)
 except BaseException:
     pass
 """
+
+
+def start_slow_reader(topic, out):
+    import subprocess
+    import sys
+    from conftest import _process_env
+    with open(out, 'w') as fh:
+        return subprocess.Popen([sys.executable, '-c', SLOW_READER, topic], stdout=fh,
+                                stderr=subprocess.STDOUT, env=_process_env())
 
 
 def test_the_aborted_cycle_reaches_a_reader_that_is_slow_to_acknowledge(graph, ros, tmp_path):
@@ -239,13 +252,9 @@ def test_the_aborted_cycle_reaches_a_reader_that_is_slow_to_acknowledge(graph, r
     once.
     """
     import subprocess
-    import sys
-    from conftest import _process_env
     emu, drv = start_emulator_and_driver(graph, tmp_path, '--cycle-time', '20')
     out = tmp_path / 'reader.out'
-    with open(out, 'w') as fh:
-        reader = subprocess.Popen([sys.executable, '-c', SLOW_READER], stdout=fh,
-                                  stderr=subprocess.STDOUT, env=_process_env())
+    reader = start_slow_reader('/feeder/cycle_status', out)
     try:
         wait_for_readers(ros, '/feeder/cycle_status', 1)
         ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') >= 1, 60.0,
@@ -271,6 +280,53 @@ def test_the_aborted_cycle_reaches_a_reader_that_is_slow_to_acknowledge(graph, r
         assert 'aborted: interrupted (SIGINT)' in out.read_text(), \
             (out.read_text(), graph.log(drv))
     finally:
+        reader.send_signal(signal.SIGCONT)
+        reader.send_signal(signal.SIGINT)
+        reader.wait(10)
+
+
+def test_an_error_that_lasted_one_period_reaches_a_slow_diagnostics_reader(ros, tmp_path):
+    """
+    /diagnostics keeps the last messages for a reader that has not acknowledged (issue 10, 7).
+
+    A node's diagnostics say ERROR in one update and OK in the next while a reader is stopped
+    (SIGSTOP) and its transport queue is full: the reader must still see the ERROR once it
+    goes on (reliable repair from the writer's history). With the writer's depth 1
+    (diagnostic_updater's; ours before) the OK replaced the ERROR: 3 of 3 runs lost it.
+    """
+    from feeder_common.diagnostics import Updater
+    out = tmp_path / 'reader.out'
+    reader = start_slow_reader('/diagnostics', out)
+    level = {'now': 'ok'}
+    updater = Updater(ros.node, period=3600.0, hardware_id='test')
+    updater.add('pulse', lambda st: st.summary(level['now'], f'pulse {level["now"]}'))
+    try:
+        ros.spin_until(lambda: ros.node.count_subscribers('/diagnostics') >= 1, 60.0,
+                       'the reader of /diagnostics')
+        updater.force_update()
+        end = time.monotonic() + 30.0       # the reader's subscription matched and took one
+        while 'pulse ok' not in out.read_text():
+            assert time.monotonic() < end, out.read_text()
+            updater.force_update()
+            ros.spin_for(0.2)
+        reader.send_signal(signal.SIGSTOP)
+        # Fill the stopped reader's transport queue from another writer, so that what the
+        # node sends next is not delivered at once and must come from the writer's history.
+        flood = ros.node.create_publisher(DiagnosticArray, '/diagnostics', 1)
+        for _ in range(3000):
+            flood.publish(DiagnosticArray(status=[DiagnosticStatus(message='flood')]))
+        for now in ('error', 'ok', 'ok'):
+            level['now'] = now
+            updater.force_update()
+            ros.spin_for(0.05)
+        reader.send_signal(signal.SIGCONT)
+        end = time.monotonic() + 10.0
+        while out.read_text().count('pulse ok') < 3 and time.monotonic() < end:
+            ros.spin_for(0.1)
+        lines = [x for x in out.read_text().splitlines() if x.startswith('pulse')]
+        assert lines[-3:] == ['pulse error', 'pulse ok', 'pulse ok'], lines
+    finally:
+        updater.destroy()
         reader.send_signal(signal.SIGCONT)
         reader.send_signal(signal.SIGINT)
         reader.wait(10)
