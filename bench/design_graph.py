@@ -51,47 +51,27 @@ sys.path.insert(0, str(REPO / 'scripts'))
 
 from demo_graph import Processes  # noqa: E402
 from feeder_testing import claim_domain_id  # noqa: E402
+from graph_bench import BenchNode  # noqa: E402
 
 DEFAULT_RUNS = (f'{REPO}/docs/design/triangle_design.yaml:0.005',
                 f'{REPO}/docs/design/house_base_design.yaml:0.0005')
 
 
-class Listener:
+class Listener(BenchNode):
     """The bench's node: collects cycle_status and edge1_verdict, enables the stand-in."""
+
+    prog = 'design_graph'
 
     def __init__(self, rclpy):
         from diagnostic_msgs.msg import DiagnosticStatus
         from rclpy.qos import QoSProfile, ReliabilityPolicy
-        self.rclpy = rclpy
-        self.node = rclpy.create_node('feeder_design_graph')
+        super().__init__(rclpy, 'feeder_design_graph')
         qos = QoSProfile(depth=10_000, reliability=ReliabilityPolicy.RELIABLE)
         self.statuses, self.verdicts = [], []
         self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
                                       self.statuses.append, qos)
         self.node.create_subscription(DiagnosticStatus, '/feeder/edge1_verdict',
                                       self.verdicts.append, qos)
-
-    def spin_until(self, cond, timeout, what, procs=None):
-        end = time.monotonic() + timeout
-        while not cond():
-            if time.monotonic() > end:
-                raise SystemExit(f'design_graph: timed out waiting for {what}')
-            if procs is not None:
-                procs.check()
-            self.rclpy.spin_once(self.node, timeout_sec=0.1)
-
-    def enable(self, on, procs):
-        from std_srvs.srv import SetBool
-        client = self.node.create_client(SetBool, '/feeder/feeder_driver/enable')
-        self.spin_until(client.service_is_ready, 120, 'the stand-in', procs)
-        fut = client.call_async(SetBool.Request(data=on))
-        self.spin_until(fut.done, 10, 'enable', procs)
-        if not fut.result().success:
-            raise SystemExit(f'design_graph: enable {on} refused: {fut.result().message}')
-        self.node.destroy_client(client)
-
-    def close(self):
-        self.node.destroy_node()
 
 
 def kernel_prediction(scene):

@@ -76,7 +76,41 @@ def _ready_of(readies, verdict_info):
     return readies[k] if k >= 0 else None
 
 
-class Probe:
+class BenchNode:
+    """A benchmark's own node: spins until a condition holds, switches the stand-in's cycling."""
+
+    prog = 'graph_bench'
+
+    def __init__(self, rclpy, name):
+        self.rclpy = rclpy
+        self.node = rclpy.create_node(name)
+
+    def spin_until(self, cond, timeout, what, procs=None):
+        """Spin until ``cond()``; exit with a message after ``timeout`` s or if a node died."""
+        end = time.monotonic() + timeout
+        while not cond():
+            if time.monotonic() > end:
+                raise SystemExit(f'{self.prog}: timed out waiting for {what}')
+            if procs is not None:
+                procs.check()
+            self.rclpy.spin_once(self.node, timeout_sec=0.05)
+
+    def enable(self, on, procs=None):
+        """Switch the cycling of /feeder/feeder_driver on or off (its ~/enable service)."""
+        from std_srvs.srv import SetBool
+        client = self.node.create_client(SetBool, '/feeder/feeder_driver/enable')
+        self.spin_until(client.service_is_ready, 120, 'the sim', procs)
+        fut = client.call_async(SetBool.Request(data=on))
+        self.spin_until(fut.done, 10, 'enable', procs)
+        if not fut.result().success:
+            raise SystemExit(f'{self.prog}: enable {on} refused: {fut.result().message}')
+        self.node.destroy_client(client)
+
+    def close(self):
+        self.node.destroy_node()
+
+
+class Probe(BenchNode):
     """The benchmark's node: subscriptions with receive timestamps, service calls."""
 
     def __init__(self, rclpy):
@@ -84,8 +118,7 @@ class Probe:
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import Range
         from std_msgs.msg import Bool
-        self.rclpy = rclpy
-        self.node = rclpy.create_node('feeder_bench')
+        super().__init__(rclpy, 'feeder_bench')
         reliable = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE)
         latched = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -101,35 +134,16 @@ class Probe:
         self.node.create_subscription(DiagnosticStatus, '/feeder/edge1_verdict',
                                       lambda m, i: self.verdicts.append((_seq(m), i)), reliable)
 
-    def spin_until(self, cond, timeout, what):
-        end = time.monotonic() + timeout
-        while not cond():
-            if time.monotonic() > end:
-                raise SystemExit(f'graph_bench: timed out waiting for {what}')
-            self.rclpy.spin_once(self.node, timeout_sec=0.05)
-
     def spin_for(self, seconds):
         end = time.monotonic() + seconds
         while time.monotonic() < end:
             self.rclpy.spin_once(self.node, timeout_sec=0.02)
-
-    def enable(self, on):
-        from std_srvs.srv import SetBool
-        client = self.node.create_client(SetBool, '/feeder/feeder_driver/enable')
-        self.spin_until(client.service_is_ready, 90, 'the sim')
-        fut = client.call_async(SetBool.Request(data=on))
-        self.spin_until(fut.done, 10, 'enable')
-        assert fut.result().success, fut.result().message
-        self.node.destroy_client(client)
 
     def clear(self):
         self.prox.clear()
         self.ready.clear()
         self.status.clear()
         self.verdicts.clear()
-
-    def close(self):
-        self.node.destroy_node()
 
 
 # SCHED_FIFO priority of the sim, monitor and predictor (--realtime-priority; 0: normal)
@@ -386,8 +400,8 @@ def main():
         print(f'graph_bench: ROS_DOMAIN_ID={domain} (loopback), {os.cpu_count()} cores, load '
               f'average {load} (other work on the machine skews latency), {args.load} busy '
               f'processes started, realtime_priority {args.realtime_priority}'
-              f'{" (probe too)" if args.probe_realtime else ""}, logs in {log_dir}; nodes from {demo_graph.INSTALL}, '
-              f'executor: {executor}', flush=True)
+              f'{" (probe too)" if args.probe_realtime else ""}, logs in {log_dir}; nodes '
+              f'from {demo_graph.INSTALL}, executor: {executor}', flush=True)
         if args.only in (None, 'latency'):
             series = latency(rclpy, log_dir, args.latency_cycles, args.latency_period)
             for k, (label, xs) in enumerate(series.items()):

@@ -41,7 +41,7 @@ sys.path.insert(0, str(REPO / 'bench'))
 
 from demo_graph import Processes  # noqa: E402
 from feeder_testing import claim_domain_id  # noqa: E402
-from soak import rss_kb, SCENE, TOPICS  # noqa: E402
+from soak import SCENE, TOPICS, rss_kb  # noqa: E402
 
 
 def make_node(which, context, out):

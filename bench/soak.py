@@ -51,6 +51,7 @@ sys.path.insert(0, str(REPO / 'scripts'))
 
 from demo_graph import Processes  # noqa: E402
 from feeder_testing import claim_domain_id  # noqa: E402
+from graph_bench import BenchNode  # noqa: E402
 
 SCENE = str(REPO / 'scenes' / 'triangle.yaml')
 PERIOD = 0.005
@@ -79,13 +80,14 @@ def start(procs, bag):
                 '--ros-args', *ns)
 
 
-class Driver:
+class Driver(BenchNode):
     """The soak's node: enables cycling, reads the sim's seq from /diagnostics (1 Hz)."""
+
+    prog = 'soak'
 
     def __init__(self, rclpy):
         from diagnostic_msgs.msg import DiagnosticArray
-        self.rclpy = rclpy
-        self.node = rclpy.create_node('feeder_soak')
+        super().__init__(rclpy, 'feeder_soak')
         self.seq = 0
         self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50)
 
@@ -93,24 +95,6 @@ class Driver:
         for s in msg.status:
             if s.name == 'feeder_driver: actuator':
                 self.seq = int({kv.key: kv.value for kv in s.values}['seq'])
-
-    def spin_until(self, cond, timeout, what, procs=None):
-        end = time.monotonic() + timeout
-        while not cond():
-            if time.monotonic() > end:
-                raise SystemExit(f'soak: timed out waiting for {what}')
-            if procs is not None:
-                procs.check()
-            self.rclpy.spin_once(self.node, timeout_sec=0.1)
-
-    def enable(self, on):
-        from std_srvs.srv import SetBool
-        client = self.node.create_client(SetBool, '/feeder/feeder_driver/enable')
-        self.spin_until(client.service_is_ready, 120, 'the sim')
-        fut = client.call_async(SetBool.Request(data=on))
-        self.spin_until(fut.done, 10, 'enable')
-        assert fut.result().success, fut.result().message
-        self.node.destroy_client(client)
 
 
 def read_bag(bag):
@@ -283,7 +267,8 @@ def main():
             continue
         flat &= slope < args.flat_kb
         rows.append((f'RSS of {name}, second half', f'{first} -> {last} KB, '
-                     f'{slope:+.2f} KB per 1000 cycles ({step[0]} rises, largest {step[1]:.0f} KB)',
+                     f'{slope:+.2f} KB per 1000 cycles ({step[0]} rises, largest '
+                     f'{step[1]:.0f} KB)',
                      f'< {args.flat_kb:g}'))
     print(f'\nload average: {load0} at the start, {load1} at the end\n')
     print('| check | result | target |\n|---|---|---|')
