@@ -188,16 +188,21 @@ def wait_for_handshake(ros):
         ros.spin_for(0.1)
 
 
+def fire_the_first_cycle(ros):
+    """Once the driver and a reader of its cycle_status are up, fire cycle 1."""
+    wait_for_readers(ros, '/feeder/cycle_status', 1)
+    ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') >= 1, 60.0,
+                   'the driver')
+    res = wait_for_handshake(ros)
+    assert 'seq 1' in res.message, res.message
+
+
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
 def test_the_cycle_a_signal_aborts_reaches_cycle_status(graph, ros, tmp_path, sig):
     """The driver sends STOP and reports the aborted cycle before it leaves (issue 10, item 6)."""
     emu, drv = start_emulator_and_driver(graph, tmp_path, '--cycle-time', '20')
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
-    wait_for_readers(ros, '/feeder/cycle_status', 1)
-    ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') >= 1, 60.0,
-                   'the driver')
-    res = wait_for_handshake(ros)        # fires cycle 1; it takes 20 s
-    assert 'seq 1' in res.message, res.message
+    fire_the_first_cycle(ros)            # it takes 20 s (--cycle-time)
     ros.spin_for(0.3)
     drv.send_signal(sig)
     assert drv.wait(10) == 0, graph.log(drv)
@@ -256,11 +261,7 @@ def test_the_aborted_cycle_reaches_a_reader_that_is_slow_to_acknowledge(graph, r
     out = tmp_path / 'reader.out'
     reader = start_slow_reader('/feeder/cycle_status', out)
     try:
-        wait_for_readers(ros, '/feeder/cycle_status', 1)
-        ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') >= 1, 60.0,
-                       'the driver')
-        res = wait_for_handshake(ros)        # fires cycle 1; it takes 20 s
-        assert 'seq 1' in res.message, res.message
+        fire_the_first_cycle(ros)        # it takes 20 s (--cycle-time)
         ros.spin_for(0.5)
         reader.send_signal(signal.SIGSTOP)
         drv.send_signal(signal.SIGINT)
