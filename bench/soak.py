@@ -30,12 +30,16 @@ read with the mcap reader (not the recorder's code) and every cycle is checked:
   the warm-up. It counts false ready, missed ready after the warm-up, and anomalies (the
   triangle's orbit has none: each one is false);
 * memory: every node's RSS (/proc/<pid>/status) sampled every few seconds; the growth over
-  the second half of the run, per 1000 cycles.
+  the second half of the run, per 1000 cycles. The recorder holds the index of every chunk
+  it wrote (the bag's summary needs it at the end, as rosbag2's MCAP writer holds its own):
+  its growth is judged after that index, measured here (bytes per chunk, tracemalloc on
+  feeder_monitor.bag.McapLog) times the bag's chunks.
 
 Prints a table; exit status 0 when every count is zero and memory is flat (growth under
-``--flat-kb`` KB per 1000 cycles), else 1. Usage (after ``. scripts/setup.sh``):
+``--flat-kb`` KB per 1000 cycles), else 1. ``--reread DIR`` judges a finished run again from
+its bag and rss.csv. Usage (after ``. scripts/setup.sh``):
 
-    python bench/soak.py [--cycles 100000] [--out DIR]
+    python bench/soak.py [--cycles 100000] [--out DIR] | --reread DIR
 """
 
 import argparse
@@ -190,6 +194,91 @@ def write_samples(samples, path):
                 fh.write(f'{name},{seq},{kb}\n')
 
 
+def read_samples(path):
+    """rss.csv back into {node: [(seq, rss_kb), ...]}."""
+    samples = {}
+    for line in pathlib.Path(path).read_text().splitlines()[1:]:
+        name, seq, kb = line.split(',')
+        samples.setdefault(name, []).append((int(seq), int(kb)))
+    return samples
+
+
+def bag_chunks(bag):
+    """(chunks, channels) in the bag's summary."""
+    from mcap.reader import make_reader
+    chunks = channels = 0
+    for path in sorted(pathlib.Path(bag).glob('*.mcap')):
+        with open(path, 'rb') as fh:
+            summary = make_reader(fh).get_summary()
+        chunks += len(summary.chunk_indexes)
+        channels = max(channels, len(summary.channels))
+    return chunks, channels
+
+
+def chunk_index_bytes(channels, chunks=2000):
+    """Python memory the recorder keeps per chunk written, with ``channels`` channels."""
+    import tracemalloc
+    from feeder_monitor.bag import McapLog
+    with tempfile.TemporaryDirectory() as tmp:
+        log = McapLog.create(pathlib.Path(tmp) / 'index.mcap', 'ros2', 'soak')
+        schema = log.add_schema('std_msgs/msg/Bool', 'ros2msg', b'bool data')
+        ids = [log.add_channel(f'/c{k}', schema, 'cdr', {}) for k in range(channels)]
+        stamp = 0
+
+        def one_chunk():
+            nonlocal stamp
+            for channel in ids:
+                stamp += 1
+                log.add_message(channel, stamp, b'\0' * 8, stamp, stamp)
+            log.flush()
+
+        for _ in range(10):
+            one_chunk()
+        tracemalloc.start()
+        before = tracemalloc.get_traced_memory()[0]
+        for _ in range(chunks):
+            one_chunk()
+        grown = tracemalloc.get_traced_memory()[0] - before
+        tracemalloc.stop()
+        log.close()
+    return grown / chunks
+
+
+def judge(out, samples, args, load0):
+    """Reconcile the bag, judge the memory, print the table; the exit status."""
+    bag = out / 'bag'
+    n, ready_truth, problems = reconcile(read_bag(bag))
+    growth = memory_growth(samples, n)
+    chunks, channels = bag_chunks(bag)
+    per_chunk = chunk_index_bytes(channels)
+    index_kb = chunks / max(n, 1) * 1000 * per_chunk / 1024     # per 1000 cycles
+    load1 = ', '.join(f'{x:.1f}' for x in os.getloadavg())
+    rows = [('cycles in the bag', str(n), ''),
+            ('cycles whose part is seen on the goal edge after the warm-up', str(ready_truth),
+             '')]
+    rows += [(k, str(v), '0') for k, v in problems.items()]
+    flat = True
+    for name, (slope, first, last, step) in growth.items():
+        if slope is None:
+            rows.append((f'RSS of {name}', 'too few samples', ''))
+            continue
+        index = index_kb if name == 'recorder' else 0.0
+        flat &= slope - index < args.flat_kb
+        of_which = (f'; of which the chunk index {index:.2f} ({chunks} chunks of '
+                    f'{per_chunk:.0f} B), the rest {slope - index:+.2f}') if index else ''
+        rows.append((f'RSS of {name}, second half', f'{first} -> {last} KB, '
+                     f'{slope:+.2f} KB per 1000 cycles ({step[0]} rises, largest '
+                     f'{step[1]:.0f} KB){of_which}',
+                     f'< {args.flat_kb:g}' + (' beside the index' if index else '')))
+    print(f'\nload average: {load0} at the start, {load1} at the end\n')
+    print('| check | result | target |\n|---|---|---|')
+    for r in rows:
+        print('| ' + ' | '.join(r) + ' |')
+    ok = flat and not any(problems.values()) and n >= args.cycles
+    print(f'\nsoak: {"PASS" if ok else "FAIL"}')
+    return 0 if ok else 1
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0].strip())
     ap.add_argument('--cycles', type=int, default=100_000)
@@ -200,7 +289,16 @@ def main():
     ap.add_argument('--flat-kb', type=float, default=5.0,
                     help='memory counts as flat below this growth, KB per 1000 cycles '
                     '(default 5: 0.5 MB per 100,000 cycles)')
+    ap.add_argument('--reread', type=pathlib.Path, default=None, metavar='DIR',
+                    help="judge a finished run again from DIR's bag and rss.csv (no new run)")
     args = ap.parse_args()
+    if args.reread is not None:
+        out = args.reread.resolve()
+        if not (out / 'bag').is_dir() or not (out / 'rss.csv').is_file():
+            raise SystemExit(f'soak: {out} has no bag/ and rss.csv of a finished run')
+        samples = read_samples(out / 'rss.csv')
+        args.cycles = min(seq for pts in samples.values() for seq, _ in pts[-1:])
+        return judge(out, samples, args, 'not recorded (a reread)')
     out = (args.out or pathlib.Path(tempfile.mkdtemp(prefix='feeder-soak-'))).resolve()
     out.mkdir(parents=True, exist_ok=True)
     bag = out / 'bag'
@@ -252,31 +350,8 @@ def main():
     fired = drv.seq
     print(f'soak: {fired}+ cycles in {wall:.0f} s ({fired / wall:.0f} cycles/s); reading the '
           'bag', flush=True)
-    n, ready_truth, problems = reconcile(read_bag(bag))
-    growth = memory_growth(samples, n)
     write_samples(samples, out / 'rss.csv')
-    load1 = ', '.join(f'{x:.1f}' for x in os.getloadavg())
-    rows = [('cycles in the bag', str(n), ''),
-            ('cycles whose part is seen on the goal edge after the warm-up', str(ready_truth),
-             '')]
-    rows += [(k, str(v), '0') for k, v in problems.items()]
-    flat = True
-    for name, (slope, first, last, step) in growth.items():
-        if slope is None:
-            rows.append((f'RSS of {name}', 'too few samples', ''))
-            continue
-        flat &= slope < args.flat_kb
-        rows.append((f'RSS of {name}, second half', f'{first} -> {last} KB, '
-                     f'{slope:+.2f} KB per 1000 cycles ({step[0]} rises, largest '
-                     f'{step[1]:.0f} KB)',
-                     f'< {args.flat_kb:g}'))
-    print(f'\nload average: {load0} at the start, {load1} at the end\n')
-    print('| check | result | target |\n|---|---|---|')
-    for r in rows:
-        print('| ' + ' | '.join(r) + ' |')
-    ok = flat and not any(problems.values()) and n >= args.cycles
-    print(f'\nsoak: {"PASS" if ok else "FAIL"}')
-    return 0 if ok else 1
+    return judge(out, samples, args, load0)
 
 
 if __name__ == '__main__':
