@@ -118,7 +118,7 @@ class McapLog:
         self.schemas = {}
         self.channels = {}
         self.stats = {}                 # channel id -> [count, first log time, last log time]
-        self.chunk_indexes = []
+        self.chunk_indexes = []         # ChunkIndex records, encoded once written (bytes)
         self.metadata_indexes = []
         self.metadata_names = set()
         self._pending = bytearray()     # schema/channel records for the next write
@@ -211,7 +211,9 @@ class McapLog:
         out = self._pending
         self._pending = bytearray()
         if self._chunk:
-            self.chunk_indexes.append(self._take_chunk(out))
+            # Kept encoded until the summary: a ChunkIndex object costs about 4 times its
+            # bytes, and a recorder holds one per flush for the whole bag.
+            self.chunk_indexes.append(_record(self._take_chunk(out)))
         if not out:
             return False
         # One write: a kill leaves either the old provisional end or the new one intact
@@ -251,7 +253,7 @@ class McapLog:
                                 (Opcode.STATISTICS, [stats]),
                                 (Opcode.CHUNK_INDEX, self.chunk_indexes),
                                 (Opcode.METADATA_INDEX, self.metadata_indexes)):
-            group = b''.join(_record(r) for r in records)
+            group = b''.join(r if isinstance(r, bytes) else _record(r) for r in records)
             if group:
                 offsets.append(SummaryOffset(group_opcode=opcode,
                                              group_start=summary_start + len(summary),
