@@ -23,10 +23,12 @@ import io
 import json
 import math
 import sys
+import types
 
 import numpy as np
 import pytest
 from throwmap import DomainError, InputError, Part, ThrowModel
+from throwmap import status as kernel_status
 from throwmap.cli import main
 from throwmap_testing import PAPER_W, SCENES, TRIANGLE_VERTICES
 
@@ -36,6 +38,21 @@ TRIANGLE = str(SCENES / 'triangle.yaml')
 @pytest.fixture(scope='module')
 def model():
     return ThrowModel(Part(TRIANGLE_VERTICES), -0.005, PAPER_W, -9.66)
+
+
+def test_every_template_status_message_quotes_the_throw_and_its_limit():
+    # A template's fields are looked up only when it is formatted: a wrong name would surface
+    # as an AttributeError the first time that (rare) status comes back.
+    model = types.SimpleNamespace(
+        accuracy=types.SimpleNamespace(max_flight_steps=123, max_impacts=45),
+        knobs=types.SimpleNamespace(max_sim_steps=678), arm_length=0.5)
+    limits = {kernel_status.ERR_FLIGHT_CAP: 'max_flight_steps = 123 steps',
+              kernel_status.ERR_SETTLE_CAP: 'max_impacts = 45 impacts',
+              kernel_status.ERR_SIM_CAP: 'max_sim_steps = 678 integrator steps',
+              kernel_status.LOST: 'the arm [0, 0.5 m]'}
+    for code in kernel_status.TEMPLATES:
+        text = kernel_status.message(model, code, 2, 0.125)
+        assert '(2, 0.125 m)' in text and limits.get(code, '') in text, text
 
 
 # ------------------------------------------------------------------- the map's arguments

@@ -18,10 +18,11 @@ The compiled code's vocabulary: status codes with their messages, event codes, r
 Every compiled path (base_map, the composed pipeline, event_sim, the effects' hooks) returns one
 of these status codes and writes events in the record layout below; :func:`error_for` turns a
 status into the exception the Python API raises, with a message that names the problem and the
-fix. One table: a new status is one line in CODES and, if its message needs more than a
-template, one builder.
+fix. A new status is one line in CODES and one in TEMPLATES or, if its message needs more
+than a template, one builder.
 """
 
+import functools
 import math
 import numbers
 
@@ -98,37 +99,6 @@ def _domain(model, status, edge, R):
                        f'{R})')
 
 
-def _flight_cap(model, status, edge, R):
-    return NumericalError(f'flight from ({edge}, {R:.6g} m): no contact found within '
-                          f'accuracy.max_flight_steps = {model.accuracy.max_flight_steps} steps; '
-                          'raise it or contact_time_tol')
-
-
-def _settle_cap(model, status, edge, R):
-    return NumericalError(f'catch after ({edge}, {R:.6g} m) did not settle within '
-                          f'accuracy.max_impacts = {model.accuracy.max_impacts} impacts; raise it')
-
-
-def _nonfinite(model, status, edge, R):
-    return NumericalError(f'throw from ({edge}, {R:.6g} m) produced a non-finite state')
-
-
-def _painleve(model, status, edge, R):
-    return NumericalError(f'catch after ({edge}, {R:.6g} m): sliding contact with no consistent '
-                          'normal force (Painleve paradox); lower contact.mu')
-
-
-def _sim_cap(model, status, edge, R):
-    return NumericalError(f'throw from ({edge}, {R:.6g} m) did not settle within '
-                          f'accuracy.max_sim_steps = {model.knobs.max_sim_steps} integrator '
-                          'steps; raise it, or integrator_step / roll_step')
-
-
-def _lost(model, status, edge, R):
-    return PartLost(f'lost: from ({edge}, {R:.6g} m) the part left the arm [0, '
-                    f'{model.arm_length:g} m]')
-
-
 def _arm_strike(model, status, edge, R):
     carry = model.effects.get('finite_carry')
     return DomainError('arm_strike', f'from ({edge}, {R:.6g} m) the returning arm meets the part '
@@ -136,16 +106,36 @@ def _arm_strike(model, status, edge, R):
                        'arm faster (smaller return_time) or throw higher')
 
 
-def _release(model, status, edge, R):
-    return DomainError('release_speed', f'from ({edge}, {R:.6g} m) the sampled release speed is '
-                       '<= 0; noise.release_speed_sd is too large for the release speed')
+# Messages that are templates: status -> (exception of a message, template). A template
+# quotes the throw's ``edge`` and ``R`` and what ``model`` knows (str.format fields).
+TEMPLATES = {
+    ERR_FLIGHT_CAP: (NumericalError,
+                     'flight from ({edge}, {R:.6g} m): no contact found within '
+                     'accuracy.max_flight_steps = {model.accuracy.max_flight_steps} steps; '
+                     'raise it or contact_time_tol'),
+    ERR_SETTLE_CAP: (NumericalError,
+                     'catch after ({edge}, {R:.6g} m) did not settle within '
+                     'accuracy.max_impacts = {model.accuracy.max_impacts} impacts; raise it'),
+    ERR_NONFINITE: (NumericalError,
+                    'throw from ({edge}, {R:.6g} m) produced a non-finite state'),
+    ERR_PAINLEVE: (NumericalError,
+                   'catch after ({edge}, {R:.6g} m): sliding contact with no consistent '
+                   'normal force (Painleve paradox); lower contact.mu'),
+    ERR_SIM_CAP: (NumericalError,
+                  'throw from ({edge}, {R:.6g} m) did not settle within '
+                  'accuracy.max_sim_steps = {model.knobs.max_sim_steps} integrator '
+                  'steps; raise it, or integrator_step / roll_step'),
+    LOST: (PartLost,
+           'lost: from ({edge}, {R:.6g} m) the part left the arm [0, '
+           '{model.arm_length:g} m]'),
+    ERR_RELEASE: (functools.partial(DomainError, 'release_speed'),
+                  'from ({edge}, {R:.6g} m) the sampled release speed is '
+                  '<= 0; noise.release_speed_sd is too large for the release speed'),
+}
 
-
+# Messages that need more than a template: status -> builder(model, status, edge, R).
 BUILDERS = {ERR_EDGE_INDEX: _domain, ERR_UNSTABLE_EDGE: _domain, ERR_GRASP: _domain,
-            ERR_TOE_STUB: _domain, ERR_CARRY_GRASP: _domain, ERR_FLIGHT_CAP: _flight_cap,
-            ERR_SETTLE_CAP: _settle_cap, ERR_NONFINITE: _nonfinite, ERR_PAINLEVE: _painleve,
-            ERR_SIM_CAP: _sim_cap, LOST: _lost, ERR_ARM_STRIKE: _arm_strike,
-            ERR_RELEASE: _release}
+            ERR_TOE_STUB: _domain, ERR_CARRY_GRASP: _domain, ERR_ARM_STRIKE: _arm_strike}
 
 
 def error_for(model, status, edge, R, after=None):
@@ -162,8 +152,11 @@ def error_for(model, status, edge, R, after=None):
         R = math.nan
     if isinstance(edge, numbers.Integral) and not isinstance(edge, bool):
         edge = int(edge)
-    build = BUILDERS.get(int(status), _domain)
-    err = build(model, int(status), edge, R)
+    if int(status) in TEMPLATES:
+        exception, template = TEMPLATES[int(status)]
+        err = exception(template.format(model=model, edge=edge, R=R))
+    else:
+        err = BUILDERS.get(int(status), _domain)(model, int(status), edge, R)
     if after is not None:
         if isinstance(err, PartLost):
             err.after = after
