@@ -22,6 +22,7 @@ case). :class:`Parser` takes arbitrary byte chunks and returns decoded messages 
 counts every byte and line it drops.
 """
 
+import dataclasses
 from dataclasses import dataclass
 import re
 from typing import Optional
@@ -118,211 +119,135 @@ def _parse_seq(text):
     return _parse_uint('seq', text, SEQ_MODULO - 1)
 
 
-def _expect(fields, count, usage):
-    if len(fields) != count:
-        raise ProtocolError(f'expected {count} field(s) ({usage}), got {len(fields)}')
+def _check_int(name, value, low, high, rule):
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise ProtocolError(f'{name}: must be an integer {rule}, got {value!r}')
+    return value
 
 
-class _SeqOnly:
-    """Codec of the messages whose one field is a seq (``FIRE``, ``ACK``)."""
+def _parse_speed(text):
+    if not _INT_RE.match(text) or abs(int(text)) > MAX_SPEED_MRAD_S:
+        raise ProtocolError(f'speed: {text!r} is not an integer within +-{MAX_SPEED_MRAD_S} '
+                            'mrad/s')
+    return int(text)
+
+
+def _parse_bit(text):
+    if text not in ('0', '1'):
+        raise ProtocolError(f'bit: {text!r} must be 0 or 1')
+    return int(text)
+
+
+class _Field:
+    """
+    One wire field: its place in the usage line, and its codec both ways.
+
+    ``encode(value)`` checks a value and returns its text; ``decode(text)`` checks a received
+    field and returns the value; both raise ProtocolError naming the field.
+    """
+
+    def __init__(self, usage, encode, decode):
+        self.usage, self.encode, self.decode = usage, encode, decode
+
+
+def _matching(name, pattern, usage):
+    def check(value):
+        return _check_match(name, value, pattern)
+    return _Field(usage, check, check)
+
+
+def _text(name, max_len, usage, allow_empty=False, check_received=True):
+    def check(value):
+        return _check_text(name, value, max_len, allow_empty)
+    return _Field(usage, check, check if check_received else str)
+
+
+_SEQ = _Field('<seq>', lambda v: str(_check_seq('seq', v)), _parse_seq)
+_SEQ_OR_NONE = _Field('<seq|->', lambda v: '-' if v is None else str(_check_seq('seq', v)),
+                      lambda t: None if t == '-' else _parse_seq(t))
+_BIT = _Field('<0|1>', lambda v: str(_check_int('bit', v, 0, 1, '0 or 1')), _parse_bit)
+_SPEED = _Field('<speed mrad/s>',
+                lambda v: str(_check_int('speed', v, -MAX_SPEED_MRAD_S, MAX_SPEED_MRAD_S,
+                                         f'within +-{MAX_SPEED_MRAD_S} mrad/s')),
+                _parse_speed)
+_UPTIME = _Field('<uptime_ms>', lambda v: str(_check_int('uptime_ms', v, 0, UINT32_MAX,
+                                                         f'0..{UINT32_MAX}')),
+                 lambda t: _parse_uint('uptime_ms', t, UINT32_MAX))
+_TOKEN = _matching('token', _TOKEN_RE, '<token>')
+_BOOT_ID = _matching('boot_id', _BOOT_RE, '<boot_id>')
+_CODE = _matching('code', _WORD_RE, '<CODE>')
+_STATE = _matching('state', _WORD_RE, '<STATE>')
+_FIRMWARE = _text('firmware', 32, '<firmware>')
+# A received ERR text is taken as framed: the controller's text is for people, not parsed.
+_ERR_TEXT = _text('text', 48, '<text>', allow_empty=True, check_received=False)
+
+
+class _Message:
+    """
+    The codec every message shares, driven by its table ``FIELDS``.
+
+    ``FIELDS`` lists the dataclass fields in wire order, each with its ``_Field``; the usage
+    line of an error (``SENS,<seq>,<0|1>``) is made from the same table.
+    """
+
+    NAME = ''
+    FIELDS = ()
 
     def fields(self):
-        return [self.NAME, str(_check_seq('seq', self.seq))]
+        """Return the wire fields, command name first (raises ProtocolError)."""
+        return [self.NAME] + [field.encode(getattr(self, attr)) for attr, field in self.FIELDS]
 
     @classmethod
     def from_fields(cls, fields):
-        _expect(fields, 1, f'{cls.NAME},<seq>')
-        return cls(_parse_seq(fields[0]))
+        """Decode the received fields that follow the command name."""
+        if len(fields) != len(cls.FIELDS):
+            usage = ','.join([cls.NAME] + [field.usage for _, field in cls.FIELDS])
+            raise ProtocolError(f'expected {len(cls.FIELDS)} field(s) ({usage}), '
+                                f'got {len(fields)}')
+        return cls(*[field.decode(text) for (_, field), text in zip(cls.FIELDS, fields)])
 
 
-class _TokenOnly:
-    """Codec of the messages whose one field is a token (``PING``, ``PONG``)."""
+def _message(cls_name, name, doc, *fields, **namespace):
+    """
+    One message class: a frozen dataclass of ``fields`` with the table codec.
 
-    def fields(self):
-        return [self.NAME, _check_match('token', self.token, _TOKEN_RE)]
-
-    @classmethod
-    def from_fields(cls, fields):
-        _expect(fields, 1, f'{cls.NAME},<token>')
-        return cls(_check_match('token', fields[0], _TOKEN_RE))
-
-
-# ---- host -> controller ------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Fire(_SeqOnly):
-    """``FIRE,<seq>``: run one throw-catch cycle tagged ``seq``."""
-
-    seq: int
-    NAME = 'FIRE'
+    Each of ``fields`` is ``(attribute, type, _Field)`` or ``(attribute, type, _Field,
+    default)``; ``namespace`` adds properties.
+    """
+    spec = [(f[0], f[1]) if len(f) == 3 else (f[0], f[1], dataclasses.field(default=f[3]))
+            for f in fields]
+    namespace.update(NAME=name, FIELDS=tuple((f[0], f[2]) for f in fields), __doc__=doc,
+                     __module__=__name__)
+    return dataclasses.make_dataclass(cls_name, spec, bases=(_Message,), namespace=namespace,
+                                      frozen=True)
 
 
-@dataclass(frozen=True)
-class Stop:
-    """``STOP``: abort the cycle in progress (if any); the arm returns to rest."""
-
-    NAME = 'STOP'
-
-    def fields(self):
-        return [self.NAME]
-
-    @classmethod
-    def from_fields(cls, fields):
-        _expect(fields, 0, 'STOP')
-        return cls()
-
-
-@dataclass(frozen=True)
-class Ping(_TokenOnly):
-    """``PING,<token>``: the controller answers ``PONG,<token>``."""
-
-    token: str
-    NAME = 'PING'
-
-
-# ---- controller -> host ------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Hello:
-    """``HELLO,<firmware>,<boot_id>``: banner after power-up or reset, and answer to ID."""
-
-    firmware: str
-    boot_id: str
-    NAME = 'HELLO'
-
-    def fields(self):
-        _check_text('firmware', self.firmware, 32)
-        return [self.NAME, self.firmware, _check_match('boot_id', self.boot_id, _BOOT_RE)]
-
-    @classmethod
-    def from_fields(cls, fields):
-        _expect(fields, 2, 'HELLO,<firmware>,<boot_id>')
-        _check_text('firmware', fields[0], 32)
-        return cls(fields[0], _check_match('boot_id', fields[1], _BOOT_RE))
-
-
-@dataclass(frozen=True)
-class Ack(_SeqOnly):
-    """``ACK,<seq>``: FIRE accepted, the cycle has started."""
-
-    seq: int
-    NAME = 'ACK'
-
-
-@dataclass(frozen=True)
-class Rel:
-    """``REL,<seq>,<speed>``: the arm released the part at ``speed`` mrad/s."""
-
-    seq: int
-    speed_mrad_s: int
-    NAME = 'REL'
-
-    def fields(self):
-        s = self.speed_mrad_s
-        if isinstance(s, bool) or not isinstance(s, int) or abs(s) > MAX_SPEED_MRAD_S:
-            raise ProtocolError(f'speed: must be an integer within +-{MAX_SPEED_MRAD_S} mrad/s,'
-                                f' got {s!r}')
-        return [self.NAME, str(_check_seq('seq', self.seq)), str(s)]
-
-    @classmethod
-    def from_fields(cls, fields):
-        _expect(fields, 2, 'REL,<seq>,<speed mrad/s>')
-        if not _INT_RE.match(fields[1]) or abs(int(fields[1])) > MAX_SPEED_MRAD_S:
-            raise ProtocolError(f'speed: {fields[1]!r} is not an integer within '
-                                f'+-{MAX_SPEED_MRAD_S} mrad/s')
-        return cls(_parse_seq(fields[0]), int(fields[1]))
-
-    @property
-    def speed_rad_s(self):
-        return self.speed_mrad_s / 1000.0
-
-
-@dataclass(frozen=True)
-class Sens:
-    """``SENS,<seq>,<0|1>``: sensor bit sampled after the part settled; ends the cycle."""
-
-    seq: int
-    bit: int
-    NAME = 'SENS'
-
-    def fields(self):
-        if self.bit not in (0, 1) or isinstance(self.bit, bool):
-            raise ProtocolError(f'bit: must be 0 or 1, got {self.bit!r}')
-        return [self.NAME, str(_check_seq('seq', self.seq)), str(self.bit)]
-
-    @classmethod
-    def from_fields(cls, fields):
-        _expect(fields, 2, 'SENS,<seq>,<0|1>')
-        if fields[1] not in ('0', '1'):
-            raise ProtocolError(f'bit: {fields[1]!r} must be 0 or 1')
-        return cls(_parse_seq(fields[0]), int(fields[1]))
-
-
-@dataclass(frozen=True)
-class Err:
-    """``ERR,<seq|->,<CODE>,<text>``: a refused or failed command."""
-
-    seq: Optional[int]
-    code: str
-    text: str = ''
-    NAME = 'ERR'
-
-    def fields(self):
-        seq = '-' if self.seq is None else str(_check_seq('seq', self.seq))
-        _check_match('code', self.code, _WORD_RE)
-        _check_text('text', self.text, 48, allow_empty=True)
-        return [self.NAME, seq, self.code, self.text]
-
-    @classmethod
-    def from_fields(cls, fields):
-        _expect(fields, 3, 'ERR,<seq|->,<CODE>,<text>')
-        seq = None if fields[0] == '-' else _parse_seq(fields[0])
-        return cls(seq, _check_match('code', fields[1], _WORD_RE), fields[2])
-
-
-@dataclass(frozen=True)
-class Pong(_TokenOnly):
-    """``PONG,<token>``: answer to PING."""
-
-    token: str
-    NAME = 'PONG'
-
-
-@dataclass(frozen=True)
-class Hb:
-    """``HB,<uptime_ms>,<STATE>``: heartbeat, once a second."""
-
-    uptime_ms: int
-    state: str
-    NAME = 'HB'
-
-    def fields(self):
-        u = self.uptime_ms
-        if isinstance(u, bool) or not isinstance(u, int) or not 0 <= u <= UINT32_MAX:
-            raise ProtocolError(f'uptime_ms: must be an integer 0..{UINT32_MAX}, got {u!r}')
-        return [self.NAME, str(u), _check_match('state', self.state, _WORD_RE)]
-
-    @classmethod
-    def from_fields(cls, fields):
-        _expect(fields, 2, 'HB,<uptime_ms>,<STATE>')
-        uptime = _parse_uint('uptime_ms', fields[0], UINT32_MAX)
-        return cls(uptime, _check_match('state', fields[1], _WORD_RE))
-
-
-@dataclass(frozen=True)
-class Ident:
-    """``ID``: the controller answers with its banner ``HELLO,<firmware>,<boot_id>``."""
-
-    NAME = 'ID'
-
-    def fields(self):
-        return [self.NAME]
-
-    @classmethod
-    def from_fields(cls, fields):
-        _expect(fields, 0, 'ID')
-        return cls()
-
+# The message table (docs/serial-protocol.md). Host -> controller:
+Fire = _message('Fire', 'FIRE', '``FIRE,<seq>``: run one throw-catch cycle tagged ``seq``.',
+                ('seq', int, _SEQ))
+Stop = _message('Stop', 'STOP',
+                '``STOP``: abort the cycle in progress (if any); the arm returns to rest.')
+Ping = _message('Ping', 'PING', '``PING,<token>``: the controller answers ``PONG,<token>``.',
+                ('token', str, _TOKEN))
+Ident = _message('Ident', 'ID', '``ID``: the controller answers with its banner '
+                 '``HELLO,<firmware>,<boot_id>``.')
+# Controller -> host:
+Hello = _message('Hello', 'HELLO', '``HELLO,<firmware>,<boot_id>``: banner after power-up or '
+                 'reset, and answer to ID.', ('firmware', str, _FIRMWARE),
+                 ('boot_id', str, _BOOT_ID))
+Ack = _message('Ack', 'ACK', '``ACK,<seq>``: FIRE accepted, the cycle has started.',
+               ('seq', int, _SEQ))
+Rel = _message('Rel', 'REL', '``REL,<seq>,<speed>``: the arm released the part at ``speed`` '
+               'mrad/s.', ('seq', int, _SEQ), ('speed_mrad_s', int, _SPEED),
+               speed_rad_s=property(lambda self: self.speed_mrad_s / 1000.0))
+Sens = _message('Sens', 'SENS', '``SENS,<seq>,<0|1>``: sensor bit sampled after the part '
+                'settled; ends the cycle.', ('seq', int, _SEQ), ('bit', int, _BIT))
+Err = _message('Err', 'ERR', '``ERR,<seq|->,<CODE>,<text>``: a refused or failed command.',
+               ('seq', Optional[int], _SEQ_OR_NONE), ('code', str, _CODE),
+               ('text', str, _ERR_TEXT, ''))
+Pong = _message('Pong', 'PONG', '``PONG,<token>``: answer to PING.', ('token', str, _TOKEN))
+Hb = _message('Hb', 'HB', '``HB,<uptime_ms>,<STATE>``: heartbeat, once a second.',
+              ('uptime_ms', int, _UPTIME), ('state', str, _STATE))
 
 HOST_MESSAGES = {cls.NAME: cls for cls in (Fire, Stop, Ping, Ident)}
 CONTROLLER_MESSAGES = {cls.NAME: cls for cls in (Hello, Ack, Rel, Sens, Err, Pong, Hb)}
