@@ -19,7 +19,7 @@ fastest period, then every cycle reconciled from the bag (issue 10). Not in CI.
 
 The sim (hardware mode, triangle, ``cycle_period`` 0.005 s, its minimum) cycles until it has
 fired N cycles; the recorder records ``cycle_status``, ``proximity``, ``edge1_verdict``,
-``edge1_ready`` and the predictor's ``predicted/edge`` and ``predicted/radius``. The bag is
+``edge1_ready`` and the predictor's ``predicted/state``. The bag is
 read with the mcap reader (not the recorder's code) and every cycle is checked:
 
 * ``cycle_status``: seq 1..n, contiguous, every cycle completed, one ``proximity`` each;
@@ -59,8 +59,7 @@ from graph_bench import BenchNode  # noqa: E402
 
 SCENE = str(REPO / 'scenes' / 'triangle.yaml')
 PERIOD = 0.005
-TOPICS = ('cycle_status', 'proximity', 'edge1_verdict', 'edge1_ready', 'predicted/edge',
-          'predicted/radius')
+TOPICS = ('cycle_status', 'proximity', 'edge1_verdict', 'edge1_ready', 'predicted/state')
 
 
 def rss_kb(pid):
@@ -125,7 +124,8 @@ def read_bag(bag):
 def reconcile(msgs):
     """Count, cycle by cycle, what the bag shows against the geometry's truth."""
     import numpy as np
-    from feeder_common.messages import parse_cycle_status, parse_edge_verdict
+    from feeder_common.messages import (parse_cycle_status, parse_edge_verdict,
+                                        parse_predicted_state)
     from throwmap import analyse, load_scene, sees
     scene = load_scene(SCENE)
     sensor = analyse(scene).sensor
@@ -138,15 +138,22 @@ def reconcile(msgs):
             1 for k, s in enumerate(seqs) if s != k + 1)
     problems['failed cycles'] = sum(not s.ok for s in statuses)
     problems['proximity count - cycles'] = len(msgs.get('/feeder/proximity', [])) - n
-    edges = np.array([m.data for m in msgs.get('/feeder/predicted/edge', [])])
-    radii = np.array([m.data for m in msgs.get('/feeder/predicted/radius', [])])
-    problems['predictions - cycles'] = len(edges) - n
-    m = min(n, len(edges), len(radii))
-    seen = np.asarray(sees(scene.part, edges[:m], radii[:m], sensor.radius, sensor.footprint),
-                      dtype=bool)
-    bits = np.array([bool(s.sensor) for s in statuses[:m]])
+    predicted, dup_predictions = {}, 0
+    for p in (parse_predicted_state(x) for x in msgs.get('/feeder/predicted/state', [])):
+        dup_predictions += p.seq in predicted
+        predicted.setdefault(p.seq, p)
+    problems['duplicate predictions'] = dup_predictions
+    problems['cycles without a prediction'] = sum(1 for s in seqs if s not in predicted)
+    problems['predictions of no cycle'] = len(set(predicted) - set(seqs))
+    # The cycles 1..m that have their prediction; a missing one is counted above.
+    m = next((k for k in range(n) if k + 1 not in predicted or k + 1 != seqs[k]), n)
+    edges = np.array([predicted[k + 1].edge for k in range(m)])
+    radii = np.array([predicted[k + 1].R for k in range(m)], dtype=float)
+    seen = np.asarray(sees(scene.part, edges, radii, sensor.radius, sensor.footprint),
+                      dtype=bool).reshape(m)
+    bits = np.array([bool(s.sensor) for s in statuses[:m]], dtype=bool)
     problems['sensor bit != geometry'] = int((bits != seen).sum())
-    truth = seen & (edges[:m] == sensor.goal_edge) & \
+    truth = seen & (edges == sensor.goal_edge) & \
         (np.arange(1, m + 1) >= sensor.warmup_throws)
     verdicts = {}
     dup = 0
@@ -321,7 +328,7 @@ def main():
                        'the readers of cycle_status', procs)
         drv.spin_until(lambda: drv.node.count_publishers('/feeder/edge1_verdict') >= 1, 120,
                        'the monitor', procs)
-        drv.spin_until(lambda: drv.node.count_publishers('/feeder/predicted/edge') >= 1, 120,
+        drv.spin_until(lambda: drv.node.count_publishers('/feeder/predicted/state') >= 1, 120,
                        'the predictor', procs)
         end = time.monotonic() + 3.0      # the recorder's discovery of every topic
         drv.spin_until(lambda: time.monotonic() > end, 10, 'discovery')

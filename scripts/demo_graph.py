@@ -154,7 +154,8 @@ def run(args, scene_path, out, procs, t0):
     import rclpy
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-    from std_msgs.msg import Bool, Float64, Int32, String
+    from feeder_common.messages import parse_predicted_state
+    from std_msgs.msg import Bool
     from std_srvs.srv import SetBool
     from throwmap import analyse, load_scene, sees
 
@@ -166,7 +167,7 @@ def run(args, scene_path, out, procs, t0):
     goal, radius = an.sensor.goal_edge, an.sensor.radius
     rclpy.init()
     node = rclpy.create_node('feeder_demo')
-    got = {k: [] for k in ('status', 'edge', 'radius', 'kind', 'ready', 'verdict')}
+    got = {k: [] for k in ('status', 'predicted', 'ready', 'verdict')}
     diags = {}
 
     def keep(key):
@@ -177,9 +178,8 @@ def run(args, scene_path, out, procs, t0):
             diags[s.name] = s
 
     node.create_subscription(DiagnosticStatus, '/feeder/cycle_status', keep('status'), reliable)
-    node.create_subscription(Int32, '/feeder/predicted/edge', keep('edge'), reliable)
-    node.create_subscription(Float64, '/feeder/predicted/radius', keep('radius'), reliable)
-    node.create_subscription(String, '/feeder/predicted/throw_kind', keep('kind'), reliable)
+    node.create_subscription(DiagnosticStatus, '/feeder/predicted/state', keep('predicted'),
+                             reliable)
     node.create_subscription(Bool, '/feeder/edge1_ready', keep('ready'), latched)
     # One verdict per judged cycle, with its seq (edge1_ready is the latched state, which the
     # monitor also republishes while idle: it cannot be matched to cycles by counting).
@@ -204,7 +204,7 @@ def run(args, scene_path, out, procs, t0):
                node.count_subscribers('/feeder/proximity') >= 2, STARTUP_TIMEOUT,
                'the predictor, the monitor and the recorder')
     spin_until(lambda: all(recording(t) for t in ('/feeder/proximity', '/feeder/edge1_ready',
-                                                  '/feeder/predicted/radius')),
+                                                  '/feeder/predicted/state')),
                STARTUP_TIMEOUT, 'the recorder')
     client = node.create_client(SetBool, '/feeder/feeder_driver/enable')
     spin_until(client.service_is_ready, STARTUP_TIMEOUT, 'the sim')
@@ -228,26 +228,18 @@ def run(args, scene_path, out, procs, t0):
         return {kv.key: kv.value for kv in msg.values}.get('ready') == 'true'
 
     def states():
-        """(edge, R) per cycle; a lost part (edge -1) has no predicted/radius (R None)."""
-        out, radii = [], iter(got['radius'])
-        for m in got['edge']:
-            r = None if m.data < 0 else next(radii, None)
-            if m.data >= 0 and r is None:
-                break
-            out.append((m.data, None if r is None else r.data))
-        return out
+        """The predicted state of each cycle, by seq (R None: no part on the arm)."""
+        return {p.seq: p for p in map(parse_predicted_state, got['predicted'])}
 
     def report():
         verdicts = got['verdict']
-        index = {seq_of(m): k for k, m in enumerate(got['status'])}
         known = states()
         while printed[0] < len(verdicts):
             seq = seq_of(verdicts[printed[0]])
-            k = index.get(seq)
-            if k is None or k >= len(known):
+            if seq not in known:
                 break
             if ready_of(verdicts[printed[0]]):
-                edge, R = known[k]
+                edge, R = known[seq].edge, known[seq].R
                 where = 'no part on the arm' if R is None else f'R = {100 * R:6.2f} cm'
                 print(f'  cycle {seq:4d}: edge1_ready  {where}, edge {edge}', flush=True)
             printed[0] += 1
@@ -277,10 +269,16 @@ def run(args, scene_path, out, procs, t0):
     verdict_of = {seq_of(m): ready_of(m) for m in got['verdict']}
     judged = [k for k, m in enumerate(got['status']) if seq_of(m) in verdict_of]
     first = judged[0] if judged else n      # cycles before it are ones the monitor missed
-    rows, false_ready, missed, goal_seen = [], 0, 0, 0
-    for k, (edge, R) in enumerate(states()[:n]):
+    rows, false_ready, missed, goal_seen, unpredicted = [], 0, 0, 0, 0
+    known = states()
+    for k, status in enumerate(got['status']):
+        values = {kv.key: kv.value for kv in status.values}
+        predicted = known.get(int(values['seq']))
+        if predicted is None:
+            unpredicted += 1    # cannot be judged: the predictor must follow every cycle
+            continue
+        edge, R, kind = predicted.edge, predicted.R, predicted.throw_kind
         seen = edge >= 0 and bool(sees(scene.part, edge, R, radius, an.sensor.footprint))
-        values = {kv.key: kv.value for kv in got['status'][k].values}
         bit = values.get('sensor') == '1'
         j = k - first
         verdict = verdict_of.get(int(values['seq']))
@@ -289,7 +287,6 @@ def run(args, scene_path, out, procs, t0):
         if bit and edge == goal and j + 1 >= an.sensor.warmup_throws:
             goal_seen += 1
             missed += verdict is False
-        kind = got['kind'][k].data if k < len(got['kind']) else ''
         rows.append((int(values['seq']), edge, '' if R is None else R, kind, int(bit),
                      '' if verdict is None else int(verdict), int(seen)))
     with open(out / 'cycles.csv', 'w', newline='') as fh:
@@ -309,7 +306,8 @@ def run(args, scene_path, out, procs, t0):
     ready_n = sum(1 for r in rows if r[5] == 1)
     print(f'demo_graph: {n} cycles in {t_cycles:.1f} s ({n / t_cycles:.0f}/s); sensor fired '
           f'{sum(r[4] for r in rows)} times, {goal_seen} on the goal edge after the warm-up; '
-          f'edge1_ready {ready_n} times, {false_ready} false, {missed} missed', flush=True)
+          f'edge1_ready {ready_n} times, {false_ready} false, {missed} missed' +
+          (f'; {unpredicted} cycles without a prediction' if unpredicted else ''), flush=True)
     print(f'demo_graph: monitor: {mon_vals.get("state", "?")}, anomalies '
           f'{mon_vals.get("anomalies", "?")}; predictor followed '
           f'{agree_vals.get("followed", "?")} cycles, sensor bits '
@@ -322,7 +320,7 @@ def run(args, scene_path, out, procs, t0):
           f'({time.monotonic() - t0:.1f} s in all)', flush=True)
     node.destroy_node()
     rclpy.shutdown()
-    ok = rc == 0 and ready_n > 0 and (
+    ok = rc == 0 and ready_n > 0 and unpredicted == 0 and (
         (false_ready == 0 and missed == 0 and agree) if must_agree else True)
     return 0 if ok else 1
 

@@ -17,12 +17,12 @@
 import pathlib
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from feeder_common.messages import parse_edge_verdict
+from feeder_common.messages import parse_edge_verdict, parse_predicted_state
 from feeder_common.stamps import parse_stamp_text
 import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Range
-from std_msgs.msg import Bool, Float64, Int32
+from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
 from throwmap import analyse, load_scene, sees
 
@@ -109,6 +109,17 @@ class Verdicts(Collector):
         return [parse_edge_verdict(m) for m in self.msgs]
 
 
+class PredictedStates(Collector):
+    """The predictor's per-cycle states (predicted/state), parsed."""
+
+    def __init__(self, ros, ns='/feeder'):
+        super().__init__(ros, DiagnosticStatus, f'{ns}/predicted/state')
+
+    @property
+    def parsed(self):
+        return [parse_predicted_state(m) for m in self.msgs]
+
+
 def status_values(msg):
     return {kv.key: kv.value for kv in msg.values}
 
@@ -179,29 +190,28 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
     verdict_stream = Verdicts(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     prox = Collector(ros, Range, '/feeder/proximity')
-    edges = Collector(ros, Int32, '/feeder/predicted/edge')
-    radii = Collector(ros, Float64, '/feeder/predicted/radius')
+    states = PredictedStates(ros)
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
     verdict_stream.wait_matched()
     wait_for_readers(ros, '/feeder/cycle_status', 3)     # the monitor's, the predictor's, ours
     wait_for_readers(ros, '/feeder/proximity', 2)        # the monitor's and ours
-    wait_for_publishers(ros, '/feeder/predicted/edge', 1)
+    wait_for_publishers(ros, '/feeder/predicted/state', 1)
     ros.spin_for(0.5)
 
     run_cycles(ros, cycles, statuses, period)
-    ros.spin_until(lambda: len(edges) >= len(statuses), 10.0, 'the predictor')
+    ros.spin_until(lambda: len(states) >= len(statuses), 10.0, 'the predictor')
     ros.spin_for(1.5)                           # let the monitor finish the last cycles
     n = len(statuses)
     assert n >= cycles
-    assert len(prox) == len(edges) == len(radii) == n
     seqs = [int(status_values(s)['seq']) for s in statuses.msgs]
     assert seqs == list(range(seqs[0], seqs[0] + n))
     assert all(s.level == DiagnosticStatus.OK for s in statuses.msgs)
+    predicted = states.parsed
+    assert len(prox) == n and [p.seq for p in predicted] == seqs
 
     # The sim's sensor bit is the sensor geometry applied to its predicted state.
-    truth = [bool(sees(sc.part, e.data, r.data, radius, footprint))
-             for e, r in zip(edges.msgs, radii.msgs)]
+    truth = [bool(sees(sc.part, p.edge, p.R, radius, footprint)) for p in predicted]
     assert [p.range == float('-inf') for p in prox.msgs] == truth
     assert [status_values(s)['sensor'] == '1' for s in statuses.msgs] == truth
     for p in prox.msgs:
@@ -222,7 +232,7 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
     on_goal = 0
     for j, verdict in enumerate(verdicts):
         k = j + missed
-        edge, R = edges.msgs[k].data, radii.msgs[k].data
+        edge, R = predicted[k].edge, predicted[k].R
         seen_on_goal = truth[k] and edge == goal
         if verdict:
             assert seen_on_goal, f'edge1_ready at cycle {seqs[k]} but the part is on edge ' \

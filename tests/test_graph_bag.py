@@ -19,6 +19,8 @@ import math
 import signal
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from feeder_common.messages import parse_predicted_state
+from feeder_common.stamps import parse_stamp_text
 from feeder_nodes import (Collector, LATCHED, monitor, predictor, sim_as_hardware,
                           STARTUP_TIMEOUT, status_values, TRIANGLE, wait_for_monitor,
                           wait_for_publishers)
@@ -28,7 +30,7 @@ from rclpy.serialization import deserialize_message
 from rosbags.interfaces import QosDurability, QosReliability
 from rosbags.rosbag2 import Reader
 from sensor_msgs.msg import JointState, Range
-from std_msgs.msg import Bool, Float64, Float64MultiArray, Int32, String
+from std_msgs.msg import Bool, Float64MultiArray, String
 from std_srvs.srv import Trigger
 from throwmap import load_scene
 from visualization_msgs.msg import MarkerArray
@@ -40,10 +42,8 @@ EXPECTED = {
     '/feeder/proximity': (Range, N),
     '/feeder/cycle_status': (DiagnosticStatus, N),
     '/feeder/joint_states': (JointState, 2 * N),
-    '/feeder/predicted/edge': (Int32, N),
-    '/feeder/predicted/radius': (Float64, N),
+    '/feeder/predicted/state': (DiagnosticStatus, N),
     '/feeder/predicted/part_pose': (PoseStamped, N),
-    '/feeder/predicted/throw_kind': (String, N),
     '/feeder/predicted/limit_set': (Float64MultiArray, 1),      # latched, once
     '/feeder/predicted/analysis': (String, 1),                  # latched, once
     '/feeder/markers': (MarkerArray, None),     # latched + at most one per markers_period
@@ -124,7 +124,7 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     wait_for_monitor(ros, ready)
-    wait_for_publishers(ros, '/feeder/predicted/edge', 1)
+    wait_for_publishers(ros, '/feeder/predicted/state', 1)
     rec = graph.start('feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
                       '__ns:=/feeder', name='recorder')
     # Two more: selected topics until 10 messages; everything but /diagnostics for 6 s.
@@ -220,13 +220,17 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     # The last markers show the last predicted state, upright in feeder_base (REP 103: the
     # library's plane x-y is x-z).
     outline = next(m for m in markers if (m.ns, m.id) == ('part', 0))
-    edge, R = msgs['/feeder/predicted/edge'][-1].data, msgs['/feeder/predicted/radius'][-1].data
+    states = [parse_predicted_state(m) for m in msgs['/feeder/predicted/state']]
+    assert [p.seq for p in states] == list(range(1, N + 1))
+    assert [p.stamp_ns for p in states] == \
+        [parse_stamp_text(status_values(s)['stamp']) for s in msgs['/feeder/cycle_status']]
+    edge, R = states[-1].edge, states[-1].R
     scene = load_scene(TRIANGLE)
     expected = scene.part.pose_vertices(edge, R, scene.h)
     got = [c for p in outline.points[:-1] for c in (p.x, p.z)]
     assert got == pytest.approx(expected.ravel().tolist())
     assert all(p.y == 0.0 for p in outline.points)
     poses = msgs['/feeder/predicted/part_pose']
-    assert [p.pose.position.x for p in poses] == [r.data for r in msgs['/feeder/predicted/radius']]
+    assert [p.pose.position.x for p in poses] == [p.R for p in states]
     names = {s.name for a in msgs['/diagnostics'] for s in a.status}
     assert {'feeder_driver: actuator', 'feeder_monitor: readiness'} <= names

@@ -16,12 +16,12 @@
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_nodes import (check_ready_correctness, Collector, Diagnostics, EXPERIMENT, LATCHED,
-                          monitor, predictor, REPO, run_cycles, SHORT_ARM, sim_as_hardware,
-                          status_values, wait_for_monitor, wait_for_publishers,
+                          monitor, PredictedStates, predictor, REPO, run_cycles, SHORT_ARM,
+                          sim_as_hardware, status_values, wait_for_monitor, wait_for_publishers,
                           wait_for_readers)
 from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import Range
-from std_msgs.msg import Bool, Float64, Int32, String
+from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
 from throwmap import load_scene
 
@@ -37,20 +37,23 @@ def test_experiment_ready_exactly_when_the_part_is_seen_on_the_goal_edge(graph, 
 
 
 class Predictions:
-    """predicted/* of one sim (namespace prefix ``ns``)."""
+    """predicted/state and predicted/part_pose of one sim (namespace prefix ``ns``)."""
 
     def __init__(self, ros, ns):
-        self.edge = Collector(ros, Int32, f'{ns}/predicted/edge')
-        self.kind = Collector(ros, String, f'{ns}/predicted/throw_kind')
-        self.radius = Collector(ros, Float64, f'{ns}/predicted/radius')
+        self.states = PredictedStates(ros, ns)
         self.pose = Collector(ros, PoseStamped, f'{ns}/predicted/part_pose')
 
     def __len__(self):
-        return min(len(self.edge), len(self.kind))
+        return len(self.states)
 
     def last(self, count):
-        return [m.data for m in self.edge.msgs[-count:]], \
-            [m.data for m in self.kind.msgs[-count:]]
+        parsed = self.states.parsed[-count:]
+        return [p.edge for p in parsed], [p.throw_kind for p in parsed]
+
+    @property
+    def radii(self):
+        """R of every state with a part on the arm (a lost part has none: not NaN)."""
+        return [p.R for p in self.states.parsed if p.R is not None]
 
 
 def prediction_statuses(diags, node):
@@ -69,8 +72,8 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     The part starts near the end of the 33 cm arm and falls off at the first throw.
 
     The hardware stand-in reports it in /diagnostics (its simulated part) and on the sensor
-    (nothing seen); the predictor on topics (edge -1 and kind lost on every cycle from then
-    on, no radius, no pose) and in /diagnostics; the monitor sees a silence the limit set
+    (nothing seen); the predictor on predicted/state (edge -1, kind lost, R none on every
+    cycle from then on; no pose) and in /diagnostics; the monitor sees a silence the limit set
     cannot produce. The start parameters put a part back on the stand-in's arm; ~/place_part
     tells the predictor.
     """
@@ -86,7 +89,7 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     wait_for_monitor(ros, ready)
     wait_for_readers(ros, '/feeder/cycle_status', 3)     # predictor, monitor, us
     wait_for_readers(ros, '/feeder/proximity', 2)
-    wait_for_publishers(ros, '/feeder/predicted/edge', 1)
+    wait_for_publishers(ros, '/feeder/predicted/state', 1)
     ros.spin_for(0.5)
 
     # 40 cycles: the part is lost in the first; the arm keeps cycling empty.
@@ -99,8 +102,10 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     assert all(s.level == DiagnosticStatus.OK and s.message == 'completed'
                for s in statuses.msgs)
     assert len(prox) == n and all(p.range == float('inf') for p in prox.msgs)
+    assert [p.seq for p in pred.states.parsed] == \
+        [int(status_values(s)['seq']) for s in statuses.msgs]
     assert pred.last(n) == ([-1] * n, ['lost'] * n)
-    assert len(pred.radius) == 0 and len(pred.pose) == 0    # no NaN, no made-up pose
+    assert pred.radii == [] and len(pred.pose) == 0    # no NaN, no made-up pose
     for node in ('feeder_driver', 'feeder_sim'):
         wait_for_prediction_status(ros, diags, node, DiagnosticStatus.ERROR,
                                    LOST_MESSAGE.format(1))
@@ -130,10 +135,10 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     for node in (HW, PRED):
         assert ros.set_parameters(node, {'start_radius': 0.12})['start_radius'].successful
     ros.call(Trigger, f'{HW}/trigger_cycle', Trigger.Request())
-    ros.spin_until(lambda: len(pred) == n + 2 and len(pred.radius) == len(pred.pose) == 1,
+    ros.spin_until(lambda: len(pred) == n + 2 and len(pred.radii) == len(pred.pose) == 1,
                    10.0, 'cycle n + 2')
     edge, R, kind = load_scene(SHORT_ARM).model.f(1, 0.12)
-    assert pred.last(1) == ([edge], [kind]) and pred.radius.msgs[0].data == R
+    assert pred.last(1) == ([edge], [kind]) and pred.radii == [R]
     for node in ('feeder_driver', 'feeder_sim'):
         wait_for_prediction_status(
             ros, diags, node, DiagnosticStatus.OK, f'edge {edge}, R {100 * R:.2f} cm after 1 '

@@ -25,15 +25,15 @@ import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from feeder_common.messages import cycle_status, proximity
-from feeder_nodes import (Collector, Diagnostics, LATCHED, monitor, predictor, RELIABLE,
-                          STARTUP_TIMEOUT, sim_as_hardware, status_values, TRIANGLE, Verdicts,
-                          wait_for_monitor, wait_for_readers, watch_monitor)
+from feeder_nodes import (Collector, Diagnostics, LATCHED, monitor, PredictedStates, predictor,
+                          RELIABLE, STARTUP_TIMEOUT, sim_as_hardware, status_values, TRIANGLE,
+                          Verdicts, wait_for_monitor, wait_for_readers, watch_monitor)
 import pytest
 from rclpy.duration import Duration
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Range
-from std_msgs.msg import Bool, Int32
+from std_msgs.msg import Bool
 from std_srvs.srv import SetBool, Trigger
 
 PERIOD = 0.01
@@ -145,7 +145,7 @@ def test_a_verdict_is_live_false_on_exit_and_a_killed_monitor_shows(graph, ros):
 def test_a_huge_seq_does_not_hang_the_predictor(graph, ros):
     """seq 2**70 after seq 1: an anomaly in /diagnostics, and the next cycle is followed."""
     pred = predictor(graph)
-    edges = Collector(ros, Int32, '/feeder/predicted/edge')
+    states = PredictedStates(ros)
     diags = Diagnostics(ros)
     pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', RELIABLE)
     ros.spin_until(lambda: pub.get_subscription_count() >= 1, 60.0, 'the predictor')
@@ -153,14 +153,14 @@ def test_a_huge_seq_does_not_hang_the_predictor(graph, ros):
     stamp = ros.node.get_clock().now().nanoseconds
     for k, seq in enumerate((1, 2 ** 70, 2 ** 70 + 1)):
         pub.publish(cycle_status(seq, True, 'completed', False, stamp + k, 'test'))
-    ros.spin_until(lambda: len(edges) >= 2, 10.0, 'predictions of seq 1 and 2**70 + 1')
+    ros.spin_until(lambda: len(states) >= 2, 10.0, 'predictions of seq 1 and 2**70 + 1')
     name = 'feeder_sim: sensor agreement'
     ros.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR
                                for s in diags.by_name.get(name, [])), 5.0, 'the anomaly')
     err = next(s for s in diags.by_name[name] if s.level == DiagnosticStatus.ERROR)
     assert f'seq jumped from 1 to {2 ** 70}' in err.message
     assert Diagnostics.values(err)['implausible_jumps'] == '1'
-    assert len(edges) == 2 and pred.poll() is None
+    assert [p.seq for p in states.parsed] == [1, 2 ** 70 + 1] and pred.poll() is None
 
 
 def start_emulator_and_driver(graph, tmp_path, *emulator_args):

@@ -15,9 +15,10 @@
 """(d) Bad parameters are rejected with a reason, through the parameter services."""
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_nodes import (Collector, LATCHED, monitor, predictor, sim_as_hardware,
-                          status_values, TRIANGLE, wait_for_monitor, wait_for_publishers)
-from std_msgs.msg import Bool, Float64, Int32
+from feeder_nodes import (Collector, LATCHED, monitor, PredictedStates, predictor,
+                          sim_as_hardware, status_values, TRIANGLE, wait_for_monitor,
+                          wait_for_publishers)
+from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
 from throwmap import analyse, load_scene, sees
 
@@ -38,11 +39,10 @@ def test_bad_values_are_rejected_and_good_ones_applied(graph, ros):
     predictor(graph)
     monitor(graph)
     ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
-    edges = Collector(ros, Int32, '/feeder/predicted/edge')
-    radii = Collector(ros, Float64, '/feeder/predicted/radius')
+    states = PredictedStates(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     wait_for_monitor(ros, ready)
-    wait_for_publishers(ros, '/feeder/predicted/edge', 1)
+    wait_for_publishers(ros, '/feeder/predicted/state', 1)
 
     # sim: domain of f, ranges, read-only, types
     r = ros.set_parameters(SIM, {'start_radius': 0.001, 'start_edge': 7, 'cycle_period': 0.001,
@@ -66,11 +66,10 @@ def test_bad_values_are_rejected_and_good_ones_applied(graph, ros):
     assert ros.get_parameters(SIM, ['cycle_period']) == {'cycle_period': 2.0}
     res = ros.call(Trigger, f'{SIM}/trigger_cycle', Trigger.Request())
     assert res.success, res.message
-    ros.spin_until(lambda: len(edges) == 1 and len(radii) == 1 and len(statuses) == 1, 10.0,
-                   'the prediction')
+    ros.spin_until(lambda: len(states) == 1 and len(statuses) == 1, 10.0, 'the prediction')
     scene = load_scene(TRIANGLE)
     edge, R, _ = scene.model.f(1, 0.15)
-    assert (edges.msgs[0].data, radii.msgs[0].data) == (edge, R)
+    assert (states.parsed[0].edge, states.parsed[0].R) == (edge, R)
     sensor = analyse(scene).sensor
     assert (status_values(statuses.msgs[0])['sensor'] == '1') == \
         bool(sees(scene.part, edge, R, sensor.radius, sensor.footprint))

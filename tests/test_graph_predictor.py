@@ -23,11 +23,11 @@ sensor bits the hardware sent.
 import math
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_nodes import (Collector, Diagnostics, predictor, sim_as_hardware, status_values,
-                          TRIANGLE, wait_for_publishers, wait_for_readers)
+from feeder_common.stamps import parse_stamp_text
+from feeder_nodes import (Collector, Diagnostics, PredictedStates, predictor, sim_as_hardware,
+                          status_values, TRIANGLE, wait_for_publishers, wait_for_readers)
 from geometry_msgs.msg import PoseStamped
 import pytest
-from std_msgs.msg import Float64, Int32, String
 from std_srvs.srv import Trigger
 from throwmap import analyse, load_scene, sees
 
@@ -37,19 +37,18 @@ N = 40
 def test_predictor_follows_the_hardware(graph, ros):
     sim_as_hardware(graph, 'diagnostics_period:=0.2')
     predictor(graph, 'diagnostics_period:=0.2')
-    pr = {n: Collector(ros, t, f'/feeder/predicted/{n}') for n, t in
-          (('edge', Int32), ('radius', Float64), ('throw_kind', String),
-           ('part_pose', PoseStamped))}
+    states = PredictedStates(ros)
+    poses = Collector(ros, PoseStamped, '/feeder/predicted/part_pose')
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     diags = Diagnostics(ros)
     wait_for_readers(ros, '/feeder/cycle_status', 2)        # the predictor's and ours
-    wait_for_publishers(ros, '/feeder/predicted/edge', 1)
+    wait_for_publishers(ros, '/feeder/predicted/state', 1)
     # Exactly one publisher: the predictor; the hardware stand-in publishes no predictions.
-    assert ros.node.count_publishers('/feeder/predicted/edge') == 1
+    assert ros.node.count_publishers('/feeder/predicted/state') == 1
     ros.spin_for(0.5)
     for _ in range(N):
         assert ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request()).success
-    ros.spin_until(lambda: all(len(c) == N for c in [*pr.values(), statuses]), 20.0,
+    ros.spin_until(lambda: all(len(c) == N for c in (states, poses, statuses)), 20.0,
                    f'{N} predictions')
 
     # The throw map itself, from the scene's start.
@@ -60,16 +59,19 @@ def test_predictor_follows_the_hardware(graph, ros):
         state = scene.model.f(*state)
         expected.append(state)
         state = state[:2]
-    assert [m.data for m in pr['edge'].msgs] == [e for e, _, _ in expected]
-    assert [m.data for m in pr['radius'].msgs] == [r for _, r, _ in expected]
-    assert [m.data for m in pr['throw_kind'].msgs] == [k for _, _, k in expected]
+    predicted = states.parsed
+    assert [(p.edge, p.R, p.throw_kind) for p in predicted] == expected     # to the bit
+    # Each state names its cycle: the seq and the sample stamp of its cycle_status.
+    assert [(p.seq, p.stamp_ns) for p in predicted] == \
+        [(int(status_values(s)['seq']), parse_stamp_text(status_values(s)['stamp']))
+         for s in statuses.msgs]
     assert len({e for e, _, _ in expected}) >= 2         # it did flip
     # The hardware's sensor bits are what the sensor sees of that state.
     bits = [status_values(s)['sensor'] == '1' for s in statuses.msgs]
     assert bits == [bool(sees(scene.part, e, r, an.sensor.radius, an.sensor.footprint))
                     for e, r, _ in expected]
     # Poses in feeder_base (REP 103: z up), stamped like the hardware's samples.
-    for pose, (e, r, _), status in zip(pr['part_pose'].msgs, expected, statuses.msgs):
+    for pose, (e, r, _), status in zip(poses.msgs, expected, statuses.msgs):
         assert pose.header.frame_id == 'feeder_base'
         assert pose.pose.position.x == r and pose.pose.position.y == 0.0
         assert pose.pose.position.z == pytest.approx(scene.h + scene.part.d[e])

@@ -24,6 +24,9 @@ it, values ``seq``, ``sensor`` (``1``/``0``/``none``), ``stamp`` (the sample tim
 ``edge1_verdict`` (DiagnosticStatus, the monitor's verdict of each judged cycle): ``name =
 'edge1_verdict'``, level OK (ERROR: the cycle revealed an anomaly, its reason in ``message``),
 values ``seq`` and ``stamp`` of the cycle, ``ready`` (``true``/``false``), ``state``.
+``predicted/state`` (DiagnosticStatus, the predictor's state after each followed cycle): ``name =
+'predicted_state'``, level OK, values ``seq`` and ``stamp`` of the cycle, ``edge`` (-1: no part
+on the arm), ``R`` (m, ``none`` without a part), ``throw_kind`` (``jog``/``flip``/``lost``).
 Every stamp is integer nanoseconds here; :func:`time_msg` and :func:`time_ns` convert.
 """
 
@@ -40,6 +43,7 @@ from .stamps import NS, parse_stamp_text, stamp_text
 
 CYCLE_STATUS_NAME = 'cycle'
 VERDICT_NAME = 'edge1_verdict'
+PREDICTED_STATE_NAME = 'predicted_state'
 # A follower of cycle_status replays at most this many missed cycles; a longer jump of seq is
 # implausible (a forged or corrupt seq, or a driver that ran unseen for minutes): an anomaly.
 MAX_SEQ_JUMP = 1000
@@ -141,6 +145,45 @@ def parse_edge_verdict(msg):
         stamp = None
     return EdgeVerdict(seq, stamp, ready, values.get('state', ''),
                        msg.message if msg.level == DiagnosticStatus.ERROR else '')
+
+
+@dataclass(frozen=True)
+class PredictedState:
+    """A parsed ``predicted/state``: where the predictor has the part after cycle ``seq``."""
+
+    seq: int
+    stamp_ns: Optional[int]
+    edge: int               # -1: no part on the arm
+    R: Optional[float]      # m; None without a part on the arm
+    throw_kind: str         # 'jog', 'flip' or 'lost'
+
+
+def predicted_state(seq, stamp_ns, edge, R, throw_kind):
+    """Build a ``predicted/state``; ``R`` None when no part is on the arm (edge -1)."""
+    return DiagnosticStatus(
+        level=DiagnosticStatus.OK, name=PREDICTED_STATE_NAME, message=str(throw_kind),
+        values=[KeyValue(key='seq', value=str(int(seq))),
+                KeyValue(key='stamp', value='none' if stamp_ns is None
+                         else stamp_text(stamp_ns)),
+                KeyValue(key='edge', value=str(int(edge))),
+                # repr: the shortest text that reads back as the same float
+                KeyValue(key='R', value='none' if R is None else repr(float(R))),
+                KeyValue(key='throw_kind', value=str(throw_kind))])
+
+
+def parse_predicted_state(msg):
+    """Parse a ``predicted/state``; ValueError naming what is wrong."""
+    values = {kv.key: kv.value for kv in msg.values}
+    try:
+        seq, edge = int(values['seq']), int(values['edge'])
+        R = None if values['R'] == 'none' else float(values['R'])
+    except (KeyError, ValueError) as exc:
+        raise ValueError(f'predicted/state without a usable seq/edge/R ({exc!r})') from None
+    try:
+        stamp = parse_stamp_text(values['stamp'])
+    except (KeyError, ValueError):
+        stamp = None
+    return PredictedState(seq, stamp, edge, R, values.get('throw_kind', ''))
 
 
 def proximity(stamp_ns, detected, range_m, frame_id=SENSOR_FRAME):

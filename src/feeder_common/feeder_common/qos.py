@@ -44,6 +44,9 @@ CYCLE_STATUS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                           reliability=ReliabilityPolicy.RELIABLE,
                           durability=DurabilityPolicy.VOLATILE)
 PREDICTION = DEFAULT
+# The predicted state of every followed cycle (seq, stamp, edge, R, throw kind): counted and
+# matched to cycles by seq, like cycle_status, so as deep.
+PREDICTED_STATE = CYCLE_STATUS
 PREDICTION_LATCHED = LATCHED
 MARKERS = LATCHED
 

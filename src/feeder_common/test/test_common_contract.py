@@ -196,6 +196,19 @@ def test_edge_verdict_round_trip():
         messages.parse_edge_verdict(DiagnosticStatus(values=[KeyValue(key='seq', value='1')]))
 
 
+def test_predicted_state_round_trip_keeps_R_to_the_bit():
+    R = 0.1 + 0.2       # a float whose short decimal forms read back as another float
+    msg = messages.predicted_state(12, 1795362335_204302396, 1, R, 'flip')
+    assert msg.name == 'predicted_state' and msg.level == DiagnosticStatus.OK
+    s = messages.parse_predicted_state(msg)
+    assert (s.seq, s.stamp_ns, s.edge, s.R, s.throw_kind) == \
+        (12, 1795362335_204302396, 1, R, 'flip')
+    lost = messages.parse_predicted_state(messages.predicted_state(13, None, -1, None, 'lost'))
+    assert (lost.stamp_ns, lost.edge, lost.R, lost.throw_kind) == (None, -1, None, 'lost')
+    with pytest.raises(ValueError, match='seq/edge/R'):
+        messages.parse_predicted_state(DiagnosticStatus(values=[KeyValue(key='seq', value='1')]))
+
+
 def test_a_string_longer_than_its_bound_is_refused_with_its_length():
     spec = ParamSpec('frame_id', 'feeder_sensor', 'f', max_length=frames.FRAME_ID_MAX_LENGTH)
     assert spec.validate('x' * 256) == ('x' * 256, None)

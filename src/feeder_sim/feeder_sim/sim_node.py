@@ -37,13 +37,13 @@ from feeder_common import qos
 from feeder_common.diagnostics import Updater
 from feeder_common.frames import BASE_FRAME, plane_point, plane_quaternion
 from feeder_common.messages import (cycle_status, joint_state, MAX_SEQ_JUMP, parse_cycle_status,
-                                    proximity, time_msg)
+                                    predicted_state, proximity, time_msg)
 from feeder_common.node import FeederLifecycleNode, run_node
 from feeder_common.parameters import ParameterGate
 from geometry_msgs.msg import PoseStamped
 from rclpy.lifecycle import TransitionCallbackReturn
 from sensor_msgs.msg import JointState, Range
-from std_msgs.msg import Float64, Float64MultiArray, Int32, MultiArrayDimension, String
+from std_msgs.msg import Float64MultiArray, MultiArrayDimension, String
 from std_srvs.srv import SetBool, Trigger
 from throwmap import (analyse, analysis_json, LIMIT_SET_FIELDS, limit_set_rows, load_scene,
                       PartOnArm, scene_analysis, ThrowmapError)
@@ -206,9 +206,7 @@ class SimNode(FeederLifecycleNode):
         else:
             self._pubs = {
                 'pose': pub(PoseStamped, 'predicted/part_pose', qos.PREDICTION),
-                'edge': pub(Int32, 'predicted/edge', qos.PREDICTION),
-                'kind': pub(String, 'predicted/throw_kind', qos.PREDICTION),
-                'radius': pub(Float64, 'predicted/radius', qos.PREDICTION),
+                'state': pub(DiagnosticStatus, 'predicted/state', qos.PREDICTED_STATE),
                 'limit_set': pub(Float64MultiArray, 'predicted/limit_set',
                                  qos.PREDICTION_LATCHED),
                 'analysis': pub(String, 'predicted/analysis', qos.PREDICTION_LATCHED),
@@ -388,7 +386,7 @@ class SimNode(FeederLifecycleNode):
             self._counts['agree' if status.sensor == throw.detected else 'disagree'] += 1
         stamp = status.stamp_ns if status.stamp_ns is not None else \
             self.get_clock().now().nanoseconds
-        self._publish_prediction(time_msg(stamp), throw)
+        self._publish_prediction(seq, stamp, throw)
 
     def _report_lost(self, seq, throw):
         self._lost_seq = seq
@@ -399,9 +397,10 @@ class SimNode(FeederLifecycleNode):
             ' when a part is back on the arm')
 
     # ------------------------------------------------------------------ outputs (predictor)
-    def _publish_prediction(self, stamp, throw):
-        """Publish the state after ``throw``; without a part on the arm only edge -1 and kind."""
+    def _publish_prediction(self, seq, stamp_ns, throw):
+        """Publish the state after cycle ``seq``; without a part on the arm, no pose."""
         self._last_throw = throw
+        stamp = time_msg(stamp_ns)
         if throw.on_arm:
             x, y, angle = self._predictor.pose()
             pose = PoseStamped()
@@ -412,10 +411,8 @@ class SimNode(FeederLifecycleNode):
             q = pose.pose.orientation
             q.x, q.y, q.z, q.w = plane_quaternion(angle)
             self._pubs['pose'].publish(pose)
-        self._pubs['edge'].publish(Int32(data=throw.edge))
-        self._pubs['kind'].publish(String(data=throw.kind))
-        if throw.on_arm:
-            self._pubs['radius'].publish(Float64(data=throw.R))
+        self._pubs['state'].publish(predicted_state(
+            seq, stamp_ns, throw.edge, throw.R if throw.on_arm else None, throw.kind))
         self._publish_markers(stamp)
 
     def _publish_markers(self, stamp=None, force=False):
