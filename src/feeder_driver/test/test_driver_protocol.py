@@ -124,7 +124,8 @@ def test_a_frame_of_exactly_max_line_is_accepted_and_one_more_byte_is_not():
 @pytest.mark.parametrize('bad', [
     lambda: p.Fire(-1), lambda: p.Fire(65536), lambda: p.Fire(True), lambda: p.Ping(''),
     lambda: p.Ping('a,b'), lambda: p.Hello('fw$', 'AB'), lambda: p.Hello('fw', 'A-B'),
-    lambda: p.Sens(1, 2), lambda: p.Sens(1, 1.0), lambda: p.Err(1, 'busy', ''), lambda: p.Err(1, 'BUSY', 'a*b'),
+    lambda: p.Sens(1, 2), lambda: p.Sens(1, 1.0),
+    lambda: p.Err(1, 'busy', ''), lambda: p.Err(1, 'BUSY', 'a*b'),
     lambda: p.Hb(-1, 'IDLE'), lambda: p.Rel(1, 10 ** 8), lambda: p.Rel(1, 1.5),
 ])
 def test_encoding_invalid_values_raises_a_clear_error(bad):
