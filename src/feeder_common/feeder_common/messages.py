@@ -88,6 +88,15 @@ def cycle_status(seq, ok, message, sensor, stamp_ns, hardware_id):
                 KeyValue(key='stamp', value=stamp_text(stamp_ns))])
 
 
+def _optional_stamp(values):
+    """Return the ``stamp`` value of a status in ns; None when it is missing or unreadable."""
+    # A bad stamp does not make the status unusable: the seq still names the cycle.
+    try:
+        return parse_stamp_text(values['stamp'])
+    except (KeyError, ValueError):
+        return None
+
+
 def parse_cycle_status(msg):
     """Parse a ``cycle_status``; ValueError naming what is wrong when ``seq`` is unusable."""
     values = {kv.key: kv.value for kv in msg.values}
@@ -99,10 +108,7 @@ def parse_cycle_status(msg):
         raise ValueError(f'cycle_status seq {values["seq"]!r} is not an integer') from None
     if seq < 0:
         raise ValueError(f'cycle_status seq {seq} is negative')
-    try:
-        stamp = parse_stamp_text(values['stamp'])
-    except (KeyError, ValueError):
-        stamp = None
+    stamp = _optional_stamp(values)
     return CycleStatus(seq, msg.level == DiagnosticStatus.OK,
                        _SENSOR_BIT.get(values.get('sensor')), stamp, msg.message,
                        msg.hardware_id)
@@ -139,10 +145,7 @@ def parse_edge_verdict(msg):
         ready = {'true': True, 'false': False}[values['ready']]
     except (KeyError, ValueError) as exc:
         raise ValueError(f'edge1_verdict without a usable seq/ready ({exc!r})') from None
-    try:
-        stamp = parse_stamp_text(values['stamp'])
-    except (KeyError, ValueError):
-        stamp = None
+    stamp = _optional_stamp(values)
     return EdgeVerdict(seq, stamp, ready, values.get('state', ''),
                        msg.message if msg.level == DiagnosticStatus.ERROR else '')
 
@@ -179,10 +182,7 @@ def parse_predicted_state(msg):
         R = None if values['R'] == 'none' else float(values['R'])
     except (KeyError, ValueError) as exc:
         raise ValueError(f'predicted/state without a usable seq/edge/R ({exc!r})') from None
-    try:
-        stamp = parse_stamp_text(values['stamp'])
-    except (KeyError, ValueError):
-        stamp = None
+    stamp = _optional_stamp(values)
     return PredictedState(seq, stamp, edge, R, values.get('throw_kind', ''))
 
 
