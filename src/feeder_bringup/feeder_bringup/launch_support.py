@@ -40,6 +40,7 @@ import xml.etree.ElementTree as ET
 
 from ament_index_python.packages import (get_package_prefix, get_package_share_directory,
                                          PackageNotFoundError)
+from feeder_common import auth
 
 # name: (default, description)
 COMMON_ARGUMENTS = {
@@ -54,6 +55,8 @@ COMMON_ARGUMENTS = {
     'robot_state_publisher': ('auto', 'auto: start it where it is installed; true; false'),
     'rviz': ('false', 'true: start rviz2 with share/feeder_bringup/rviz/feeder.rviz'),
     'arm_length': ('0.4', 'm, length of the arm drawn in the robot model'),
+    'key_file': ('', 'HMAC key file of the driver (or stand-in) and the monitor (mode 0600); '
+                 'created with a new key when absent; empty: $ROS_HOME/feeder/hmac.key'),
 }
 SIM_ARGUMENTS = dict(COMMON_ARGUMENTS)
 HARDWARE_ARGUMENTS = dict(COMMON_ARGUMENTS, **{
@@ -230,6 +233,16 @@ def robot_description(sensor_radius, arm_offset, arm_length=0.4, urdf=None):
     return ET.tostring(root, encoding='unicode')
 
 
+def _key_parameter(args):
+    """{'key_file': path} for the signing nodes; the file is made (mode 0600) when absent."""
+    path = os.path.abspath(os.path.expanduser(args['key_file'] or auth.default_key_path()))
+    try:
+        auth.ensure_key(path)
+    except (auth.KeyFileError, OSError) as exc:
+        raise LaunchArgumentError(f'key_file:={args["key_file"]}: {exc}') from None
+    return {'key_file': path}
+
+
 def _sensor_parameter(args):
     """{'sensor_radius': R} for the nodes when given, else {} (they design it themselves)."""
     if args['sensor_radius'].strip().lower() == 'auto':
@@ -247,7 +260,7 @@ def _common_nodes(args, ns, scene):
                   {'scene': scene, **sensor, **rt}]),
         NodeSpec('feeder_monitor', 'monitor_node', 'feeder_monitor', ns,
                  [str(share('feeder_monitor') / 'config' / 'monitor.yaml'),
-                  {'scene': scene, **sensor, **rt}]),
+                  {'scene': scene, **sensor, **rt, **_key_parameter(args)}]),
     ]
     if args['record']:
         nodes.append(NodeSpec('feeder_monitor', 'bag_recorder', 'feeder_bag_recorder', ns,
@@ -277,7 +290,8 @@ def plan_sim(given):
                         [str(share('feeder_sim') / 'config' / 'sim.yaml'),
                          {'scene': scene, 'hardware_mode': True,
                           'cycle_period': number(args, 'cycle_period', 0.005),
-                          **_sensor_parameter(args), **_realtime_parameter(args)}])
+                          **_sensor_parameter(args), **_realtime_parameter(args),
+                          **_key_parameter(args)}])
     return [hardware] + _common_nodes(args, ns, scene)
 
 
@@ -300,7 +314,7 @@ def plan_hardware(given):
     nodes.append(NodeSpec('feeder_driver', 'driver_node', 'feeder_driver', ns,
                           [str(share('feeder_driver') / 'config' / 'driver.yaml'),
                            {'port': port, 'cycle_period': number(args, 'cycle_period', 0.01),
-                            **_realtime_parameter(args)}]))
+                            **_realtime_parameter(args), **_key_parameter(args)}]))
     return nodes + _common_nodes(args, ns, scene)
 
 

@@ -132,6 +132,22 @@ def ensure_key(path):
     return load_key(path)
 
 
+def node_key(path):
+    """
+    The key a node signs or checks with: ``path``'s, or the default file's when ``path`` is ''.
+
+    The default file is created when absent (so ``ros2 run`` works without a launch); a given
+    path must exist: a mistyped path would otherwise make a key nobody else has.
+    """
+    if not path:
+        try:
+            return ensure_key(default_key_path())
+        except OSError as exc:
+            raise KeyFileError(f'cannot create the key file {default_key_path()}: '
+                               f'{exc.strerror}; give key_file:=<a file of mode 0600>') \
+                from None
+    return load_key(path)
+
 def _encode(label, fields):
     parts = []
     for field in (label, *fields):

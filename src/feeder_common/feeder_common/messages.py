@@ -38,6 +38,7 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from sensor_msgs.msg import JointState, Range
 
+from . import auth
 from .frames import ARM_JOINT, SENSOR_FRAME
 from .stamps import NS, parse_stamp_text, stamp_text
 
@@ -217,3 +218,102 @@ def joint_state(stamp_ns, position, velocity):
     js.velocity = [float(velocity)]
     js.effort = []
     return js
+
+
+# ---- signed statements (feeder_common.auth; docs/security.md) ------------------------------
+
+def signed_verdict(key, monitor, session, seq, stamp_ns, ready, state, anomaly, sent_ns):
+    """
+    Build a signed ``Verdict`` of monitor ``monitor`` (its fully qualified node name).
+
+    ``seq`` 0 and ``stamp_ns`` None: no cycle judged yet.
+    """
+    from feeder_interfaces.msg import Verdict
+    msg = Verdict(seq=int(seq), ready=bool(ready), state=str(state), anomaly=str(anomaly or ''),
+                  session=str(session))
+    if stamp_ns is not None:
+        msg.stamp = time_msg(stamp_ns)
+    msg.sent = time_msg(sent_ns)
+    msg.mac = list(auth.mac(key, auth.VERDICT_LABEL, auth.verdict_fields(
+        monitor, session, seq, stamp_ns, ready, msg.state, msg.anomaly, sent_ns)))
+    return msg
+
+
+@dataclass(frozen=True)
+class VerdictCheck:
+    """What a consumer may conclude from one ``Verdict`` (:func:`check_verdict`)."""
+
+    ready_now: bool         # signed, fresh, and the part is proven on the goal edge
+    authentic: bool         # the MAC verifies for this monitor under this key
+    seq: int
+    stamp_ns: Optional[int]
+    sent_age_s: Optional[float]
+    reason: str             # why not ready now ('' when ready_now)
+
+
+def check_verdict(msg, key, monitor, now_ns, max_age_s=1.0):
+    """
+    The one-call check of an ``edge1_ready`` / ``edge1_verdict`` message for a consumer.
+
+    ``ready_now`` only when the MAC verifies for ``monitor`` (e.g. '/feeder/feeder_monitor')
+    under ``key`` (:func:`feeder_common.auth.node_key`), ``ready`` is true, and the monitor
+    sent it at most ``max_age_s`` ago (so a dead or stalled monitor, or a replayed message,
+    reads as not ready). ``now_ns``: the consumer's clock, e.g. node.get_clock().now().
+    """
+    stamp_ns = time_ns(msg.stamp) if (msg.stamp.sec or msg.stamp.nanosec) else None
+    sent_ns = time_ns(msg.sent)
+    fields = auth.verdict_fields(monitor, msg.session, msg.seq, stamp_ns, msg.ready, msg.state,
+                                 msg.anomaly, sent_ns)
+    authentic = auth.mac_ok(key, auth.VERDICT_LABEL, fields, bytes(msg.mac))
+    age = (int(now_ns) - sent_ns) * 1e-9
+    if not authentic:
+        reason = (f'not signed by {monitor} under this key (key id {auth.key_id(key)})'
+                  if len(msg.mac) else 'unsigned verdict')
+    elif abs(age) > max_age_s:
+        reason = (f'sent {age:.3f} s ago, more than {max_age_s:g} s: the monitor stalled, '
+                  'died, or this is a replay' if age > 0 else
+                  f'sent {-age:.3f} s in the future: clocks apart')
+    elif not msg.ready:
+        reason = f'not ready: {msg.state}' + (f' ({msg.anomaly})' if msg.anomaly else '')
+    else:
+        reason = ''
+    return VerdictCheck(not reason, authentic, int(msg.seq), stamp_ns, age, reason)
+
+
+CYCLE_FIRED_NAME = 'cycle_fired'
+
+
+class CycleSigner:
+    """
+    Signs the cycle reports of one driver run (the driver, or the sim standing in for it).
+
+    ``node``: the fully qualified name of the reporting node (the monitor's ``driver_node``);
+    every run has a new random ``session``, so its reports cannot be replayed into another run.
+    """
+
+    def __init__(self, key, node, session=None):
+        self.key = key
+        self.node = node
+        self.session = session or auth.new_session()
+
+    def cycle_status(self, seq, ok, message, sensor, stamp_ns, hardware_id):
+        """A signed ``cycle_status`` (values ``session`` and ``mac`` besides the usual)."""
+        msg = cycle_status(seq, ok, message, sensor, stamp_ns, hardware_id)
+        tag = auth.mac(self.key, auth.CYCLE_LABEL, auth.cycle_fields(
+            self.node, self.session, seq, stamp_ns, 'completed' if ok else 'failed',
+            _SENSOR_TEXT[sensor], message))
+        msg.values += [KeyValue(key='session', value=self.session),
+                       KeyValue(key='mac', value=tag.hex())]
+        return msg
+
+    def cycle_fired(self, seq, stamp_ns, hardware_id):
+        """A signed ``cycle_fired``: cycle ``seq`` is being fired (sent before the actuator moves)."""
+        tag = auth.mac(self.key, auth.FIRED_LABEL,
+                       auth.fired_fields(self.node, self.session, seq, stamp_ns))
+        return DiagnosticStatus(
+            level=DiagnosticStatus.OK, name=CYCLE_FIRED_NAME, message='firing',
+            hardware_id=hardware_id,
+            values=[KeyValue(key='seq', value=str(int(seq))),
+                    KeyValue(key='stamp', value=stamp_text(stamp_ns)),
+                    KeyValue(key='session', value=self.session),
+                    KeyValue(key='mac', value=tag.hex())])

@@ -39,10 +39,18 @@ LATCHED = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
 PROXIMITY = DEFAULT
 PROXIMITY_SUBSCRIPTION = qos_profile_sensor_data
 JOINT_STATES = DEFAULT
+# The driver's process asserts liveliness on its cycle writers at least this often (s): a
+# reader that asks for the same lease learns within it that the driver died or hangs (a
+# SIGKILL included), instead of after DDS's participant lease (20 s).
+DRIVER_LEASE_S = 1.0
 # One message per fired cycle; a reader must not lose one: reliable, volatile, depth 100.
 CYCLE_STATUS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
                           reliability=ReliabilityPolicy.RELIABLE,
-                          durability=DurabilityPolicy.VOLATILE)
+                          durability=DurabilityPolicy.VOLATILE,
+                          liveliness=LivelinessPolicy.AUTOMATIC,
+                          liveliness_lease_duration=Duration(seconds=DRIVER_LEASE_S))
+# The notice "cycle N is being fired", sent before the actuator moves: as deep and as live.
+CYCLE_FIRED = CYCLE_STATUS
 PREDICTION = DEFAULT
 # The predicted state of every followed cycle (seq, stamp, edge, R, throw kind): counted and
 # matched to cycles by seq, like cycle_status, so as deep.

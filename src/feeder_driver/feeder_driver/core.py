@@ -21,6 +21,7 @@ ROS time in nanoseconds), and returns a list of effects for the caller to carry 
 
 * :class:`Send` -- write a message to the port (on failure call :meth:`DriverCore.link_lost`),
 * :class:`OpenLink` / :class:`CloseLink` -- open or close the port,
+* :class:`Firing` -- a cycle is about to be fired (carried out before the FIRE it precedes),
 * :class:`CycleFinished` -- one per fired cycle, completed or failed (never dropped),
 * :class:`Released` -- the arm released the part (joint state at release).
 
@@ -84,6 +85,13 @@ class CycleResult:
 @dataclass(frozen=True)
 class CycleFinished:
     result: CycleResult
+
+
+@dataclass(frozen=True)
+class Firing:
+    """Cycle ``seq`` is about to be fired: announced before the FIRE goes out."""
+
+    seq: int
 
 
 @dataclass(frozen=True)
@@ -367,7 +375,8 @@ class DriverCore:
         self.counters['fired'] += 1
         self._last_fire_at = now
         self.last_controller_error = None
-        return [Send(p.Fire(self.pending.wire_seq))]
+        # The notice first: whoever holds a ready must drop it before the arm can move.
+        return [Firing(seq), Send(p.Fire(self.pending.wire_seq))]
 
     def _maybe_fire_enabled(self, now):
         if not (self.enabled and self.active and self.pending is None):

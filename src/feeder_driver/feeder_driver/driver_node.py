@@ -29,10 +29,10 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_common import qos
+from feeder_common import auth, qos
 from feeder_common.diagnostics import Updater
-from feeder_common.messages import cycle_status, joint_state, proximity
-from feeder_common.node import FeederLifecycleNode, flush, run_node
+from feeder_common.messages import CycleSigner, joint_state, proximity
+from feeder_common.node import FeederLifecycleNode, flush, run_node, StartupError
 from feeder_common.parameters import ParameterGate
 from rclpy.lifecycle import TransitionCallbackReturn
 from sensor_msgs.msg import JointState, Range
@@ -55,13 +55,19 @@ class DriverNode(FeederLifecycleNode):
         # Set before Node.__init__: a context shutdown may destroy a half-built node.
         self.core = self.link = self.diagnostics = None
         self._tick_timer = None
-        self._pub_prox = self._pub_status = self._pub_joint = None
+        self._pub_prox = self._pub_status = self._pub_joint = self._pub_fired = None
         super().__init__(node_name, **kwargs)
         self._params = ParameterGate(self, params.SPECS, params.validate,
                                      self._apply_parameters)
         self._params.declare_all()
         self._params.check_startup()
         self._p = self._params.values
+        try:
+            # One session per process: a restarted driver is a new run to the monitor.
+            self._signer = CycleSigner(auth.node_key(self._p['key_file']),
+                                       self.get_fully_qualified_name())
+        except auth.KeyFileError as exc:
+            raise StartupError(f'key_file: {exc}') from None
         for name in self._params.unknown_given():
             self.get_logger().warning(f'parameter {name} is not a parameter of driver_node; '
                                       'ignored (docs/driver.md lists them)')
@@ -108,6 +114,8 @@ class DriverNode(FeederLifecycleNode):
                                                                qos.CYCLE_STATUS)
             self._pub_joint = self.create_lifecycle_publisher(JointState, 'joint_states',
                                                               qos.JOINT_STATES)
+            self._pub_fired = self.create_lifecycle_publisher(DiagnosticStatus, 'cycle_fired',
+                                                              qos.CYCLE_FIRED)
             self.link = SerialLink(self._p['port'], self._p['baud_rate'], self._on_rx,
                                    self._on_lost)
             self._tick_timer = self.create_timer(self._tick_period(), self._tick)
@@ -151,19 +159,21 @@ class DriverNode(FeederLifecycleNode):
             self._apply(self.core.stop(time.monotonic(), self._stamp(), reason))
             # The aborted cycle's status must reach its readers before the writer goes (DDS
             # drops what a destroyed writer has not delivered).
-            for pub in (self._pub_prox, self._pub_status, self._pub_joint):
-                if pub is not None:
-                    flush(pub)
+            for pub in self._publishers():
+                flush(pub)
         if self.link is not None:
             self.link.close()
             self.link = None
         if self._tick_timer is not None:
             self.destroy_timer(self._tick_timer)
             self._tick_timer = None
-        for pub in (self._pub_prox, self._pub_status, self._pub_joint):
-            if pub is not None:
-                self.destroy_lifecycle_publisher(pub)
-        self._pub_prox = self._pub_status = self._pub_joint = None
+        for pub in self._publishers():
+            self.destroy_lifecycle_publisher(pub)
+        self._pub_prox = self._pub_status = self._pub_joint = self._pub_fired = None
+
+    def _publishers(self):
+        return [pub for pub in (self._pub_prox, self._pub_status, self._pub_joint,
+                                self._pub_fired) if pub is not None]
 
     def destroy_node(self):
         self._teardown('node destroyed')
@@ -263,6 +273,10 @@ class DriverNode(FeederLifecycleNode):
             elif isinstance(effect, c.CloseLink):
                 if self.link is not None:
                     self.link.close()
+            elif isinstance(effect, c.Firing):
+                if self._pub_fired is not None:
+                    self._publish(self._pub_fired, self._signer.cycle_fired(
+                        effect.seq, self._stamp(), self._p['port']))
             elif isinstance(effect, c.CycleFinished):
                 self._publish_result(effect.result)
             elif isinstance(effect, c.Released):
@@ -280,7 +294,7 @@ class DriverNode(FeederLifecycleNode):
             self._publish(self._pub_prox, proximity(result.stamp, bool(result.sensor),
                                                     self._p['sensor_range_m'],
                                                     self._p['frame_id']))
-        self._publish(self._pub_status, cycle_status(
+        self._publish(self._pub_status, self._signer.cycle_status(
             result.seq, ok, 'completed' if ok else result.reason,
             None if result.sensor is None else bool(result.sensor), result.stamp,
             self._p['port']))

@@ -13,51 +13,57 @@
 # limitations under the License.
 
 """
-monitor_node: raises edge1_ready when a detection proves the part lies on the goal edge.
+monitor_node: says when a detection proves the part lies on the goal edge, signed and stamped.
 
-ROS glue only: the rules and the state machine are feeder_monitor.readiness's, the analysis is
-throwmap's (throwmap.scene_analysis, the same numbers the sim uses), the contract (QoS,
-message parsers, parameters, run helper) feeder_common's.
+ROS glue only: the rules and the state machine are feeder_monitor.readiness's, which reports it
+may judge feeder_monitor.trust's, the analysis throwmap's (throwmap.scene_analysis, the same
+numbers the sim uses), the contract (QoS, message builders and parsers, keys, parameters, run
+helper) feeder_common's.
 """
 
+import collections
 import functools
 import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_common import qos
+from feeder_common import auth, qos
 from feeder_common.diagnostics import Updater
-from feeder_common.graph import PublisherGuard
-from feeder_common.messages import (edge_verdict, parse_cycle_status, proximity_detected,
-                                    time_ns)
+from feeder_common.messages import (parse_cycle_fired, parse_cycle_status, proximity_detected,
+                                    signed_verdict, time_ns)
 from feeder_common.node import flush, run_node, StartupError
 from feeder_common.parameters import ParameterGate
 from feeder_common.params import check_scene
-from feeder_common.stamps import ns_seconds
+from feeder_interfaces.msg import Verdict
 from lifecycle_msgs.msg import TransitionEvent
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from sensor_msgs.msg import Range
-from std_msgs.msg import Bool
 from throwmap import analyse, load_scene, scene_analysis, ThrowmapError
 
 from .params import MONITOR_PARAMS
-from .readiness import (ANOMALY, CyclePairer, limit_set_orbit, ReadinessMonitor,
-                        rules_from_analysis, WARMING_UP)
+from .readiness import (ANOMALY, limit_set_orbit, ReadinessMonitor, rules_from_analysis,
+                        WARMING_UP)
+from .trust import ReportGate
 
 RULE_PARAMS = ('sensor_radius', 'warmup_cycles', 'settle_cycles', 'silence_margin',
                'early_margin_cycles', 'run_margin_cycles')
+# Sensor bits of recent cycles, by sample stamp, for the proximity cross-check.
+CROSS_CHECK_DEPTH = 256
+# A heartbeat later than this many periods means the monitor itself stalled.
+STALL_PERIODS = 3
 
 
 class MonitorNode(Node):
     """
-    Consumes proximity and cycle_status; publishes edge1_ready, edge1_verdict, /diagnostics.
+    Consumes cycle_status, cycle_fired, proximity; publishes edge1_ready, edge1_verdict.
 
-    It decides only on cycles from the one node it trusts (``driver_node``): a cycle that
-    arrives while another node publishes ``cycle_status`` or ``proximity`` is an anomaly, and
-    a detection is judged only after the publishers were checked to be exactly the pinned
-    driver (feeder_common.graph). ``edge1_ready`` is live (deadline and liveliness lease
-    ``ready_deadline``), false on a clean exit, when the driver leaves the graph or leaves its
-    active state.
+    It judges only reports that prove themselves (feeder_monitor.trust: signed by ``driver_node``
+    under ``key_file``, fresh, of the driver's current run, next in seq). Its statement about
+    the part (``feeder_interfaces/Verdict``: the cycle's seq and stamp, ready, state) is signed
+    too, republished with a fresh ``sent`` every quarter of ``ready_deadline`` while idle, and
+    turned false the moment a cycle fires, the driver's liveliness lapses, it leaves its active
+    state, or the monitor finds it stalled itself.
     """
 
     def __init__(self, **kwargs):
@@ -68,10 +74,13 @@ class MonitorNode(Node):
         self._base = None
         self._orbit = None
         self._monitor = None
-        self._pairer = None
         self._params = ParameterGate(self, MONITOR_PARAMS, self._validate, self._apply)
         p = self._params
         self._scene = self._load_scene(p.declare('scene'))
+        try:
+            self._key = auth.node_key(p.declare('key_file'))
+        except auth.KeyFileError as exc:
+            raise StartupError(f'key_file: {exc}') from None
         orbit_throws = p.declare('orbit_throws')
         try:
             self._base = analyse(self._scene)
@@ -86,38 +95,42 @@ class MonitorNode(Node):
             self.get_logger().warning(f'parameter {name} is not a parameter of monitor_node; '
                                       'ignored (docs/nodes.md lists them)')
         self._monitor = ReadinessMonitor(rules)
-        self._pairer = CyclePairer(self._param('stamp_tolerance'), self._param('pair_timeout'))
+        self._driver = self.resolve_topic_name(self._param('driver_node'))
+        self._gate = ReportGate(self._key, self._driver, self._param('max_report_age'))
+        self._fqn = self.get_fully_qualified_name()
+        self._session = auth.new_session()
         self._anomaly_in_period = None
-        self._lost_mark = 0
         self._bad_input = 0
+        self._bad_mark = 0
+        self._counts = {'unsigned_fired': 0, 'disagreements': 0, 'stalls': 0,
+                        'liveliness_lost': 0}
+        self._recent_bits = collections.OrderedDict()       # stamp_ns -> (seq, bit)
+        self._recent_proximity = collections.OrderedDict()  # stamp_ns -> bit
 
-        self._ready = False
-        self._ready_sent = 0.0          # time.monotonic() of the last edge1_ready
+        # The statement on edge1_ready: (seq, stamp_ns, ready, state, anomaly).
+        self._statement = (0, None, False, WARMING_UP, '')
         self._ready_pub = self.create_publisher(
-            Bool, 'edge1_ready', qos.edge1_ready(self._param('ready_deadline')))
-        self._verdict_pub = self.create_publisher(DiagnosticStatus, 'edge1_verdict',
-                                                  qos.EDGE1_VERDICT)
-        driver = self.resolve_topic_name(self._param('driver_node'))
-        self._guard = PublisherGuard(self, (self.resolve_topic_name('cycle_status'),
-                                            self.resolve_topic_name('proximity')), driver)
-        self._distrust = None           # why the publishers are not trusted now, or None
-        self.create_subscription(TransitionEvent, f'{driver}/transition_event',
+            Verdict, 'edge1_ready', qos.edge1_ready(self._param('ready_deadline')))
+        self._verdict_pub = self.create_publisher(Verdict, 'edge1_verdict', qos.EDGE1_VERDICT)
+        self.create_subscription(TransitionEvent, f'{self._driver}/transition_event',
                                  self._on_driver_transition, qos.DEFAULT)
-        # Keeps edge1_ready's deadline while idle; checks who publishes the driver's topics.
-        self.create_timer(self._param('ready_deadline') / 2, self._on_heartbeat)
+        self._beat_period = self._param('ready_deadline') / 4
+        self._last_beat = time.monotonic()
+        self.create_timer(self._beat_period, self._on_heartbeat)
         self.create_subscription(Range, 'proximity', self._on_proximity,
                                  qos.PROXIMITY_SUBSCRIPTION)
-        self.create_subscription(DiagnosticStatus, 'cycle_status', self._on_cycle_status,
-                                 qos.CYCLE_STATUS)
-        # Runs only while a cycle waits for its other half (see _decide).
-        self._expire_timer = self.create_timer(min(0.1, self._param('pair_timeout') / 2),
-                                               self._on_expire)
-        self._expire_timer.cancel()
+        self.create_subscription(
+            DiagnosticStatus, 'cycle_status', self._on_cycle_status, qos.CYCLE_STATUS,
+            event_callbacks=SubscriptionEventCallbacks(liveliness=self._on_driver_liveliness))
+        self.create_subscription(DiagnosticStatus, 'cycle_fired', self._on_cycle_fired,
+                                 qos.CYCLE_FIRED)
         self._diagnostics = Updater(self, self._param('diagnostics_period'), self._scene.name)
         self._diagnostics.add('readiness', self._diag_readiness)
         self._diagnostics.add('inputs', self._diag_inputs)
-        self._publish_ready(False)
+        self._publish_statement()
         self._log_rules(rules)
+        self.get_logger().info(f'judging reports of {self._driver} signed with key id '
+                               f'{auth.key_id(self._key)}; verdicts signed as {self._fqn}')
 
     # ------------------------------------------------------------------ parameters
     def _param(self, name):
@@ -151,12 +164,14 @@ class MonitorNode(Node):
             return
         if 'diagnostics_period' in changes:
             self._diagnostics.set_period(changes['diagnostics_period'])
+        if 'max_report_age' in changes:
+            self._gate.max_age_ns = int(round(changes['max_report_age'] * 1e9))
         if any(n in changes for n in RULE_PARAMS):
             rules = self._rules({})
             self._monitor.set_rules(rules)
             self._log_rules(rules)
-        self._pairer.tolerance = self._param('stamp_tolerance')
-        self._pairer.timeout = self._param('pair_timeout')
+            self._set_statement(self._statement[0], self._statement[1], False,
+                                self._monitor.state)
 
     def _log_rules(self, r):
         self.get_logger().info(
@@ -177,93 +192,132 @@ class MonitorNode(Node):
         return f'a detection is on the goal edge with probability {p}, not proven'
 
     # ------------------------------------------------------------------ inputs
-    def _on_proximity(self, msg):
-        detected = proximity_detected(msg)
-        if detected is None:
-            self._bad_input += 1
-            return
-        self._decide(self._pairer.add_proximity(ns_seconds(time_ns(msg.header.stamp)),
-                                                detected, time.monotonic()))
+    def _now_ns(self):
+        return self.get_clock().now().nanoseconds
 
     def _on_cycle_status(self, msg):
         try:
             status = parse_cycle_status(msg)
         except ValueError as exc:
             self._bad_input += 1
-            self.get_logger().warning(f'{exc}; ignored', throttle_duration_sec=5.0)
+            self._judge(self._monitor.untrusted(self._monitor.last_seq or 0,
+                                                f'malformed cycle_status: {exc}'), None)
             return
-        stamp = None if status.stamp_ns is None else ns_seconds(status.stamp_ns)
-        self._decide(self._pairer.add_status(status.seq, status.ok, status.sensor, stamp,
-                                             status.message, time.monotonic(),
-                                             status.stamp_ns))
+        admission = self._gate.admit(status, self._now_ns())
+        if not admission.admitted:
+            self._judge(self._monitor.untrusted(status.seq, admission.reason), status.stamp_ns)
+            return
+        if admission.new_run:
+            # A restarted driver: its first cycles follow none of the old run's.
+            self._interrupt(f'{self._driver} started a new run (session {status.session})')
+            self._monitor.last_seq = None
+        if status.ok:
+            self._remember(self._recent_bits, status.stamp_ns, (status.seq, status.sensor))
+            v = self._monitor.completed(status.seq, status.sensor)
+        else:
+            v = self._monitor.failed(status.seq, status.message)
+        self._judge(v, status.stamp_ns)
+        self._cross_check(status.stamp_ns)
 
-    def _on_expire(self):
-        self._decide(self._pairer.expire(time.monotonic()))
+    def _on_cycle_fired(self, msg):
+        # Any notice lowers a ready (a forged one can only cost a ready, never make one).
+        try:
+            notice = parse_cycle_fired(msg)
+        except ValueError:
+            self._bad_input += 1
+            notice = None
+        if notice is None or self._gate.fired_authentic(notice):
+            self._counts['unsigned_fired'] += 1
+        seq, stamp_ns, ready, state, _ = self._statement
+        if ready:
+            self._set_statement(seq, stamp_ns, False, Verdict.STATE_CYCLING)
 
-    def _decide(self, cycles):
-        if self._pairer.pending == (0, 0):
-            self._expire_timer.cancel()
-        elif self._expire_timer.is_canceled():
-            self._expire_timer.reset()
-        for c in cycles:
-            # A second publisher costs one graph lookup per cycle to see; the full identity
-            # check (GIDs) runs before a detection is judged, the only cycles that can be ready.
-            # It sees a second publisher too, so a detection skips the cheap lookup: the
-            # lookups lie between the cycle_status and edge1_ready (bench/monitor_hop.py).
-            if c.completed and c.detected:
-                distrust = self._guard.check()
-            else:
-                distrust = self._guard.crowded()
-            if distrust is not None:
-                v = self._monitor.untrusted(c.seq, distrust)
-            elif c.completed:
-                v = self._monitor.completed(c.seq, c.detected, c.note)
-            else:
-                v = self._monitor.failed(c.seq, c.reason)
-            self._publish_ready(v.ready)
-            self._verdict_pub.publish(edge_verdict(v.seq, c.stamp_ns, v.ready, v.state,
-                                                   v.anomaly, self._scene.name))
-            if v.note:
-                self.get_logger().warning(v.note)
-            if v.anomaly:
-                self._anomaly_in_period = (v.seq, v.anomaly)
-                self.get_logger().warning(f'anomaly at cycle {v.seq}: {v.anomaly}',
-                                          throttle_duration_sec=1.0)
-            if v.ready:
-                self.get_logger().debug(f'cycle {v.seq}: part proven on the goal edge')
+    def _on_proximity(self, msg):
+        detected = proximity_detected(msg)
+        if detected is None:
+            self._bad_input += 1
+            return
+        self._remember(self._recent_proximity, time_ns(msg.header.stamp), detected)
+        self._cross_check(time_ns(msg.header.stamp))
 
-    def _publish_ready(self, ready):
-        self._ready = bool(ready)
-        self._ready_sent = time.monotonic()
-        self._ready_pub.publish(Bool(data=self._ready))
+    @staticmethod
+    def _remember(table, stamp_ns, value):
+        if stamp_ns is None:
+            return
+        table[stamp_ns] = value
+        while len(table) > CROSS_CHECK_DEPTH:
+            table.popitem(last=False)
+
+    def _cross_check(self, stamp_ns):
+        """A proximity that contradicts the signed bit of its cycle: the sensor path is broken."""
+        if stamp_ns is None or stamp_ns not in self._recent_bits or \
+                stamp_ns not in self._recent_proximity:
+            return
+        seq, bit = self._recent_bits.pop(stamp_ns)
+        if self._recent_proximity.pop(stamp_ns) != bit:
+            self._counts['disagreements'] += 1
+            self._interrupt(f'proximity contradicts the signed sensor bit of cycle {seq}')
+
+    def _judge(self, v, stamp_ns):
+        self._set_statement(v.seq, stamp_ns, v.ready, v.state, v.anomaly or '', verdict=True)
+        if v.note:
+            self.get_logger().warning(v.note)
+        if v.anomaly:
+            self._anomaly_in_period = (v.seq, v.anomaly)
+            self.get_logger().warning(f'anomaly at cycle {v.seq}: {v.anomaly}',
+                                      throttle_duration_sec=1.0)
+        if v.ready:
+            self.get_logger().debug(f'cycle {v.seq}: part proven on the goal edge')
+
+    def _set_statement(self, seq, stamp_ns, ready, state, anomaly='', verdict=False):
+        self._statement = (int(seq), stamp_ns, bool(ready), state, anomaly)
+        msg = self._publish_statement()
+        if verdict:
+            self._verdict_pub.publish(msg)
+
+    def _publish_statement(self):
+        seq, stamp_ns, ready, state, anomaly = self._statement
+        msg = signed_verdict(self._key, self._fqn, self._session, seq, stamp_ns, ready, state,
+                             anomaly, self._now_ns())
+        self._ready_pub.publish(msg)
+        self._last_sent = time.monotonic()
+        return msg
 
     def _on_heartbeat(self):
-        distrust = self._guard.check()
-        if distrust != self._distrust:
-            self._distrust = distrust
-            if distrust:
-                self.get_logger().info(f'publishers: {distrust}')
-        if distrust and self._ready:
-            self._interrupt(distrust)
-        elif time.monotonic() - self._ready_sent >= self._param('ready_deadline') / 2:
-            self._publish_ready(self._ready)
+        now = time.monotonic()
+        late = now - self._last_beat
+        self._last_beat = now
+        if late > STALL_PERIODS * self._beat_period:
+            # Cycles may have fired while this process did not run: what it held is unproven.
+            self._counts['stalls'] += 1
+            self._interrupt(f'the monitor itself stalled for {late:.2f} s')
+        elif now - self._last_sent >= self._beat_period * 0.9:
+            self._publish_statement()
+
+    def _on_driver_liveliness(self, info):
+        if info.alive_count == 0 and info.alive_count_change < 0:
+            self._counts['liveliness_lost'] += 1
+            self._interrupt(f'{self._driver} is not alive (no liveliness within '
+                            f'{qos.DRIVER_LEASE_S:g} s: it died or hangs)')
 
     def _on_driver_transition(self, msg):
         if msg.goal_state.label != 'active' and msg.start_state.label == 'active':
-            self._interrupt(f'{self._guard.trusted_node} left its active state '
-                            f'({msg.transition.label})')
+            self._interrupt(f'{self._driver} left its active state ({msg.transition.label})')
 
     def _interrupt(self, reason):
-        """No cycle can be judged (the driver left or stopped): false, warm up again."""
+        """No cycle can be judged (the driver left, stopped or is unproven): false, warm up."""
         self._monitor.interrupt(reason)
         self._anomaly_in_period = (self._monitor.last_seq, reason)
         self.get_logger().warning(f'{reason}: edge1_ready false, warming up again')
-        self._publish_ready(False)
+        seq, stamp_ns = self._statement[:2]
+        self._set_statement(seq, stamp_ns, False, ANOMALY, reason)
 
     def destroy_node(self):
         # A clean exit says false, and waits (briefly) until the readers have it.
         try:
-            self._publish_ready(False)
+            seq, stamp_ns = self._statement[:2]
+            self._statement = (seq, stamp_ns, False, ANOMALY, 'monitor stopped')
+            self._publish_statement()
             flush(self._ready_pub)
         except Exception:   # noqa: B902 - context already gone: nothing can be said
             pass
@@ -291,23 +345,24 @@ class MonitorNode(Node):
             message = f'{message} (noisy sensor: {self._noise_note(r)})'
         stat.summary(level, message)
         stat.update({'state': m.state, 'last_seq': m.last_seq, **m.counts,
-                     'trusted_publisher': self._guard.trusted_node,
-                     'publishers': self._distrust or 'trusted',
+                     'trusted_driver': self._driver, 'key_id': auth.key_id(self._key),
+                     'driver_session': self._gate.session or 'none',
                      'since_restart': m.since_restart, 'cycles_since_detection': m.gap,
                      'last_anomaly': m.last_anomaly, **r.as_dict(),
                      'namespace': self.get_namespace()})
 
     def _diag_inputs(self, stat):
-        p = self._pairer
-        lost = p.counts['proximity_lost']
-        pending = p.pending
-        level = 'warn' if lost > self._lost_mark or self._bad_input else 'ok'
-        self._lost_mark = lost
-        stat.summary(level, 'proximity and cycle_status paired' if level == 'ok' else
-                     'proximity messages lost or malformed input')
-        stat.update({**p.counts, 'pending_status': pending[0], 'pending_proximity': pending[1],
-                     'bad_input': self._bad_input})
-
+        refused = {k: v for k, v in self._gate.counts.items() if k != 'admitted'}
+        bad = self._bad_input + sum(refused.values()) + self._counts['disagreements'] + \
+            self._counts['unsigned_fired']
+        level = 'warn' if bad > self._bad_mark else 'ok'
+        self._bad_mark = bad
+        stat.summary(level, 'every cycle report signed, fresh and in order' if level == 'ok'
+                     else 'refused reports, malformed input or a contradicting proximity')
+        # Informative only: who is on the graph decides nothing (docs/security.md).
+        stat.update({**self._gate.counts, **self._counts, 'bad_input': self._bad_input,
+                     'cycle_status_publishers':
+                         self.count_publishers(self.resolve_topic_name('cycle_status'))})
 
 def main(args=None):
     return run_node(MonitorNode, 'monitor_node', args)

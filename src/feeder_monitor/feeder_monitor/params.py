@@ -14,7 +14,7 @@
 
 """Parameter table of monitor_node (ROS-free; the spec type is feeder_common's)."""
 
-from feeder_common.params import ParamSpec, REALTIME_PRIORITY
+from feeder_common.params import KEY_FILE, ParamSpec, REALTIME_PRIORITY
 
 MONITOR_PARAMS = (
     ParamSpec('scene', '', "scene YAML the feeder runs (the same file as the sim's); must load",
@@ -37,17 +37,18 @@ MONITOR_PARAMS = (
               'longest run of the orbit', minimum=0, maximum=1000),
     ParamSpec('orbit_throws', 20000, 'length of the limit-set orbit the pattern rules are read '
               'from', minimum=1000, maximum=1_000_000, read_only=True),
-    ParamSpec('stamp_tolerance', 0.001, 'proximity and cycle_status of one cycle match when '
-              'their stamps differ by at most this, s', minimum=1e-6, maximum=0.002),
-    ParamSpec('pair_timeout', 0.5, 'a cycle_status waits this long for its proximity, s (then '
-              'its own sensor bit is used)', minimum=0.01, maximum=10.0),
-    ParamSpec('driver_node', 'feeder_driver', 'the one node trusted to publish cycle_status '
-              "and proximity (relative to the monitor's namespace, or absolute); a cycle seen "
-              'while another node publishes them is an anomaly', read_only=True,
+    ParamSpec('max_report_age', 1.0, 'a cycle report sampled more than this long ago (or this far '
+              'in the future) is refused as stale: an anomaly, never ready, s (clocks of driver '
+              'and monitor must agree to well within it)', minimum=0.01, maximum=60.0),
+    KEY_FILE,
+    ParamSpec('driver_node', 'feeder_driver', 'the node whose signed cycle reports are judged '
+              "(relative to the monitor's namespace, or absolute); a report not signed by it "
+              'under key_file is an anomaly', read_only=True,
               constraints='not empty', max_length=256),
     ParamSpec('ready_deadline', 1.0, 'edge1_ready is published at least this often, s (every '
-              'judged cycle, and again when idle): its offered deadline and liveliness lease; '
-              'a reader that sees either lapse must take the verdict as stale (false)',
+              'judged cycle, and every quarter of it when idle, with a fresh signed sent '
+              'time): its offered deadline and liveliness lease; a reader that sees either '
+              'lapse, or a sent time older than this, must take the statement as false',
               minimum=0.02, maximum=60.0, read_only=True),
     ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages', minimum=0.1,
               maximum=60.0),

@@ -22,7 +22,7 @@ the domain of f. Each check returns the reason of a rejection, or None.
 
 import math
 
-from feeder_common.params import check_scene, ParamSpec, REALTIME_PRIORITY
+from feeder_common.params import check_scene, KEY_FILE, ParamSpec, REALTIME_PRIORITY
 
 
 SIM_PARAMS = (
@@ -60,6 +60,7 @@ SIM_PARAMS = (
               minimum=0.0, maximum=10.0),
     ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages', minimum=0.1,
               maximum=60.0),
+    KEY_FILE,       # hardware mode: signs the cycle reports as the driver does
 )
 
 

@@ -33,12 +33,12 @@ import math
 import sys
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_common import qos
+from feeder_common import auth, qos
 from feeder_common.diagnostics import Updater
 from feeder_common.frames import BASE_FRAME, plane_point, plane_quaternion
-from feeder_common.messages import (cycle_status, joint_state, MAX_SEQ_JUMP, parse_cycle_status,
+from feeder_common.messages import (CycleSigner, joint_state, MAX_SEQ_JUMP, parse_cycle_status,
                                     predicted_state, proximity, time_msg)
-from feeder_common.node import FeederLifecycleNode, run_node
+from feeder_common.node import FeederLifecycleNode, run_node, StartupError
 from feeder_common.parameters import ParameterGate
 from geometry_msgs.msg import PoseStamped
 from rclpy.lifecycle import TransitionCallbackReturn
@@ -95,6 +95,13 @@ class SimNode(FeederLifecycleNode):
         for name in p.unknown_given():
             self.get_logger().warning(f'parameter {name} is not a parameter of sim_node; '
                                       'ignored (docs/nodes.md lists them)')
+        self._signer = None
+        if self._hardware:
+            try:
+                self._signer = CycleSigner(auth.node_key(p.values['key_file']),
+                                           self.get_fully_qualified_name())
+            except auth.KeyFileError as exc:
+                raise StartupError(f'key_file: {exc}') from None
 
         self._diagnostics = Updater(self, p.values['diagnostics_period'], HARDWARE_ID)
         self._diagnostics.add('lifecycle', self._diag_lifecycle)
@@ -201,6 +208,7 @@ class SimNode(FeederLifecycleNode):
             self._pubs = {
                 'proximity': pub(Range, 'proximity', qos.PROXIMITY),
                 'cycle_status': pub(DiagnosticStatus, 'cycle_status', qos.CYCLE_STATUS),
+                'cycle_fired': pub(DiagnosticStatus, 'cycle_fired', qos.CYCLE_FIRED),
                 'joint_states': pub(JointState, 'joint_states', qos.JOINT_STATES),
             }
         else:
@@ -315,14 +323,15 @@ class SimNode(FeederLifecycleNode):
         self._seq += 1
         stamp = self.get_clock().now().nanoseconds
         pubs = self._pubs
+        pubs['cycle_fired'].publish(self._signer.cycle_fired(self._seq, stamp, HARDWARE_ID))
         pubs['joint_states'].publish(joint_state(stamp, 0.0, self._scene.release_speed))
         try:
             throw = self._predictor.throw()
         except ThrowmapError as exc:
             self._counts['failed'] += 1
             pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
-            pubs['cycle_status'].publish(cycle_status(self._seq, False, str(exc), None, stamp,
-                                                      HARDWARE_ID))
+            pubs['cycle_status'].publish(self._signer.cycle_status(
+                self._seq, False, str(exc), None, stamp, HARDWARE_ID))
             if self._truth is not None:
                 self._truth.cycle(self._seq, stamp, error=exc)
             self.get_logger().error(f'cycle {self._seq} failed: {exc}',
@@ -337,8 +346,8 @@ class SimNode(FeederLifecycleNode):
         # proximity and cycle_status back to back: the monitor decides on both.
         pubs['proximity'].publish(proximity(stamp, throw.detected,
                                             self._param('sensor_range_m')))
-        pubs['cycle_status'].publish(cycle_status(self._seq, True, 'completed', throw.detected,
-                                                  stamp, HARDWARE_ID))
+        pubs['cycle_status'].publish(self._signer.cycle_status(
+            self._seq, True, 'completed', throw.detected, stamp, HARDWARE_ID))
         pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
         return self._seq, None
 
