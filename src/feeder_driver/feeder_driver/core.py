@@ -166,6 +166,7 @@ class DriverCore:
         self._last_fire_at = None
         self._hold_until = None       # after a failure, continuous cycling waits one period
         self._last_open_error = None
+        self._legacy = None           # detail of a protocol-1 frame seen since the port opened
 
     # ---- configuration -------------------------------------------------------------------
 
@@ -267,6 +268,7 @@ class DriverCore:
         self._last_rx = None
         self._ids_outstanding = 0
         self._last_open_error = None
+        self._legacy = None
         self._log('info', 'serial port open; handshake (PING) started')
         return self._send_ping(now)
 
@@ -305,6 +307,10 @@ class DriverCore:
             if self.link == DISCONNECTED:
                 break
             if isinstance(event, p.Rejected):
+                if event.kind == 'legacy' and self._legacy is None:
+                    # Old firmware: say so once per opening; the handshake cannot complete.
+                    self._legacy = event.detail
+                    self._log('error', f'controller speaks an old protocol: {event.detail}')
                 self._log('debug', f'dropped frame ({event.kind}): {event.detail}')
                 continue
             self._last_rx = now
@@ -336,9 +342,11 @@ class DriverCore:
         if self.link == HANDSHAKE:
             if now - self._opened_at > cfg.watchdog_timeout_s:
                 self.counters['handshake_timeouts'] += 1
+                why = (f'the controller sent {self._legacy}' if self._legacy is not None else
+                       'is a feeder controller on this port, at this baud rate?')
                 return effects + self.link_lost(
                     now, stamp, f'no PONG within {_fmt(cfg.watchdog_timeout_s)} s of opening '
-                    '(is a feeder controller on this port, at this baud rate?)')
+                    f'({why})')
             if now - self._ping_sent_at > cfg.ack_timeout_s:
                 effects += self._send_ping(now)
         elif self.link == CONNECTED:

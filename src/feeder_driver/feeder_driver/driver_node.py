@@ -343,7 +343,7 @@ class DriverNode(FeederLifecycleNode):
             stat.add('frames ok', stats['lines'])
             stat.add('garbage bytes', stats['garbage_bytes'])
             stat.add('frames dropped', self.link.parser.dropped_frames)
-            for kind in ('checksum', 'frame', 'overlong', 'truncated', 'unknown', 'fields'):
+            for kind in self.link.parser.REJECT_KINDS:
                 stat.add(f'dropped {kind}', stats[kind])
 
     def _diag_cycles(self, stat):

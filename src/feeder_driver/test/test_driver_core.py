@@ -83,6 +83,20 @@ def test_handshake_retries_ping_then_gives_up_and_backs_off():
     assert core.tick(2.21, 0) == [c.OpenLink()]
 
 
+def test_a_controller_of_protocol_1_is_refused_with_the_reason():
+    core = c.DriverCore(CFG)
+    core.start(0.0)
+    core.link_opened(0.0)
+    body = b'HELLO,old-fw,1A2B'
+    line = b'$' + body + b'*%02X\r\n' % p.legacy_checksum(body)
+    core.received(0.1, 0, p.Parser().feed(line))
+    assert core.link == c.HANDSHAKE
+    core.tick(2.1, 0)
+    assert core.link == c.DISCONNECTED
+    assert 'protocol 1' in core.last_link_error and 'update the controller firmware' in \
+        core.last_link_error, core.last_link_error
+
+
 def test_backoff_doubles_and_caps():
     core = c.DriverCore(CFG)
     core.start(0.0)
