@@ -238,7 +238,11 @@ class DriverNode(FeederLifecycleNode):
                 self._apply(self.core.link_lost(t, stamp, payload))
 
     def _tick(self):
-        self._apply(self.core.tick(time.monotonic(), self._stamp()))
+        # What the reader has read so far is handled before any deadline is judged: after a
+        # stall (SIGSTOP, starved CPU) a reply may be waiting in the queue or the port.
+        read_until = self.link.read_until if self.link is not None else None
+        self._drain()
+        self._apply(self.core.tick(time.monotonic(), self._stamp(), read_until))
 
     def _apply(self, effects):
         work = list(effects)
