@@ -285,8 +285,9 @@ class Rejected:
 
     ``kind``: ``checksum`` (the CRC does not match), ``frame`` (malformed: no ``*HHHH``, not
     four uppercase hex digits, control or non-ASCII byte), ``legacy`` (a well-formed frame of
-    protocol 1, ``*HH`` with its XOR: the peer runs old firmware), ``overlong``, ``truncated`` (a new ``$`` came before the line ended), ``unknown``
-    (command not in the table) or ``fields`` (known command, bad fields). ``command`` is the
+    protocol 1, ``*HH`` with its XOR: the peer runs old firmware), ``overlong``,
+    ``truncated`` (a new ``$`` came before the line ended), ``unknown`` (command not in the
+    table) or ``fields`` (known command, bad fields). ``command`` is the
     command name when it could be read. ``raw``: the dropped bytes (at most MAX_LINE).
     """
 

@@ -215,7 +215,7 @@ def test_scene_path_that_is_a_directory(tmp_path, capsys):
 
 
 def _special_file(tmp_path, kind):
-    """A path of the given kind; the socket is returned open (close it after the test)."""
+    """Return a path of the given kind (and the bound socket, to close after the test)."""
     if kind == 'fifo':
         path = tmp_path / 'scene.fifo'
         os.mkfifo(path)
@@ -231,8 +231,8 @@ def _special_file(tmp_path, kind):
 @pytest.mark.parametrize('kind, named', [('fifo', 'a FIFO (named pipe)'),
                                          ('character device', 'a character device'),
                                          ('socket', 'a socket')])
-def test_scene_path_that_is_not_a_regular_file_is_refused_at_once(tmp_path, capsys, kind,
-                                                                   named):
+def test_scene_path_that_is_not_a_regular_file_is_refused_at_once(
+        tmp_path, capsys, kind, named):
     """
     Issue 20, attack 9: a FIFO as the scene blocked the loader (and the nodes) for good.
 
