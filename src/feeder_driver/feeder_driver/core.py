@@ -36,6 +36,11 @@ from typing import Any, Optional
 from . import protocol as p
 
 DISCONNECTED = 'disconnected'
+# A gap this long between two ticks means the process was stalled (SIGSTOP, starved CPU).
+STALL_S = 0.25
+# How long, after a deadline (or after waking from a stall), the core waits for the reader
+# to show that it has read the port past that deadline, before it trusts the clock alone.
+READ_GRACE_S = 0.5
 HANDSHAKE = 'handshake'
 CONNECTED = 'connected'
 
@@ -174,6 +179,9 @@ class DriverCore:
         self._last_fire_at = None
         self._hold_until = None       # after a failure, continuous cycling waits one period
         self._last_open_error = None
+        self._legacy = None           # detail of a protocol-1 frame seen since the port opened
+        self._last_tick = None
+        self._awake_since = None      # first tick after the last stall
 
     # ---- configuration -------------------------------------------------------------------
 
@@ -275,6 +283,7 @@ class DriverCore:
         self._last_rx = None
         self._ids_outstanding = 0
         self._last_open_error = None
+        self._legacy = None
         self._log('info', 'serial port open; handshake (PING) started')
         return self._send_ping(now)
 
@@ -313,6 +322,10 @@ class DriverCore:
             if self.link == DISCONNECTED:
                 break
             if isinstance(event, p.Rejected):
+                if event.kind == 'legacy' and self._legacy is None:
+                    # Old firmware: say so once per opening; the handshake cannot complete.
+                    self._legacy = event.detail
+                    self._log('error', f'controller speaks an old protocol: {event.detail}')
                 self._log('debug', f'dropped frame ({event.kind}): {event.detail}')
                 continue
             self._last_rx = now
@@ -321,9 +334,34 @@ class DriverCore:
 
     # ---- timers ------------------------------------------------------------------------------
 
-    def tick(self, now, stamp):
-        """Check timeouts, reconnects and continuous cycling (the node calls it at 50 Hz)."""
+    def _read_horizon(self, now, read_until):
+        """
+        Time up to which every received byte has been handled: deadlines are judged on it.
+
+        ``read_until`` is when the reader's latest completed read began (all bytes that
+        arrived before it have been read and their events handled). After a stall a reply
+        may sit in the port's buffer past its deadline: it is read before the cycle fails.
+        Should the reader stop reporting while the ticks run on time, the clock takes over
+        READ_GRACE_S late, so a cycle still ends.
+        """
+        if self._last_tick is None or now - self._last_tick > STALL_S:
+            self._awake_since = now
+        self._last_tick = now
+        if read_until is None:
+            return now
+        if now - self._awake_since >= READ_GRACE_S:
+            return min(now, max(read_until, now - READ_GRACE_S))
+        return min(now, read_until)
+
+    def tick(self, now, stamp, read_until=None):
+        """
+        Check timeouts, reconnects and continuous cycling (the node calls it at 50 Hz).
+
+        ``read_until``: when the reader's latest completed read of the port began (its
+        events already handed to :meth:`received`); None: everything up to ``now`` is.
+        """
         cfg = self.config
+        horizon = self._read_horizon(now, read_until)
         effects = []
         if self.link == DISCONNECTED:
             if self.running and self.next_open_at is not None and now >= self.next_open_at:
@@ -332,7 +370,7 @@ class DriverCore:
             return effects
         pend = self.pending
         if pend is not None:
-            age = now - pend.fired_at
+            age = horizon - pend.fired_at
             if pend.acked_at is None and age > cfg.ack_timeout_s:
                 effects.append(Send(p.Stop()))
                 effects += self._fail(now, stamp, f'no ACK within {_fmt(cfg.ack_timeout_s)} s '
@@ -342,15 +380,17 @@ class DriverCore:
                 effects += self._fail(now, stamp, f'no SENS within {_fmt(cfg.cycle_timeout_s)} '
                                       f's of FIRE ({self._progress(pend)})')
         if self.link == HANDSHAKE:
-            if now - self._opened_at > cfg.watchdog_timeout_s:
+            if horizon - self._opened_at > cfg.watchdog_timeout_s:
                 self.counters['handshake_timeouts'] += 1
+                why = (f'the controller sent {self._legacy}' if self._legacy is not None else
+                       'is a feeder controller on this port, at this baud rate?')
                 return effects + self.link_lost(
                     now, stamp, f'no PONG within {_fmt(cfg.watchdog_timeout_s)} s of opening '
-                    '(is a feeder controller on this port, at this baud rate?)')
+                    f'({why})')
             if now - self._ping_sent_at > cfg.ack_timeout_s:
                 effects += self._send_ping(now)
         elif self.link == CONNECTED:
-            if now - self._last_rx > cfg.watchdog_timeout_s:
+            if horizon - self._last_rx > cfg.watchdog_timeout_s:
                 self.counters['watchdog_timeouts'] += 1
                 return effects + self.link_lost(
                     now, stamp, f'controller silent for {_fmt(now - self._last_rx)} s '

@@ -248,7 +248,11 @@ class DriverNode(FeederLifecycleNode):
                 self._apply(self.core.link_lost(t, stamp, payload))
 
     def _tick(self):
-        self._apply(self.core.tick(time.monotonic(), self._stamp()))
+        # What the reader has read so far is handled before any deadline is judged: after a
+        # stall (SIGSTOP, starved CPU) a reply may be waiting in the queue or the port.
+        read_until = self.link.read_until if self.link is not None else None
+        self._drain()
+        self._apply(self.core.tick(time.monotonic(), self._stamp(), read_until))
 
     def _apply(self, effects):
         work = list(effects)
@@ -357,7 +361,7 @@ class DriverNode(FeederLifecycleNode):
             stat.add('frames ok', stats['lines'])
             stat.add('garbage bytes', stats['garbage_bytes'])
             stat.add('frames dropped', self.link.parser.dropped_frames)
-            for kind in ('checksum', 'frame', 'overlong', 'truncated', 'unknown', 'fields'):
+            for kind in self.link.parser.REJECT_KINDS:
                 stat.add(f'dropped {kind}', stats[kind])
 
     def _diag_cycles(self, stat):

@@ -221,7 +221,8 @@ class Faults:
         noise = bytes(self.rng.choice([b for b in range(256) if b not in (0x24,)])
                       for _ in range(self.rng.randint(3, 24)))
         bad_sum = bytearray(p.encode(p.Sens(self.rng.randrange(p.SEQ_MODULO), 1)))
-        bad_sum[-4:-2] = b'%02X' % ((int(bad_sum[-4:-2], 16) + 1) % 256)
+        check = slice(-2 - p.CHECK_DIGITS, -2)      # the hex digits before CR LF
+        bad_sum[check] = b'%0*X' % (p.CHECK_DIGITS, (int(bad_sum[check], 16) + 1) % 65536)
         cut = p.encode(p.Ack(self.rng.randrange(p.SEQ_MODULO)))[:5]
         overlong = b'$' + b'X' * (p.MAX_LINE + 10) + b'\r\n'
         return noise + bytes(bad_sum) + cut + noise[:5] + overlong + b'\xff\xfe\r\n' + cut

@@ -13,15 +13,18 @@
 # limitations under the License.
 
 r"""
-Feeder controller protocol (docs/serial-protocol.md): framing, checksum, messages, parser.
+Feeder controller protocol (docs/serial-protocol.md): framing, frame check, messages, parser.
 
-ROS-free. A frame is ``$BODY*HH\r\n`` where BODY is ``CMD[,field...]`` in printable ASCII
-and HH is the XOR of the BODY bytes as two hex digits (sent uppercase, accepted in either
-case). :class:`Parser` takes arbitrary byte chunks and returns decoded messages and
-:class:`Rejected` events; it keeps a bounded buffer, resynchronises on the next ``$`` and
-counts every byte and line it drops.
+ROS-free. Protocol version 2: a frame is ``$BODY*HHHH\r\n`` where BODY is ``CMD[,field...]``
+in printable ASCII and HHHH is the CRC-16/CCITT-FALSE of the BODY bytes (polynomial 0x1021,
+initial value 0xFFFF, no reflection, no final XOR: ``binascii.crc_hqx(body, 0xFFFF)``) as
+four uppercase hex digits. :class:`Parser` takes arbitrary byte chunks and returns decoded
+messages and :class:`Rejected` events; it keeps a bounded buffer, resynchronises on the next
+``$`` and counts every byte and line it drops. A frame of protocol 1 (``*HH``, the XOR of the
+body) is recognised and refused as ``legacy``, so an old controller is named as such.
 """
 
+import binascii
 import dataclasses
 from dataclasses import dataclass
 import re
@@ -29,6 +32,10 @@ from typing import Optional
 
 # Longest frame accepted, from '$' up to and including the final '\n'.
 MAX_LINE = 96
+# The version of this protocol: 1 framed with an 8-bit XOR, 2 with CRC-16/CCITT-FALSE.
+PROTOCOL_VERSION = 2
+# Hex digits of the frame check (uppercase on the wire).
+CHECK_DIGITS = 4
 # Sequence numbers on the wire are 0 .. SEQ_MODULO - 1.
 SEQ_MODULO = 65536
 UINT32_MAX = 2 ** 32 - 1
@@ -42,7 +49,8 @@ _RULES = {_TOKEN_RE: '1-16 of [A-Za-z0-9_-]', _BOOT_RE: '1-16 of [A-Za-z0-9]',
           _WORD_RE: '1-12 of [A-Z0-9_], starting A-Z'}
 _UINT_RE = re.compile(r'[0-9]{1,10}\Z')
 _INT_RE = re.compile(r'-?[0-9]{1,10}\Z')
-_HEX = b'0123456789ABCDEFabcdef'
+_HEX = b'0123456789ABCDEF'
+_LEGACY_HEX = b'0123456789ABCDEFabcdef'
 
 # Error codes a controller sends in ERR (docs/serial-protocol.md, section 'Error codes').
 ERROR_CODES = ('BADSUM', 'BADFRAME', 'OVERLONG', 'BADCMD', 'BADARG', 'BUSY', 'ABORTED',
@@ -56,9 +64,21 @@ class ProtocolError(ValueError):
 
 
 def checksum(body):
-    """XOR of the bytes of ``body`` (everything between '$' and '*')."""
+    """
+    Frame check of ``body`` (everything between '$' and '*'): CRC-16/CCITT-FALSE.
+
+    Polynomial 0x1021, initial value 0xFFFF, bits not reflected, no final XOR; the CRC of
+    ``b'123456789'`` is 0x29B1. A generator of degree 16 detects every burst of up to 16
+    bits, every odd number of bit errors (it has the factor x + 1) and every two-bit error
+    within 32767 bits, far more than the 96 bytes of a frame (docs/serial-protocol.md).
+    """
     if isinstance(body, str):
         body = body.encode('ascii')
+    return binascii.crc_hqx(body, 0xFFFF)
+
+
+def legacy_checksum(body):
+    """XOR of the bytes of ``body``: the frame check of protocol 1, only to recognise it."""
     value = 0
     for byte in body:
         value ^= byte
@@ -99,7 +119,7 @@ def frame(fields):
     for k, field in enumerate(fields):
         _check_text(f'field {k}', field, MAX_LINE, allow_empty=k > 0)
     body = ','.join(fields).encode('ascii')
-    line = b'$' + body + b'*%02X\r\n' % checksum(body)
+    line = b'$' + body + b'*%04X\r\n' % checksum(body)
     if len(line) > MAX_LINE:
         raise ProtocolError(f'frame: {len(line)} bytes, longer than MAX_LINE={MAX_LINE}; '
                             'shorten the text fields')
@@ -263,9 +283,11 @@ class Rejected:
     """
     A frame the parser dropped.
 
-    ``kind``: ``checksum``, ``frame`` (malformed: no ``*HH``, bad hex, control or non-ASCII
-    byte), ``overlong``, ``truncated`` (a new ``$`` came before the line ended), ``unknown``
-    (command not in the table) or ``fields`` (known command, bad fields). ``command`` is the
+    ``kind``: ``checksum`` (the CRC does not match), ``frame`` (malformed: no ``*HHHH``, not
+    four uppercase hex digits, control or non-ASCII byte), ``legacy`` (a well-formed frame of
+    protocol 1, ``*HH`` with its XOR: the peer runs old firmware), ``overlong``,
+    ``truncated`` (a new ``$`` came before the line ended), ``unknown`` (command not in the
+    table) or ``fields`` (known command, bad fields). ``command`` is the
     command name when it could be read. ``raw``: the dropped bytes (at most MAX_LINE).
     """
 
@@ -276,7 +298,8 @@ class Rejected:
 
 
 # What a receiving controller answers to each kind of rejected frame (docs/serial-protocol.md).
-REJECT_CODES = {'checksum': 'BADSUM', 'frame': 'BADFRAME', 'overlong': 'OVERLONG',
+REJECT_CODES = {'checksum': 'BADSUM', 'frame': 'BADFRAME', 'legacy': 'BADFRAME',
+                'overlong': 'OVERLONG',
                 'truncated': 'BADFRAME', 'unknown': 'BADCMD', 'fields': 'BADARG'}
 
 
@@ -290,8 +313,9 @@ class Parser:
     tail of an overlong frame) and each kind of rejected frame.
     """
 
-    STAT_KEYS = ('bytes', 'lines', 'garbage_bytes', 'checksum', 'frame', 'overlong',
+    STAT_KEYS = ('bytes', 'lines', 'garbage_bytes', 'checksum', 'frame', 'legacy', 'overlong',
                  'truncated', 'unknown', 'fields')
+    REJECT_KINDS = STAT_KEYS[3:]
 
     def __init__(self, messages=None, max_line=MAX_LINE):
         if max_line < 8:
@@ -306,9 +330,7 @@ class Parser:
     @property
     def dropped_frames(self):
         """Frames dropped for any reason (sum of the rejection counters)."""
-        s = self.stats
-        return s['checksum'] + s['frame'] + s['overlong'] + s['truncated'] + s['unknown'] + \
-            s['fields']
+        return sum(self.stats[kind] for kind in self.REJECT_KINDS)
 
     def reset(self):
         """Forget a partial frame (e.g. after reopening the port); counters are kept."""
@@ -374,17 +396,23 @@ class Parser:
     def _decode(self, line):
         if line.endswith(b'\r'):
             line = line[:-1]
-        if len(line) < 4 or line[-3:-2] != b'*':
-            return self._reject('frame', 'no *HH checksum at the end of the line', line)
-        body, given = line[:-3], line[-2:]
+        n = CHECK_DIGITS
+        if len(line) < n + 2 or line[-n - 1:-n] != b'*':
+            if self._is_legacy(line):
+                return self._reject('legacy', 'a frame of serial protocol 1 (XOR checksum *HH); '
+                                    f'this side speaks protocol {PROTOCOL_VERSION} (CRC-16 '
+                                    '*HHHH): update the controller firmware '
+                                    '(docs/serial-protocol.md)', line)
+            return self._reject('frame', f'no *{"H" * n} CRC at the end of the line', line)
+        body, given = line[:-n - 1], line[-n:]
         if any(b not in _HEX for b in given):
-            return self._reject('frame', f'checksum {given!r} is not two hex digits', line)
+            return self._reject('frame', f'CRC {given!r} is not {n} uppercase hex digits', line)
         if any(b < 0x20 or b > 0x7e for b in body):
             return self._reject('frame', 'control or non-ASCII byte inside the frame', line)
         want = checksum(body)
         if int(given, 16) != want:
-            return self._reject('checksum', f'checksum {given.decode()} != computed '
-                                f'{want:02X}', line)
+            return self._reject('checksum', f'CRC {given.decode()} != computed '
+                                f'{want:04X}', line)
         fields = body.decode('ascii').split(',')
         name = fields[0]
         cls = self.messages.get(name)
@@ -396,3 +424,13 @@ class Parser:
             return self._reject('fields', f'{name}: {exc}', line, name)
         self.stats['lines'] += 1
         return message
+
+    @staticmethod
+    def _is_legacy(line):
+        """Whether ``line`` (no '$', no line end) is a valid protocol-1 frame ``BODY*HH``."""
+        if len(line) < 4 or line[-3:-2] != b'*':
+            return False
+        body, given = line[:-3], line[-2:]
+        if any(b not in _LEGACY_HEX for b in given) or any(b < 0x20 or b > 0x7e for b in body):
+            return False
+        return int(given, 16) == legacy_checksum(body)

@@ -16,7 +16,9 @@
 Serial transport of the driver: pyserial port plus a reader thread (ROS-free).
 
 The reader thread does blocking reads with a short timeout, feeds the protocol parser and
-hands ``(generation, t_monotonic, events)`` to ``on_events``; on a read error it calls
+hands ``(generation, t_monotonic, events)`` to ``on_events``; then it sets
+:attr:`SerialLink.read_until` to the time that read began (every byte that arrived before it
+has been handed over: the owner judges reply deadlines on it). On a read error it calls
 ``on_lost(generation, error)`` once and exits. ``generation`` increases with every open,
 so the owner can ignore events of a connection it has already closed. Writes happen on the
 caller's thread. :meth:`close` stops and joins the reader before it closes the port.
@@ -55,6 +57,8 @@ class SerialLink:
         self._ser = None
         self._thread = None
         self._stop = threading.Event()
+        # Start of the latest completed read (monotonic); None while closed.
+        self.read_until = None
 
     @property
     def is_open(self):
@@ -77,6 +81,7 @@ class SerialLink:
             raise LinkError(f'{self.port}: flushing input failed: {exc}') from None
         self.generation += 1
         self.parser.reset()
+        self.read_until = self._clock()     # the input before this instant was flushed
         self._ser = ser
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._reader, args=(ser, self.generation,
@@ -118,13 +123,16 @@ class SerialLink:
 
     def _reader(self, ser, generation, stop):
         while not stop.is_set():
+            began = self._clock()
             try:
                 data = ser.read(ser.in_waiting or 1)
             except Exception as exc:    # noqa: B902 - any read failure means the link is gone
                 if not stop.is_set():
                     self._on_lost(generation, f'{self.port}: read failed: {exc}')
                 return
-            if not data or stop.is_set():
-                continue
-            events = self.parser.feed(data)
-            self._on_events(generation, self._clock(), events)
+            if stop.is_set():
+                return
+            if data:
+                events = self.parser.feed(data)
+                self._on_events(generation, self._clock(), events)
+            self.read_until = began

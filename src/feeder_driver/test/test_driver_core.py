@@ -83,6 +83,20 @@ def test_handshake_retries_ping_then_gives_up_and_backs_off():
     assert core.tick(2.21, 0) == [c.OpenLink()]
 
 
+def test_a_controller_of_protocol_1_is_refused_with_the_reason():
+    core = c.DriverCore(CFG)
+    core.start(0.0)
+    core.link_opened(0.0)
+    body = b'HELLO,old-fw,1A2B'
+    line = b'$' + body + b'*%02X\r\n' % p.legacy_checksum(body)
+    core.received(0.1, 0, p.Parser().feed(line))
+    assert core.link == c.HANDSHAKE
+    core.tick(2.1, 0)
+    assert core.link == c.DISCONNECTED
+    assert 'protocol 1' in core.last_link_error and 'update the controller firmware' in \
+        core.last_link_error, core.last_link_error
+
+
 def test_backoff_doubles_and_caps():
     core = c.DriverCore(CFG)
     core.start(0.0)
@@ -289,3 +303,47 @@ def test_a_late_answer_to_a_repeated_id_is_not_a_reset():
     assert core.counters['controller_resets'] == 1
     core.received(0.64, 0, [p.Hello('fw', 'B2')])
     assert core.counters['controller_resets'] == 2
+
+
+def test_a_sens_waiting_in_the_buffer_after_a_stall_completes_the_cycle(core):
+    # Issue 20, attack 6: the driver is paused (SIGSTOP) right after firing; the controller's
+    # SENS arrives while it sleeps and waits in the port's buffer. On waking, the tick comes
+    # first, 5 s later; the reader has not read since it was stopped (read_until = 1.06).
+    seq = fire(core, 1.0)
+    core.received(1.05, 0, [p.Ack(seq)])
+    assert core.tick(1.06, 0, read_until=1.05) == []
+    assert core.tick(8.0, 0, read_until=1.06) == []          # neither a timeout nor link loss
+    assert core.link == c.CONNECTED and core.pending is not None
+    # The reader wakes too and hands over the SENS it found.
+    (res,) = results(core.received(8.01, 80, [p.Sens(seq, 1)]))
+    assert res.ok and res.sensor == 1 and res.stamp == 80
+    assert core.tick(8.02, 0, read_until=8.005) == []
+    assert core.counters['failed'] == 0 and core.counters['watchdog_timeouts'] == 0
+
+
+def test_after_a_stall_a_missing_sens_fails_once_the_port_is_read(core):
+    seq = fire(core, 1.0)
+    core.received(1.05, 0, [p.Ack(seq)])
+    core.tick(1.06, 0, read_until=1.05)
+    assert core.tick(8.0, 0, read_until=1.06) == []
+    eff = core.tick(8.02, 0, read_until=8.0)      # read after the deadline: nothing came
+    (res,) = results(eff)
+    assert not res.ok and 'no SENS within 3 s' in res.reason and p.Stop() in sent(eff)
+
+
+def test_a_reader_that_stops_reporting_does_not_hold_a_cycle_forever(core):
+    # The ticks run on time but the reader never reports: the clock takes over, late by
+    # READ_GRACE_S at most, so the cycle still ends (and the silent link is declared lost).
+    seq = fire(core, 1.0)
+    core.received(1.05, 0, [p.Ack(seq)])
+    t, ended = 1.06, None
+    while t < 6.0 and ended is None:
+        for res in results(core.tick(t, 0, read_until=1.05)):
+            ended = (t, res)
+        t = round(t + 0.02, 6)
+    assert ended is not None
+    t, res = ended
+    # Silent since 1.05: the watchdog (2 s) judged by the clock, READ_GRACE_S late.
+    assert 1.05 + CFG.watchdog_timeout_s < t <= 1.05 + CFG.watchdog_timeout_s + \
+        c.READ_GRACE_S + 0.03
+    assert not res.ok and 'serial link lost during cycle' in res.reason

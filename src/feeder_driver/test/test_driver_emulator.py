@@ -119,12 +119,16 @@ def test_busy_stop_and_bad_frames(emu_factory, link_path):
     assert cl.wait(lambda e: isinstance(e, p.Err) and e.seq == 2)[0].code == 'BUSY'
     cl.send(p.Stop())
     assert cl.wait(lambda e: isinstance(e, p.Err) and e.seq == 1)[0].code == 'ABORTED'
-    cl.send(b'$FIRE,3*00\r\n')
+    cl.send(b'$FIRE,3*0000\r\n')
     assert cl.wait(lambda e: isinstance(e, p.Err) and e.seq is None)[0].code == 'BADSUM'
-    cl.send(b'$JUMP*%02X\r\n' % p.checksum(b'JUMP'))
+    cl.send(b'$JUMP*%04X\r\n' % p.checksum(b'JUMP'))
     cl.wait(lambda e: isinstance(e, p.Err) and e.code == 'BADCMD')
-    cl.send(b'$FIRE,x*%02X\r\n' % p.checksum(b'FIRE,x'))
+    cl.send(b'$FIRE,x*%04X\r\n' % p.checksum(b'FIRE,x'))
     cl.wait(lambda e: isinstance(e, p.Err) and e.code == 'BADARG')
+    # A host of protocol 1 (XOR *HH) is told its frame is bad, and nothing fires.
+    cl.send(b'$FIRE,4*%02X\r\n' % p.legacy_checksum(b'FIRE,4'))
+    err = cl.wait(lambda e: isinstance(e, p.Err) and e.code == 'BADFRAME')[0]
+    assert err.text == 'legacy'
     time.sleep(0.6)
     outcomes = [(r['seq'], r['outcome']) for r in emu.records]
     assert outcomes == [(2, 'busy'), (1, 'aborted')]

@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Protocol codec: round trips, the worked checksum example, defensive decoding."""
+"""Protocol codec: round trips, the worked CRC example, defensive decoding."""
 
 import random
 
@@ -29,12 +29,48 @@ ALL = [p.Fire(0), p.Fire(65535), p.Stop(), p.Ping('h1'), p.Ident(),
 TABLE = dict(p.HOST_MESSAGES, **p.CONTROLLER_MESSAGES)
 
 
-def test_checksum_worked_example():
-    # docs/serial-protocol.md: 'P'^'I'^'N'^'G'^','^'4'^'2' = 0x3A
-    assert p.checksum(b'PING,42') == 0x3A
-    assert p.encode(p.Ping('42')) == b'$PING,42*3A\r\n'
-    assert p.encode(p.Fire(7)) == b'$FIRE,7*03\r\n'
-    assert p.encode(p.Sens(7, 1)) == b'$SENS,7,1*0D\r\n'
+def bitwise_crc(data):
+    """CRC-16/CCITT-FALSE as docs/serial-protocol.md writes it for firmware, bit by bit."""
+    crc = 0xFFFF
+    for byte in data:
+        crc ^= byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else crc << 1
+            crc &= 0xFFFF
+    return crc
+
+
+def test_crc_worked_example():
+    # docs/serial-protocol.md, section 3: the check value of the standard and the running CRC
+    # of PING,42 byte by byte.
+    assert p.checksum(b'123456789') == bitwise_crc(b'123456789') == 0x29B1
+    running = [bitwise_crc(b'PING,42'[:k]) for k in range(1, 8)]
+    assert running == [0xBB05, 0xCA5D, 0x8C0C, 0x6427, 0xEECC, 0xA637, 0xF43D]
+    assert p.checksum(b'PING,42') == 0xF43D
+    assert p.encode(p.Ping('42')) == b'$PING,42*F43D\r\n'
+    assert p.encode(p.Sens(17, 1)) == b'$SENS,17,1*2A61\r\n'
+    for msg in ALL:
+        line = p.encode(msg)
+        assert line[-7:-6] == b'*' and int(line[-6:-2], 16) == bitwise_crc(line[1:-7])
+
+
+def test_doc_example_frames_are_exact():
+    # The example frames of docs/serial-protocol.md, section 5.
+    examples = {
+        p.Hello('feeder-emu-1.0', '1A2B0001'): b'$HELLO,feeder-emu-1.0,1A2B0001*92F3',
+        p.Ident(): b'$ID*A21B', p.Ping('h1'): b'$PING,h1*8F8C', p.Pong('h1'): b'$PONG,h1*026D',
+        p.Fire(17): b'$FIRE,17*AF2A', p.Ack(17): b'$ACK,17*2D2E',
+        p.Rel(17, 5585): b'$REL,17,5585*84A5', p.Sens(17, 1): b'$SENS,17,1*2A61',
+        p.Hb(123456, 'IDLE'): b'$HB,123456,IDLE*0802',
+        p.Hb(123456, 'BUSY'): b'$HB,123456,BUSY*A2BE',
+        p.Err(18, 'BUSY', 'cycle 17 in progress'): b'$ERR,18,BUSY,cycle 17 in progress*F585',
+        p.Stop(): b'$STOP*AF2E', p.Err(18, 'ABORTED', 'stopped by host'):
+        b'$ERR,18,ABORTED,stopped by host*A4EF',
+        p.Err(None, 'BADSUM', 'checksum'): b'$ERR,-,BADSUM,checksum*4028',
+        p.Err(19, 'FAULT', 'arm stalled'): b'$ERR,19,FAULT,arm stalled*5F27',
+    }
+    for msg, line in examples.items():
+        assert p.encode(msg) == line + b'\r\n'
 
 
 @pytest.mark.parametrize('msg', ALL, ids=lambda m: m.NAME)
@@ -46,9 +82,9 @@ def test_round_trip(msg):
     assert parser.stats['lines'] == 1 and parser.dropped_frames == 0
 
 
-def test_lowercase_checksum_and_bare_newline_are_accepted():
+def test_bare_newline_is_accepted():
     parser = p.Parser()
-    line = b'$HELLO,fw,AB*%02x\n' % p.checksum(b'HELLO,fw,AB')
+    line = b'$HELLO,fw,AB*%04X\n' % p.checksum(b'HELLO,fw,AB')
     assert parser.feed(line) == [p.Hello('fw', 'AB')]
 
 
@@ -69,16 +105,18 @@ def test_byte_by_byte():
 
 
 @pytest.mark.parametrize('raw, kind', [
-    (b'$SENS,7,1*00\r\n', 'checksum'),
+    (b'$SENS,7,1*0000\r\n', 'checksum'),
     (b'$SENS,7,1\r\n', 'frame'),
-    (b'$SENS,7,1*G1\r\n', 'frame'),
-    (b'$SENS,7,\xff1*00\r\n', 'frame'),
-    (b'$SE\x00NS,7,1*00\r\n', 'frame'),
-    (b'$FOO,1*%02X\r\n' % p.checksum(b'FOO,1'), 'unknown'),
-    (b'$SENS,7,2*%02X\r\n' % p.checksum(b'SENS,7,2'), 'fields'),
-    (b'$SENS,70000,1*%02X\r\n' % p.checksum(b'SENS,70000,1'), 'fields'),
-    (b'$ACK,7,8*%02X\r\n' % p.checksum(b'ACK,7,8'), 'fields'),
-    (b'$ACK,-1*%02X\r\n' % p.checksum(b'ACK,-1'), 'fields'),
+    (b'$SENS,7,1*G100\r\n', 'frame'),
+    (b'$SENS,7,1*00\r\n', 'frame'),
+    (b'$SENS,7,1*%02X\r\n' % p.legacy_checksum(b'SENS,7,1'), 'legacy'),
+    (b'$SENS,7,\xff1*0000\r\n', 'frame'),
+    (b'$SE\x00NS,7,1*0000\r\n', 'frame'),
+    (b'$FOO,1*%04X\r\n' % p.checksum(b'FOO,1'), 'unknown'),
+    (b'$SENS,7,2*%04X\r\n' % p.checksum(b'SENS,7,2'), 'fields'),
+    (b'$SENS,70000,1*%04X\r\n' % p.checksum(b'SENS,70000,1'), 'fields'),
+    (b'$ACK,7,8*%04X\r\n' % p.checksum(b'ACK,7,8'), 'fields'),
+    (b'$ACK,-1*%04X\r\n' % p.checksum(b'ACK,-1'), 'fields'),
     (b'$ACK,7', 'truncated'),
     (b'$' + b'A' * 200 + b'\r\n', 'overlong'),
 ])
@@ -110,7 +148,7 @@ def test_buffer_stays_bounded_under_endless_input():
 
 
 def test_a_frame_of_exactly_max_line_is_accepted_and_one_more_byte_is_not():
-    text = 'x' * (p.MAX_LINE - len('$ERR,1,FAULT,*HH\r\n'))
+    text = 'x' * (p.MAX_LINE - len('$ERR,1,FAULT,*HHHH\r\n'))
     with pytest.raises(p.ProtocolError):
         p.encode(p.Err(1, 'FAULT', text))       # text longer than 48
     fields = ['HELLO', 'f' * 32, 'A' * 16]
@@ -140,7 +178,7 @@ def test_random_noise_never_raises_and_never_forges_a_message():
     for _ in range(300):
         chunk = bytes(rng.randrange(256) for _ in range(rng.randrange(1, 64)))
         for event in parser.feed(chunk):
-            # Random bytes pass an 8-bit checksum now and then, but only as a valid message.
+            # Random bytes could pass the CRC (1 in 65536), but only as a valid message.
             assert isinstance(event, (p.Rejected,) + tuple(TABLE.values()))
     assert parser.stats['bytes'] > 0
 

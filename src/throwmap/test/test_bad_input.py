@@ -22,7 +22,11 @@ a silently truncated edge, a traceback from the CLI) or named the wrong field.
 import io
 import json
 import math
+import os
+import socket
 import sys
+import threading
+import time
 import types
 
 import numpy as np
@@ -203,11 +207,60 @@ def _load_error(path):
 
 def test_scene_path_that_is_a_directory(tmp_path, capsys):
     """Used to escape as IsADirectoryError (a traceback from the CLI)."""
-    message = (f'scene: {tmp_path} is a directory, not a file; give the path of a scene YAML '
-               '(e.g. scenes/triangle.yaml)')
+    message = (f'scene: {tmp_path} is a directory, not a regular file; give the path of a '
+               'scene YAML file (e.g. scenes/triangle.yaml)')
     assert _load_error(str(tmp_path)) == message
     assert main(['grasp', str(tmp_path)], out=io.StringIO()) == 2
     assert capsys.readouterr().err == f'throwmap: error: {message}\n'
+
+
+def _special_file(tmp_path, kind):
+    """Return a path of the given kind (and the bound socket, to close after the test)."""
+    if kind == 'fifo':
+        path = tmp_path / 'scene.fifo'
+        os.mkfifo(path)
+        return str(path), None
+    if kind == 'character device':
+        return os.devnull, None
+    sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    path = tmp_path / 'scene.sock'
+    sock.bind(str(path))
+    return str(path), sock
+
+
+@pytest.mark.parametrize('kind, named', [('fifo', 'a FIFO (named pipe)'),
+                                         ('character device', 'a character device'),
+                                         ('socket', 'a socket')])
+def test_scene_path_that_is_not_a_regular_file_is_refused_at_once(
+        tmp_path, capsys, kind, named):
+    """
+    Issue 20, attack 9: a FIFO as the scene blocked the loader (and the nodes) for good.
+
+    Run in a thread so that a regression shows as a failure, not as a hung test; a writer
+    then opens the FIFO to let the blocked loader go.
+    """
+    path, sock = _special_file(tmp_path, kind)
+    message = (f'scene: {path} is {named}, not a regular file; give the path of a scene YAML '
+               'file (e.g. scenes/triangle.yaml)')
+    outcome = []
+    thread = threading.Thread(target=lambda: outcome.append(_load_error(path)), daemon=True)
+    started = time.monotonic()
+    thread.start()
+    thread.join(timeout=5.0)
+    blocked = thread.is_alive()
+    if blocked and kind == 'fifo':
+        with open(path, 'wb'):
+            pass
+        thread.join(timeout=5.0)
+    try:
+        assert not blocked, f'load_scene({path!r}) still blocked after 5 s'
+        assert time.monotonic() - started < 1.0
+        assert outcome == [message]
+        assert main(['grasp', path], out=io.StringIO()) == 2
+        assert capsys.readouterr().err == f'throwmap: error: {message}\n'
+    finally:
+        if sock is not None:
+            sock.close()
 
 
 def test_scene_file_that_is_not_utf8(tmp_path, capsys):

@@ -25,6 +25,7 @@ the base ThrowModel itself.
 import math
 import os
 import re
+import stat
 import warnings
 
 import yaml
@@ -287,6 +288,20 @@ _StrictLoader.add_implicit_resolver(
     list('-+0123456789.'))
 
 
+_FILE_KINDS = ((stat.S_ISDIR, 'a directory'), (stat.S_ISFIFO, 'a FIFO (named pipe)'),
+               (stat.S_ISCHR, 'a character device'), (stat.S_ISBLK, 'a block device'),
+               (stat.S_ISSOCK, 'a socket'))
+
+
+def _check_regular(path, mode, what):
+    """Raise InputError naming what ``path`` is when it is not a regular file."""
+    if stat.S_ISREG(mode):
+        return
+    kind = next((name for test, name in _FILE_KINDS if test(mode)), 'not a regular file')
+    raise InputError(what, f'{path} is {kind}, not a regular file',
+                     'give the path of a scene YAML file (e.g. scenes/triangle.yaml)')
+
+
 def read_yaml(path, what='scene'):
     """
     Read a YAML file as the scene loader does: strict (no repeated keys), within the limits.
@@ -297,12 +312,16 @@ def read_yaml(path, what='scene'):
     if not os.path.exists(path):
         raise InputError(what, f'no such file: {path}',
                          'give the path of a scene YAML (e.g. scenes/triangle.yaml)')
-    if os.path.isdir(path):
-        raise InputError(what, f'{path} is a directory, not a file',
-                         'give the path of a scene YAML (e.g. scenes/triangle.yaml)')
     try:
-        with open(path, 'rb') as fh:
-            raw = fh.read(MAX_SCENE_BYTES + 1)     # a FIFO or /dev/zero stops here too
+        # Refused before opening: opening a FIFO blocks until a writer comes, and opening a
+        # device can act on it (a serial port resets its board).
+        _check_regular(path, os.stat(path).st_mode, what)
+        # O_NONBLOCK: should the path become a FIFO after that check, the open cannot block;
+        # fstat then refuses it.
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, 'O_CLOEXEC', 0))
+        with os.fdopen(fd, 'rb') as fh:
+            _check_regular(path, os.fstat(fh.fileno()).st_mode, what)
+            raw = fh.read(MAX_SCENE_BYTES + 1)     # a huge file is not read whole
     except OSError as exc:
         raise InputError(f'{path}', f'cannot be read ({exc.strerror})',
                          'check the path and its permissions') from None
