@@ -67,6 +67,20 @@ def test_normal_cycle(core):
     assert fire(core, 1.3) == seq + 1
 
 
+def test_every_fire_is_announced_before_it_goes_out(core):
+    # The monitor drops a ready on the notice: it must precede the FIRE that moves the arm,
+    # whether the cycle is triggered or fired by continuous cycling.
+    ok, _, eff = core.trigger(1.0)
+    assert ok and [type(e) for e in eff] == [c.Firing, c.Send]
+    assert eff[0].seq == 1 and isinstance(eff[1].message, p.Fire)
+    core.received(1.2, 12, [p.Ack(1), p.Sens(1, 0)])
+    core.enable(True, 1.3)
+    eff = core.tick(2.5, 0)
+    kinds = [type(e) for e in eff]
+    assert c.Firing in kinds and kinds.index(c.Firing) + 1 == kinds.index(c.Send)
+    assert [e.seq for e in eff if isinstance(e, c.Firing)] == [2]
+
+
 def test_handshake_retries_ping_then_gives_up_and_backs_off():
     core = c.DriverCore(CFG)
     core.start(0.0)
