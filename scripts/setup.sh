@@ -45,6 +45,12 @@ _feeder_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
       exit 1
     fi
     echo "setup: colcon build (ros2_ws)"
+    # The wheels install their share/ (ament index, CMake configs) into the venv: the message
+    # generators look their typesupports up there.
+    case ":${AMENT_PREFIX_PATH:-}:" in
+      *":$VIRTUAL_ENV:"*) ;;
+      *) export AMENT_PREFIX_PATH="$VIRTUAL_ENV${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}" ;;
+    esac
     if ! (cd "$ROOT/ros2_ws" && colcon build --event-handlers console_direct- \
           > "$ROOT/ros2_ws/colcon-build.log" 2>&1); then
       cat "$ROOT/ros2_ws/colcon-build.log"
