@@ -33,9 +33,24 @@ _feeder_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
   if [ ! -e "$VENV/bin/throwmap" ] && [ -x "$VENV/lib/throwmap/throwmap" ]; then
     ln -s ../lib/throwmap/throwmap "$VENV/bin/throwmap"
   fi
+  # The message wheels' exported CMake targets name the wheel builder's Python and numpy
+  # include folders: point this venv's copies at its own (idempotent; nothing to do on a
+  # normal ROS install, whose files never name them).
+  python "$ROOT/scripts/wheel_cmake_paths.py"
   if [ "${FEEDER_SKIP_COLCON:-0}" != 1 ] && ls "$ROOT"/src/feeder_*/package.xml >/dev/null 2>&1
   then
+    if ! command -v cc >/dev/null || ! command -v c++ >/dev/null; then
+      echo "setup: building feeder_interfaces (messages) needs a C and a C++ compiler (cc, c++)" \
+        "on PATH: install them (Debian/Ubuntu: apt-get install g++)" >&2
+      exit 1
+    fi
     echo "setup: colcon build (ros2_ws)"
+    # The wheels install their share/ (ament index, CMake configs) into the venv: the message
+    # generators look their typesupports up there.
+    case ":${AMENT_PREFIX_PATH:-}:" in
+      *":$VIRTUAL_ENV:"*) ;;
+      *) export AMENT_PREFIX_PATH="$VIRTUAL_ENV${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}" ;;
+    esac
     if ! (cd "$ROOT/ros2_ws" && colcon build --event-handlers console_direct- \
           > "$ROOT/ros2_ws/colcon-build.log" 2>&1); then
       cat "$ROOT/ros2_ws/colcon-build.log"
