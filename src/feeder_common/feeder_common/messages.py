@@ -36,6 +36,7 @@ from typing import Optional
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from feeder_interfaces.msg import Verdict
 from sensor_msgs.msg import JointState, Range
 
 from . import auth
@@ -77,6 +78,8 @@ class CycleStatus:
     stamp_ns: Optional[int]
     message: str
     hardware_id: str
+    session: str = ''       # the reporting run (CycleSigner); '' unsigned
+    mac: bytes = b''        # HMAC-SHA256 of the report (feeder_common.auth); b'' unsigned
 
 
 def cycle_status(seq, ok, message, sensor, stamp_ns, hardware_id):
@@ -110,9 +113,10 @@ def parse_cycle_status(msg):
     if seq < 0:
         raise ValueError(f'cycle_status seq {seq} is negative')
     stamp = _optional_stamp(values)
+    session, tag = _signature(values)
     return CycleStatus(seq, msg.level == DiagnosticStatus.OK,
                        _SENSOR_BIT.get(values.get('sensor')), stamp, msg.message,
-                       msg.hardware_id)
+                       msg.hardware_id, session, tag)
 
 
 @dataclass(frozen=True)
@@ -228,7 +232,6 @@ def signed_verdict(key, monitor, session, seq, stamp_ns, ready, state, anomaly, 
 
     ``seq`` 0 and ``stamp_ns`` None: no cycle judged yet.
     """
-    from feeder_interfaces.msg import Verdict
     msg = Verdict(seq=int(seq), ready=bool(ready), state=str(state), anomaly=str(anomaly or ''),
                   session=str(session))
     if stamp_ns is not None:
@@ -281,6 +284,38 @@ def check_verdict(msg, key, monitor, now_ns, max_age_s=1.0):
 
 
 CYCLE_FIRED_NAME = 'cycle_fired'
+
+
+def _signature(values):
+    """The ``session`` and ``mac`` of a signed status; ('', b'') when absent or malformed."""
+    session, text = values.get('session', ''), values.get('mac', '')
+    if len(session) > 64 or len(text) != 2 * auth.MAC_BYTES:
+        return session[:64], b''
+    try:
+        return session, bytes.fromhex(text)
+    except ValueError:
+        return session, b''
+
+
+@dataclass(frozen=True)
+class CycleFired:
+    """A parsed ``cycle_fired``: cycle ``seq`` was being fired at ``stamp_ns``."""
+
+    seq: int
+    stamp_ns: Optional[int]
+    session: str
+    mac: bytes
+
+
+def parse_cycle_fired(msg):
+    """Parse a ``cycle_fired``; ValueError naming what is wrong."""
+    values = {kv.key: kv.value for kv in msg.values}
+    try:
+        seq = int(values['seq'])
+    except (KeyError, ValueError) as exc:
+        raise ValueError(f'cycle_fired without a usable seq ({exc!r})') from None
+    session, tag = _signature(values)
+    return CycleFired(seq, _optional_stamp(values), session, tag)
 
 
 class CycleSigner:
