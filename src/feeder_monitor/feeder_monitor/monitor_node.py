@@ -288,9 +288,15 @@ class MonitorNode(Node):
         late = now - self._last_beat
         self._last_beat = now
         if late > STALL_PERIODS * self._beat_period:
-            # Cycles may have fired while this process did not run: what it held is unproven.
+            # Cycles may have fired while this process did not run: what it held is unproven
+            # until the next report is judged (a stale backlog is refused by the gate).
             self._counts['stalls'] += 1
-            self._interrupt(f'the monitor itself stalled for {late:.2f} s')
+            seq, stamp_ns, ready = self._statement[:3]
+            if ready:
+                self._set_statement(seq, stamp_ns, False, ANOMALY,
+                                    f'the monitor itself stalled for {late:.2f} s')
+            else:
+                self._publish_statement()
         elif now - self._last_sent >= self._beat_period * 0.9:
             self._publish_statement()
 
