@@ -97,8 +97,11 @@ def combine_patterns(patterns):
 MAY_MISS = 1        # the sensor can read 0
 MAY_SEE = 2         # the sensor can read 1
 OFF_GOAL = 4        # the part can lie on another edge than the goal edge
-# After an anomaly the sensor stays suspect this many cycles (about 9 detections of the
-# triangle): a ready then needs the goal edge even if one bit seen was a missed detection.
+# After a sensor anomaly (a bit the limit set cannot produce there) the sensor stays suspect
+# this many cycles (about 9 detections of the triangle): a ready then needs the goal edge even
+# if one bit seen was a missed detection. 150 is the shortest of 0, 50, 150, 500 that gave no
+# false ready at spurious = missed rate 0.05 (bench/readiness_faults.py, docstring of
+# ReadinessMonitor).
 SUSPECT_CYCLES = 150
 HISTORY_CHOICES = (32, 28, 24, 20, 16, 12, 8, 6, 4, 3, 2, 1)   # longest first
 
@@ -127,7 +130,7 @@ class Prediction:
     orbit_throws: int
 
     def flags(self, length, word):
-        """Flags of the cycle after ``length`` bits ``word`` (None: the orbit never shows it)."""
+        """Return the flags of the cycle after ``length`` bits ``word`` (None: not seen)."""
         return self.tables[length].get(word)
 
     def as_dict(self):
@@ -136,8 +139,9 @@ class Prediction:
 
 def _history_words(bits, segments, history):
     """
-    For each cycle i the ``history`` bits before it as an int (bit i-1 at bit 0) and how many
-    of them lie in i's own segment (no history spans a break of the orbit).
+    Pack, for each cycle i, the ``history`` bits before it into an int (bit i-1 at bit 0).
+
+    Also returns how many of them lie in i's own segment (no history spans a break).
     """
     b = np.asarray(bits, dtype=np.uint64)
     words = np.zeros(b.size, dtype=np.uint64)
@@ -173,7 +177,7 @@ def _clip_segments(segments, lo, hi):
 
 def choose_history(bits, edges, goal_edge, segments, choices=HISTORY_CHOICES):
     """
-    The longest history (in ``choices``) the orbit samples completely, 0 if none.
+    Return the longest history (in ``choices``) the orbit samples completely, 0 if none.
 
     Read the table off the first half of the orbit and follow the second half: the history
     passes when no cycle there shows a bit the table excludes, nor lies off the goal edge where
@@ -204,8 +208,10 @@ def choose_history(bits, edges, goal_edge, segments, choices=HISTORY_CHOICES):
 
 def build_prediction(bits, edges, goal_edge, segments=None, history=None):
     """
-    Build the :class:`Prediction` of an orbit's sensor ``bits`` and ``edges`` (None if no
-    history passes :func:`choose_history`). ``segments``: the orbit's unbroken stretches.
+    Build the :class:`Prediction` of an orbit's sensor ``bits`` and ``edges``.
+
+    None if no history passes :func:`choose_history`. ``segments``: the orbit's unbroken
+    stretches.
     """
     bits = np.asarray(bits, dtype=bool)
     segments = tuple(segments) if segments else ((0, bits.size),)
@@ -546,6 +552,7 @@ class ReadinessMonitor:
         if note == 'sensor disagreement':
             anomaly = self._anomaly(seq, 'proximity and cycle_status disagree on the sensor bit')
             self._restart_sensor(need_clear=detected)
+            self.suspect_left = self.suspect_cycles
             return self._verdict(seq, False, anomaly)
         if self.need_clear:
             if detected:                # the impossible run goes on
@@ -558,6 +565,7 @@ class ReadinessMonitor:
             found = self._check_pattern(detected)
             if found:
                 anomaly = self._anomaly(seq, found)
+                self.suspect_left = self.suspect_cycles
                 if detected and not self.silent:    # impossible detection pattern
                     self._restart_sensor(need_clear=True)
                     return self._verdict(seq, False, anomaly)
@@ -572,6 +580,7 @@ class ReadinessMonitor:
             if unexpected and anomaly is None:
                 anomaly = self._anomaly(seq, unexpected)
                 self.counts['unexpected'] += 1
+                self.suspect_left = self.suspect_cycles
         r = self.rules
         conditions = bool(detected and r.provable and anomaly is None and
                           self.since_restart >= r.warmup_cycles and self.settled)
@@ -587,8 +596,10 @@ class ReadinessMonitor:
 
     def _predict(self, detected):
         """
-        Follow the part with the prediction; returns (anomaly text or None, allowed,
-        goal_sure, expected) and moves the history on (or restarts it after an anomaly).
+        Follow the part with the prediction one cycle.
+
+        Returns (anomaly text or None, allowed, goal_sure, expected) and moves the history on
+        (or restarts it after an anomaly).
         """
         pred = self.rules.prediction
         flags = pred.flags(self.history_length, self.history_word)
@@ -612,12 +623,12 @@ class ReadinessMonitor:
 
     def _goal_sure_despite_one_miss(self, pred):
         """
-        Whether the part lies on the goal edge now even if one of the bits in the history was a
-        missed detection. A missed detection hides the part's flip off the goal edge; a
-        spurious detection a few cycles later then reads exactly like the next real one (the
-        limit set's gaps vary by 10 cycles), and would be a false ready. So every history the
-        orbit shows that differs from the one seen by a single 0 read for a 1 must put the
-        part on the goal edge too.
+        Tell whether the part lies on the goal edge even if one bit seen was a missed detection.
+
+        A missed detection hides the part's flip off the goal edge; a spurious detection a few
+        cycles later then reads exactly like the next real one (the limit set's gaps vary by 10
+        cycles), and would be a false ready. So every history the orbit shows that differs from
+        the one seen by a single 0 read for a 1 must put the part on the goal edge too.
         """
         length, word = self.history_length, self.history_word
         for back in range(length):
@@ -658,8 +669,6 @@ class ReadinessMonitor:
     def _verdict(self, seq, ready, anomaly):
         """Make the verdict; the one place where state and ready are tied together."""
         note, self.note = self.note, ''
-        if anomaly:
-            self.suspect_left = self.suspect_cycles
         if anomaly or self.need_clear or self.silent:
             state = ANOMALY
         elif self.since_restart < self.rules.warmup_cycles or not self.settled:

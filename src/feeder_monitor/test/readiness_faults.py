@@ -48,8 +48,8 @@ class FaultRun:
     missed_readies: int = 0
     anomalies: int = 0
     anomaly_and_ready: int = 0      # verdicts with both (must stay 0)
-    faults: dict = field(default_factory=lambda: {'spurious': 0, 'missed': 0, 'jumps': 0,
-                                                   'backs': 0})
+    faults: dict = field(default_factory=lambda: dict.fromkeys(
+        ('spurious', 'missed', 'jumps', 'backs'), 0))
     # What two other ready rules would have given on the same run (see Judgement).
     alt: dict = field(default_factory=lambda: {
         'allowed': {'readies': 0, 'false': 0, 'spurious': 0, 'missed': 0},
@@ -73,8 +73,9 @@ def truth_orbit(scene, start, throws):
 def run_faults(scene, rules, cycles, spurious=0.0, missed=0.0, jumps=0.0, backs=0.0, seed=0,
                start=None, truth=None, resettle_on_any_anomaly=False):
     """
-    Feed ``cycles`` cycles of the scene's part, with faults at the given rates, to a new
-    ReadinessMonitor and count against the truth (:class:`FaultRun`). ``truth``: a
+    Feed ``cycles`` faulty cycles of the scene's part to a new ReadinessMonitor.
+
+    Faults at the given rates; counted against the truth (:class:`FaultRun`). ``truth``: a
     precomputed (edges, radii) from :func:`truth_orbit`, long enough for the jumps.
     """
     rng = np.random.default_rng(seed)
@@ -115,8 +116,8 @@ def run_faults(scene, rules, cycles, spurious=0.0, missed=0.0, jumps=0.0, backs=
         busy += time.perf_counter() - t0
         out.cycles += 1
         out.anomalies += verdict.anomaly is not None
-        out.anomaly_and_ready += verdict.ready and (verdict.state == ANOMALY or
-                                                     verdict.anomaly is not None)
+        out.anomaly_and_ready += verdict.ready and (
+            verdict.state == ANOMALY or verdict.anomaly is not None)
         counted = cycle >= rules.settle_cycles and true_bit and seen and on_goal
         out.true_detections += counted
         if verdict.ready:

@@ -39,8 +39,6 @@ def truth(triangle):
     return truth_orbit(triangle, triangle.default_start(), 30000)
 
 
-
-
 # ------------------------------------------------------------------ attack 2
 def test_attack_2_a_seq_jump_or_back_is_never_ready(triangle, rules, truth):
     edges, radii = truth
@@ -78,8 +76,8 @@ def test_attack_5_a_flaky_sensor_makes_no_false_ready(triangle, rules, truth, ra
 
 
 @pytest.mark.parametrize('rate', [0.0, 0.01, 0.05])
-def test_seq_jumps_and_backs_with_a_flaky_sensor_make_no_false_ready(triangle, rules, truth,
-                                                                      rate):
+def test_seq_jumps_and_backs_with_a_flaky_sensor_make_no_false_ready(
+        triangle, rules, truth, rate):
     run = run_faults(triangle, rules, 20_000, spurious=rate, missed=rate, jumps=0.002,
                      backs=0.001, seed=2, truth=truth)
     print(f'rate {rate} + seq faults: {run.line()}')
