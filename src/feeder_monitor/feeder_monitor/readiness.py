@@ -23,6 +23,19 @@ a long orbit in the limit set fixes which detection patterns can occur (longest 
 detections, shortest and longest stretch without one); anything else, a failed cycle or a gap in
 the cycle numbers is an anomaly, after which the warm-up starts again.
 
+Ready means proven now (issue 20). A verdict is never ready on an anomaly cycle, nor before a
+full warm-up after one, nor while the checks are off (the first ``settle_cycles`` throws after a
+full restart, start-up included), nor once a later cycle has fired
+(:meth:`ReadinessMonitor.fired`).
+The pattern checks are weak: a spurious detection where the limit set allows one passes them.
+So a :class:`Prediction` follows the part: the orbit positions whose preceding sensor bits equal
+the bits seen are the limit-set states consistent with them; a bit none of them shows is an
+anomaly, and a detection is ready only if every one of them lies on the goal edge (and, while
+the sensor is suspect after a sensor anomaly, even if up to two bits seen were wrong: a
+missed detection followed by a spurious one reads like a normal gap). Requiring instead that
+every consistent state *show* a detection would miss every ready on the triangle: its gaps
+between detections vary from 12 to 22 throws whatever the bits before them.
+
 With scene effects: a part lost off a finite arm (``finite_arm``) is never seen again, which
 shows as a silence longer than the limit set allows. A noisy sensor (``sensor_noise``) makes a
 detection likely, not certain, to be on the goal edge (``Rules.p_goal``); its false positives
@@ -98,11 +111,12 @@ MAY_MISS = 1        # the sensor can read 0
 MAY_SEE = 2         # the sensor can read 1
 OFF_GOAL = 4        # the part can lie on another edge than the goal edge
 # After a sensor anomaly (a bit the limit set cannot produce there) the sensor stays suspect
-# this many cycles (about 9 detections of the triangle): a ready then needs the goal edge even
-# if one bit seen was a missed detection. 150 is the shortest of 0, 50, 150, 500 that gave no
-# false ready at spurious = missed rate 0.05 (bench/readiness_faults.py, docstring of
-# ReadinessMonitor).
+# this many judged cycles (about 9 detections of the triangle): a ready then needs the goal
+# edge even if up to SUSPECT_FLIPS bits in the history were wrong. 150 and 2: the least of
+# (0, 50, 80, 150, 500) x (1, 2) that gave no false ready at spurious = missed rate 0.05 over
+# 8 seeds of 20,000 cycles (bench/readiness_faults.py; one flip left 1, 80 cycles left 3).
 SUSPECT_CYCLES = 150
+SUSPECT_FLIPS = 2
 HISTORY_CHOICES = (32, 28, 24, 20, 16, 12, 8, 6, 4, 3, 2, 1)   # longest first
 
 
@@ -408,8 +422,10 @@ class ReadinessMonitor:
     state consistent with those bits lies on the goal edge.
     """
 
-    def __init__(self, rules, resettle_on_any_anomaly=False, suspect_cycles=SUSPECT_CYCLES):
+    def __init__(self, rules, resettle_on_any_anomaly=False, suspect_cycles=SUSPECT_CYCLES,
+                 suspect_flips=SUSPECT_FLIPS):
         self.rules = rules
+        self.suspect_flips = int(suspect_flips)
         self.resettle_on_any_anomaly = bool(resettle_on_any_anomaly)
         self.suspect_cycles = int(suspect_cycles)
         self.suspect_left = 0       # cycles the sensor stays suspect (after an anomaly)
@@ -543,7 +559,9 @@ class ReadinessMonitor:
         self.ready_seq = None
         self.last_judgement = None
         anomaly = None
-        self.suspect_left = max(self.suspect_left - 1, 0)
+        if self.settled:
+            # While the checks are off nothing would show a flaky sensor: the suspicion waits.
+            self.suspect_left = max(self.suspect_left - 1, 0)
         gap = self._check_seq(seq)
         if gap:
             # Throws the monitor did not see: for it, the part may be anywhere.
@@ -616,27 +634,30 @@ class ReadinessMonitor:
             self._restart_sensor(keep_pattern=not detected)
             return reason, allowed, goal_sure, expected
         if detected and goal_sure and self.suspect_left > 0:
-            goal_sure = self._goal_sure_despite_one_miss(pred)
+            goal_sure = self._goal_sure_despite_faults(pred)
         self.history_word = ((self.history_word << 1) | int(detected)) & ((1 << pred.history) - 1)
         self.history_length = min(self.history_length + 1, pred.history)
         return None, allowed, goal_sure, expected
 
-    def _goal_sure_despite_one_miss(self, pred):
+    def _goal_sure_despite_faults(self, pred):
         """
-        Tell whether the part lies on the goal edge even if one bit seen was a missed detection.
+        Tell whether the part is on the goal edge even if ``suspect_flips`` bits seen were wrong.
 
         A missed detection hides the part's flip off the goal edge; a spurious detection a few
         cycles later then reads exactly like the next real one (the limit set's gaps vary by 10
-        cycles), and would be a false ready. So every history the orbit shows that differs from
-        the one seen by a single 0 read for a 1 must put the part on the goal edge too.
+        cycles), and would be a false ready. A spurious detection in the history, taken for
+        the last real one, shifts the phase the same way. So every history the orbit shows
+        that differs from the one seen in at most ``suspect_flips`` bits must put the part on
+        the goal edge too.
         """
         length, word = self.history_length, self.history_word
-        for back in range(length):
-            if word >> back & 1:
-                continue
-            flags = pred.flags(length, word | (1 << back))
-            if flags is not None and flags & OFF_GOAL:
-                return False
+        variants = [word]
+        for _ in range(self.suspect_flips):
+            variants = {v ^ (1 << back) for v in variants for back in range(length)}
+            for variant in variants:
+                flags = pred.flags(length, variant)
+                if flags is not None and flags & OFF_GOAL:
+                    return False
         return True
 
     def _check_pattern(self, detected):
