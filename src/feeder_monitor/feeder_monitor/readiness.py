@@ -117,6 +117,10 @@ OFF_GOAL = 4        # the part can lie on another edge than the goal edge
 # 8 seeds of 20,000 cycles (bench/readiness_faults.py; one flip left 1, 80 cycles left 3).
 SUSPECT_CYCLES = 150
 SUSPECT_FLIPS = 2
+# A prediction whose histories prove at least this share of the orbit's detections needs that
+# proof for every ready; below it, only while the sensor is suspect (scenes/experiment.yaml:
+# its 8-bit histories prove none, so the rule would cost every ready of a sound sensor).
+GOAL_SURE_SHARE = 0.9
 HISTORY_CHOICES = (32, 28, 24, 20, 16, 12, 8, 6, 4, 3, 2, 1)   # longest first
 
 
@@ -142,13 +146,15 @@ class Prediction:
     history: int                # longest run of bits looked at
     tables: tuple               # tables[length]: {bits as an int, last at bit 0: flags}
     orbit_throws: int
+    goal_sure_share: float = 0.0    # of the orbit's detections, those its history proves
 
     def flags(self, length, word):
         """Return the flags of the cycle after ``length`` bits ``word`` (None: not seen)."""
         return self.tables[length].get(word)
 
     def as_dict(self):
-        return {'history': self.history, 'histories': sum(len(t) for t in self.tables)}
+        return {'history': self.history, 'histories': sum(len(t) for t in self.tables),
+                'goal_sure_share': round(self.goal_sure_share, 4)}
 
 
 def _history_words(bits, segments, history):
@@ -236,7 +242,12 @@ def build_prediction(bits, edges, goal_edge, segments=None, history=None):
     words, available = _history_words(bits, segments, history)
     flags = _cycle_flags(bits, edges, goal_edge)
     tables = tuple(_table(words, available, flags, length) for length in range(history + 1))
-    return Prediction(int(history), tables, int(bits.size))
+    # How often the bits before a detection already put every consistent state on the goal
+    # edge (the triangle: all but a few; a part whose edges the bits do not tell: none).
+    full = np.flatnonzero(bits & (available >= history))
+    sure = [not tables[history][w] & OFF_GOAL for w in (words[full] & _mask(history)).tolist()]
+    share = float(np.mean(sure)) if sure else 0.0
+    return Prediction(int(history), tables, int(bits.size), share)
 
 
 @dataclass(frozen=True)
@@ -635,6 +646,12 @@ class ReadinessMonitor:
             return reason, allowed, goal_sure, expected
         if detected and goal_sure and self.suspect_left > 0:
             goal_sure = self._goal_sure_despite_faults(pred)
+        elif detected and not goal_sure and self.suspect_left == 0 and \
+                pred.goal_sure_share < GOAL_SURE_SHARE:
+            # The bits seldom tell this part's edge before a detection: while the sensor has
+            # shown no fault, a detection the limit set allows is proof enough (the guarantee
+            # radius: no limit-set state off the goal edge reaches the sensor).
+            goal_sure = None
         self.history_word = ((self.history_word << 1) | int(detected)) & ((1 << pred.history) - 1)
         self.history_length = min(self.history_length + 1, pred.history)
         return None, allowed, goal_sure, expected
