@@ -440,6 +440,7 @@ class ReadinessMonitor:
         self.resettle_on_any_anomaly = bool(resettle_on_any_anomaly)
         self.suspect_cycles = int(suspect_cycles)
         self.suspect_left = 0       # cycles the sensor stays suspect (after an anomaly)
+        self.suspect_now = False    # the cycle being judged is one of them
         self.last_seq = None
         self.fired_seq = None       # highest seq reported fired
         self.ready_seq = None       # seq of the cycle whose ready still holds
@@ -570,6 +571,8 @@ class ReadinessMonitor:
         self.ready_seq = None
         self.last_judgement = None
         anomaly = None
+        # This cycle is judged as suspect if it is one of the suspect_cycles after an anomaly.
+        self.suspect_now = self.suspect_left > 0
         if self.settled:
             # While the checks are off nothing would show a flaky sensor: the suspicion waits.
             self.suspect_left = max(self.suspect_left - 1, 0)
@@ -644,9 +647,9 @@ class ReadinessMonitor:
             # a missed detection leaves them counting (the silence rule keeps watching).
             self._restart_sensor(keep_pattern=not detected)
             return reason, allowed, goal_sure, expected
-        if detected and goal_sure and self.suspect_left > 0:
+        if detected and goal_sure and self.suspect_now:
             goal_sure = self._goal_sure_despite_faults(pred)
-        elif detected and not goal_sure and self.suspect_left == 0 and \
+        elif detected and not goal_sure and not self.suspect_now and \
                 pred.goal_sure_share < GOAL_SURE_SHARE:
             # The bits seldom tell this part's edge before a detection: while the sensor has
             # shown no fault, a detection the limit set allows is proof enough (the guarantee

@@ -210,3 +210,24 @@ def test_no_verdict_is_ever_anomaly_and_ready(calls, with_prediction):
         assert (m.ready_seq == seq) if v.ready else m.ready_seq is None
         if v.ready:
             assert m.settled and m.since_restart >= m.rules.warmup_cycles
+
+
+def test_where_bits_seldom_tell_the_edge_the_proof_is_needed_only_while_suspect():
+    """A part whose bits never tell its edge (scenes/experiment.yaml's case, in a toy)."""
+    from feeder_monitor.readiness import Prediction
+    anything = MAY_MISS | MAY_SEE | OFF_GOAL
+    vague = Prediction(1, ({0: anything}, {0: anything, 1: anything}), 100, 0.0)
+    rules = make_rules(prediction=vague, settle_cycles=0, min_gap=None, max_run=None,
+                       max_silence=None)
+    m = ReadinessMonitor(rules)
+    assert [v.ready for v in (m.completed(1, False), m.completed(2, True))] == [False, True]
+    v = m.completed(3, False, note='sensor disagreement')      # a sensor anomaly: suspect
+    assert v.anomaly and m.suspect_left == m.suspect_cycles
+    verdicts = [m.completed(4 + k, k % 5 == 4) for k in range(m.suspect_cycles)]
+    assert not any(v.ready for v in verdicts) and m.counts['not_goal_sure'] > 0
+    assert m.completed(4 + m.suspect_cycles, True).ready          # suspicion over
+    # Where the bits usually do tell the edge, the proof is needed always.
+    strict = Prediction(1, vague.tables, 100, 1.0)
+    m = ReadinessMonitor(make_rules(prediction=strict, settle_cycles=0, min_gap=None,
+                                    max_run=None, max_silence=None))
+    assert not any(m.completed(k + 1, True).ready for k in range(5))
