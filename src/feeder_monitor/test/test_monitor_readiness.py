@@ -84,7 +84,10 @@ def test_rules_reject_a_warmup_below_the_proven_one(triangle, triangle_analysis,
 
 # ------------------------------------------------------------------ state machine
 def test_ready_only_after_warmup():
-    m = ReadinessMonitor(make_rules(warmup_cycles=3, settle_cycles=100))
+    # settle_cycles 0 and no pattern checks: the warm-up alone (issue 20: before settle_cycles
+    # no detection may be ready, so settle_cycles=100 no longer switches the checks off).
+    m = ReadinessMonitor(make_rules(warmup_cycles=3, settle_cycles=0, max_run=None,
+                                    min_gap=None, max_silence=None))
     v = feed(m, [1, 0, 1, 0, 1])
     assert [x.ready for x in v] == [False, False, True, False, True]
     assert [x.state for x in v] == [WARMING_UP, WARMING_UP, READY, TRACKING, READY]
@@ -135,7 +138,8 @@ def test_silence_is_an_anomaly_and_the_next_detection_restarts_the_warmup():
 
 
 def test_failed_cycles_and_seq_gaps_restart_the_warmup():
-    m = ReadinessMonitor(make_rules(warmup_cycles=2, settle_cycles=100))
+    m = ReadinessMonitor(make_rules(warmup_cycles=2, settle_cycles=0, max_run=None,
+                                    min_gap=None, max_silence=None))
     feed(m, [0, 0, 0])
     v = m.failed(4, 'timeout')
     assert v.state == ANOMALY and 'cycle 4 failed: timeout' in v.anomaly and not v.ready
@@ -146,7 +150,8 @@ def test_failed_cycles_and_seq_gaps_restart_the_warmup():
     v = m.completed(3, True)
     assert 'went back' in v.anomaly and not v.ready
     assert m.counts == {'cycles': 9, 'completed': 8, 'failed': 1, 'detections': 5, 'ready': 2,
-                        'anomalies': 3, 'untrusted': 0}
+                        'anomalies': 3, 'untrusted': 0, 'unexpected': 0, 'not_goal_sure': 0,
+                        'superseded': 0}
 
 
 def test_sensor_disagreement_is_an_anomaly():
@@ -183,10 +188,13 @@ def test_on_real_orbits_every_ready_is_on_the_goal_edge(triangle, triangle_analy
             if v.ready:
                 ready_total += 1
                 assert edges[k] == rules.goal_edge
-            if bit and k >= rules.warmup_cycles and edges[k] == rules.goal_edge and \
-                    m.counts['anomalies'] == 0:
+            # Issue 20: only once the checks are on, and when the prediction puts every state
+            # consistent with the bits on the goal edge (not the first detection it follows).
+            judged = m.last_judgement
+            if bit and m.settled and edges[k] == rules.goal_edge and \
+                    m.counts['anomalies'] == 0 and judged and judged.goal_sure:
                 assert v.ready
-    assert ready_total > 100
+    assert ready_total > 60
 
 
 def test_scene_start_orbit_has_no_anomaly(triangle, triangle_analysis, orbit):
@@ -196,7 +204,9 @@ def test_scene_start_orbit_has_no_anomaly(triangle, triangle_analysis, orbit):
     bits = sees(triangle.part, edges[1:], radii[1:], rules.sensor_radius, 0.0)
     verdicts = feed(m, bits)
     assert m.counts['anomalies'] == 0
-    assert sum(v.ready for v in verdicts) == int(bits[rules.warmup_cycles - 1:].sum())
+    # Issue 20: no ready before settle_cycles; the prediction's first detection has no history.
+    proven = int(bits[rules.settle_cycles:].sum())
+    assert proven - 2 <= sum(v.ready for v in verdicts) <= proven
 
 
 def test_a_misplaced_sensor_is_caught(triangle, triangle_analysis, orbit):
@@ -349,11 +359,15 @@ def test_100000_cycles_of_the_triangle_orbit(triangle, triangle_analysis, orbit)
     m = ReadinessMonitor(rules)
     verdicts = np.array([m.completed(k + 1, bool(b)).ready for k, b in enumerate(bits)])
     assert m.counts['anomalies'] == 0, m.last_anomaly
+    # Issue 20: no ready while the checks are off (the first settle_cycles throws).
     truth = bits & (edges == rules.goal_edge) & \
-        (np.arange(1, len(bits) + 1) >= rules.warmup_cycles)
+        (np.arange(1, len(bits) + 1) > rules.settle_cycles)
     false_ready = np.flatnonzero(verdicts & ~truth) + 1
     missed = np.flatnonzero(truth & ~verdicts) + 1
-    assert false_ready.size == 0 and missed.size == 0, (false_ready[:5], missed[:5])
+    assert false_ready.size == 0, false_ready[:5]
+    # The prediction leaves a few detections unproven (bits that a state off the goal edge can
+    # show too): 9 of about 5,800 on this orbit; each one counted, none an anomaly.
+    assert missed.size == m.counts['not_goal_sure'] <= 20, missed[:20]
     assert truth.sum() > 3000       # a detection rate of 3-10 % (test_rules_of_the_triangle)
 
 
