@@ -42,12 +42,10 @@ detection likely, not certain, to be on the goal edge (``Rules.p_goal``); its fa
 and negatives are in the detection patterns, because the rules read the orbit through the
 scene's own (seeded) sensor model.
 
-:class:`CyclePairer` joins the two inputs of a cycle (``proximity`` and ``cycle_status``, matched
-by their sample stamps) into one :class:`Cycle`; :class:`ReadinessMonitor` turns cycles into
+:class:`ReadinessMonitor` turns the cycles the node admits (feeder_monitor.trust) into
 verdicts.
 """
 
-from collections import deque
 from dataclasses import dataclass
 import math
 from typing import Optional
@@ -368,18 +366,6 @@ def rules_from_analysis(scene, analysis, orbit, warmup_cycles=-1, settle_cycles=
 
 
 @dataclass(frozen=True)
-class Cycle:
-    """One fired cycle as the monitor sees it (a completed one has a sensor bit)."""
-
-    seq: int
-    completed: bool
-    detected: Optional[bool] = None
-    reason: str = ''            # failure reason of a failed cycle
-    note: str = ''              # '', 'proximity lost' or 'sensor disagreement'
-    stamp_ns: Optional[int] = None  # the cycle's sample stamp (cycle_status), if it had one
-
-
-@dataclass(frozen=True)
 class Verdict:
     """The monitor's answer for one cycle (``ready`` is never true with state anomaly)."""
 
@@ -494,6 +480,17 @@ class ReadinessMonitor:
         self._restart_all()
         self.ready_seq = None
         self.state = ANOMALY
+
+    def new_run(self, reason):
+        """
+        The driver started a new run (it restarted): an anomaly, and its seqs start afresh.
+
+        Nothing of the old run's numbering carries over: neither the last seq judged nor the
+        highest seq reported fired.
+        """
+        self.interrupt(reason)
+        self.last_seq = None
+        self.fired_seq = None
 
     def set_rules(self, rules):
         """Take new rules (e.g. the sensor moved): the warm-up starts again; no anomaly."""
@@ -722,100 +719,3 @@ class ReadinessMonitor:
             self.ready_seq = seq
         self.state = state
         return Verdict(seq, ready, state, anomaly, note)
-
-
-@dataclass
-class _Status:
-    seq: int
-    ok: bool
-    detected: Optional[bool]
-    stamp: Optional[float]
-    reason: str
-    arrival: float
-    stamp_ns: Optional[int] = None
-
-
-class CyclePairer:
-    """
-    Joins ``proximity`` and ``cycle_status`` of each cycle, in cycle order.
-
-    ``cycle_status`` says that a cycle happened (and its seq); ``proximity`` carries the bit.
-    They are matched by sample stamp (within ``tolerance`` s; FIFO when a status has no stamp).
-    A completed status whose proximity does not come (a newer one arrives first, or ``timeout``
-    s pass) is decided on the status's own bit (note ``proximity lost``); a proximity whose
-    status never comes is dropped (``orphans``): the seq gap tells the monitor.
-    """
-
-    def __init__(self, tolerance=1e-3, timeout=0.5):
-        self.tolerance = float(tolerance)
-        self.timeout = float(timeout)
-        self._statuses = deque()
-        self._proximities = deque()     # (stamp, detected, arrival)
-        self.counts = {'proximity_lost': 0, 'orphans': 0, 'disagreements': 0}
-
-    def add_proximity(self, stamp, detected, now):
-        self._proximities.append((float(stamp), bool(detected), float(now)))
-        return self._drain(now)
-
-    def add_status(self, seq, ok, detected, stamp, reason, now, stamp_ns=None):
-        self._statuses.append(_Status(int(seq), bool(ok), detected,
-                                      None if stamp is None else float(stamp), str(reason),
-                                      float(now), stamp_ns))
-        return self._drain(now)
-
-    def expire(self, now):
-        """Decide statuses that waited too long; drop proximities nobody claimed."""
-        out = self._drain(now)
-        if not self._statuses:
-            while self._proximities and now - self._proximities[0][2] > self.timeout:
-                self._proximities.popleft()
-                self.counts['orphans'] += 1
-        return out
-
-    @property
-    def pending(self):
-        return len(self._statuses), len(self._proximities)
-
-    def _drain(self, now):
-        out = []
-        while self._statuses:
-            st = self._statuses[0]
-            if not st.ok:
-                self._statuses.popleft()
-                out.append(Cycle(st.seq, False, None, st.reason, stamp_ns=st.stamp_ns))
-                continue
-            prox = self._match(st)
-            if prox is not None:
-                self._statuses.popleft()
-                self._proximities.popleft()
-                note = ''
-                if st.detected is not None and st.detected != prox[1]:
-                    note = 'sensor disagreement'
-                    self.counts['disagreements'] += 1
-                out.append(Cycle(st.seq, True, prox[1], '', note, st.stamp_ns))
-                continue
-            newer = bool(self._proximities)     # _match dropped every older one
-            if (newer or now - st.arrival > self.timeout) and st.detected is not None:
-                self._statuses.popleft()
-                self.counts['proximity_lost'] += 1
-                out.append(Cycle(st.seq, True, st.detected, '', 'proximity lost', st.stamp_ns))
-                continue
-            if newer or now - st.arrival > self.timeout:
-                # Neither a bit in the status nor a proximity: report it as a failed cycle.
-                self._statuses.popleft()
-                out.append(Cycle(st.seq, False, None, 'no sensor bit for a completed cycle',
-                                 stamp_ns=st.stamp_ns))
-                continue
-            break
-        return out
-
-    def _match(self, st):
-        """Find the proximity of status ``st`` (dropping older unclaimed ones), or None."""
-        if st.stamp is None:
-            return self._proximities[0] if self._proximities else None
-        while self._proximities and self._proximities[0][0] < st.stamp - self.tolerance:
-            self._proximities.popleft()
-            self.counts['orphans'] += 1
-        if self._proximities and abs(self._proximities[0][0] - st.stamp) <= self.tolerance:
-            return self._proximities[0]
-        return None

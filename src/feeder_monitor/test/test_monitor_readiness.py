@@ -14,7 +14,7 @@
 
 import random
 
-from feeder_monitor.readiness import (ANOMALY, combine_patterns, CyclePairer, detection_pattern,
+from feeder_monitor.readiness import (ANOMALY, combine_patterns, detection_pattern,
                                       limit_set_orbit, ReadinessMonitor, READY, Rules,
                                       rules_from_analysis, TRACKING, WARMING_UP)
 import numpy as np
@@ -218,62 +218,6 @@ def test_a_misplaced_sensor_is_caught(triangle, triangle_analysis, orbit):
     verdicts = feed(m, bits)
     assert m.counts['anomalies'] > 0
     assert any(v.state == ANOMALY for v in verdicts)
-
-
-# ------------------------------------------------------------------ pairing
-def test_pairs_by_stamp_in_either_order():
-    p = CyclePairer(tolerance=1e-3, timeout=0.5)
-    assert p.add_proximity(10.0, True, now=0.0) == []
-    (c,) = p.add_status(1, True, True, 10.0, 'completed', now=0.001)
-    assert (c.seq, c.completed, c.detected, c.note) == (1, True, True, '')
-    assert p.add_status(2, True, False, 10.5, 'completed', now=0.5) == []
-    (c,) = p.add_proximity(10.5004, False, now=0.501)
-    assert (c.seq, c.detected) == (2, False)
-    assert p.pending == (0, 0)
-
-
-def test_failed_status_needs_no_proximity_and_keeps_order():
-    p = CyclePairer()
-    assert p.add_status(1, True, True, 1.0, 'completed', now=0.0) == []
-    assert p.add_status(2, False, None, None, 'timeout', now=0.01) == []   # waits behind 1
-    out = p.add_proximity(1.0, True, now=0.02)
-    assert [(c.seq, c.completed) for c in out] == [(1, True), (2, False)]
-    assert out[1].reason == 'timeout'
-
-
-def test_lost_proximity_uses_the_status_bit():
-    p = CyclePairer(timeout=0.5)
-    p.add_status(1, True, True, 1.0, 'completed', now=0.0)
-    out = p.add_proximity(2.0, False, now=0.1)         # proximity of seq 1 never came
-    assert [(c.seq, c.detected, c.note) for c in out] == [(1, True, 'proximity lost')]
-    p.add_status(2, True, False, 2.0, 'completed', now=0.11)
-    p.add_status(3, True, True, 3.0, 'completed', now=0.2)
-    assert p.expire(now=0.6) == []
-    (c,) = p.expire(now=0.71)
-    assert (c.seq, c.detected, c.note) == (3, True, 'proximity lost')
-    assert p.counts['proximity_lost'] == 2
-
-
-def test_disagreement_and_orphans():
-    p = CyclePairer()
-    p.add_proximity(0.5, True, now=0.0)                 # before the monitor saw any status
-    assert p.add_status(1, True, False, 1.0, 'completed', now=0.0) == []
-    (c,) = p.add_proximity(1.0, True, now=0.01)
-    assert c.note == 'sensor disagreement' and c.detected is True
-    assert p.counts['orphans'] == 1 and p.counts['disagreements'] == 1
-    p.add_proximity(5.0, False, now=1.0)
-    assert p.expire(now=1.2) == [] and p.pending == (0, 1)
-    p.expire(now=1.6)
-    assert p.pending == (0, 0) and p.counts['orphans'] == 2
-
-
-def test_statuses_without_stamp_pair_in_order():
-    p = CyclePairer()
-    p.add_proximity(7.0, False, now=0.0)
-    p.add_proximity(8.0, True, now=0.0)
-    out = p.add_status(1, True, None, None, 'completed', now=0.0)
-    out += p.add_status(2, True, None, None, 'completed', now=0.0)
-    assert [(c.seq, c.detected) for c in out] == [(1, False), (2, True)]
 
 
 def test_config_yaml_and_docs_match_the_table():
