@@ -178,12 +178,18 @@ class MonitorNode(Node):
 
     # ------------------------------------------------------------------ inputs
     def _on_proximity(self, msg):
-        detected = proximity_detected(msg)
-        if detected is None:
+        try:
+            detected = proximity_detected(msg)
+            stamp_ns = time_ns(msg.header.stamp)
+            problem = None if detected is not None else 'proximity without a reading (NaN)'
+        except ValueError as exc:
+            problem = str(exc)
+        if problem:
             self._bad_input += 1
+            self.get_logger().warning(f'{problem}; ignored', throttle_duration_sec=5.0)
             return
-        self._decide(self._pairer.add_proximity(ns_seconds(time_ns(msg.header.stamp)),
-                                                detected, time.monotonic()))
+        self._decide(self._pairer.add_proximity(ns_seconds(stamp_ns), detected,
+                                                time.monotonic()))
 
     def _on_cycle_status(self, msg):
         try:
