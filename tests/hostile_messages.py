@@ -57,8 +57,14 @@ VALID_TEXT = st.one_of(
     st.sampled_from(('1', '0', 'none', 'true', 'false', 'jog', 'flip', 'lost', '-1')),
     st.floats(allow_nan=False, allow_infinity=False).map(repr),
     st.integers(-1, 5).map(str))
+# Numbers beyond every bound: a seq past 2**63, a stamp past what a Time holds (issue 20's
+# stamp is '1' and 400 zeros).
+BEYOND_TEXT = st.one_of(
+    st.integers(2**63 - 2, 10**420).map(str),
+    st.integers(2**31 - 2, 10**420).map(lambda sec: f'{sec}.000000000'),
+    st.integers(2**31 - 2, 10**420).map(str))
 HUGE_TEXT = st.builds(lambda c, n: c * n, st.characters(), st.integers(0, 20_000))
-TEXT = st.one_of(st.sampled_from(TRICKY), VALID_TEXT, st.text(max_size=40),
+TEXT = st.one_of(st.sampled_from(TRICKY), VALID_TEXT, BEYOND_TEXT, st.text(max_size=40),
                  st.text(alphabet='0123456789.-+_ eEnaif\u0661\u0663', max_size=30), HUGE_TEXT)
 KEY = st.one_of(st.sampled_from(KEYS), st.sampled_from(KEYS).map(lambda k: k + ' '),
                 st.text(max_size=12))

@@ -25,7 +25,7 @@ installed monitor_node and sim_node processes: both stay up, count the bad input
 import math
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_common.messages import cycle_status, parse_cycle_status, proximity
+from feeder_common.messages import cycle_status, proximity
 from feeder_nodes import (Diagnostics, monitor, PredictedStates, predictor, RELIABLE,
                           sim_as_hardware, watch_monitor)
 from hostile_messages import KILLER_STAMP, TRICKY
@@ -58,14 +58,6 @@ def garbage_ranges(stamp):
     return out
 
 
-def refused(msg):
-    try:
-        parse_cycle_status(msg)
-    except ValueError:
-        return True
-    return False
-
-
 def test_the_killer_status_and_garbage_leave_monitor_and_predictor_judging(graph, ros):
     sim_as_hardware(graph, 'cycle_period:=0.05')
     pred = predictor(graph)
@@ -82,7 +74,6 @@ def test_the_killer_status_and_garbage_leave_monitor_and_predictor_judging(graph
 
     stamp = ros.node.get_clock().now().nanoseconds
     bad = garbage_statuses(5, stamp)
-    assert refused(bad[0]) and sum(map(refused, bad)) > 100
     status_pub.publish(bad[0])          # alone: it was enough
     ros.spin_for(1.0)
     assert mon.poll() is None, f'monitor exited with {mon.returncode}:\n{graph.log(mon)}'
