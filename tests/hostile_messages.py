@@ -83,7 +83,7 @@ KINDS = st.sampled_from(('jog', 'flip'))
 
 @st.composite
 def canonical(draw):
-    """A status one of feeder_common.messages' builders writes, with any valid fields."""
+    """Draw a status one of feeder_common.messages' builders writes, with any valid fields."""
     which = draw(st.sampled_from(('cycle', 'verdict', 'predicted')))
     if which == 'cycle':
         ok = draw(st.booleans())
@@ -104,7 +104,7 @@ def canonical(draw):
 
 @st.composite
 def mutated(draw):
-    """A builder's status with up to three hostile changes (none in about a quarter)."""
+    """Draw a builder's status with up to three hostile changes (none in about a quarter)."""
     msg = draw(canonical())
     values = list(msg.values)
     for _ in range(draw(st.integers(0, 3))):
@@ -132,7 +132,7 @@ def mutated(draw):
 
 @st.composite
 def arbitrary(draw, names=NAMES):
-    """A DiagnosticStatus of arbitrary name, level, texts and values (the keys often known)."""
+    """Draw a DiagnosticStatus of any name, level, texts and values (the keys often known)."""
     keys = draw(st.permutations(KEYS))[:draw(st.integers(0, len(KEYS)))]
     values = [KeyValue(key=k, value=draw(TEXT)) for k in keys] + draw(VALUES)
     values = draw(st.permutations(values))
@@ -143,7 +143,7 @@ def arbitrary(draw, names=NAMES):
 
 
 def statuses():
-    """Any DiagnosticStatus: mostly a builder's with hostile changes, else arbitrary."""
+    """Draw any DiagnosticStatus: mostly a builder's with hostile changes, else arbitrary."""
     return st.one_of(mutated(), arbitrary())
 
 
@@ -152,7 +152,7 @@ FLOAT32 = st.floats(width=32)
 
 @st.composite
 def ranges(draw):
-    """A sensor_msgs/Range with any float32 readings and limits and any stamp."""
+    """Draw a sensor_msgs/Range with any float32 readings and limits and any stamp."""
     rng = Range()
     rng.header.stamp = Time(sec=draw(INT32), nanosec=draw(UINT32))
     rng.header.frame_id = draw(st.text(max_size=20))

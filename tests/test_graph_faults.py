@@ -144,7 +144,7 @@ def test_a_verdict_is_live_false_on_exit_and_a_killed_monitor_shows(graph, ros):
 
 def test_a_huge_seq_does_not_hang_the_predictor(graph, ros):
     """
-    seq 2**62 after seq 1: an anomaly in /diagnostics, and the next cycle is followed.
+    A seq of 2**62 after seq 1: an anomaly in /diagnostics, and the next cycle is followed.
 
     A seq of 2**63 or more is no seq at all (feeder_common.messages): a bad status, counted.
     """

@@ -34,7 +34,7 @@ from std_srvs.srv import Trigger
 
 
 def garbage_statuses(seq, stamp):
-    """The killer status first, then every tricky text as seq, stamp and sensor."""
+    """Return the killer status first, then every tricky text as seq, stamp and sensor."""
     out = []
     for key, index in (('stamp', 2), ('seq', 0), ('sensor', 1)):
         for text in ((KILLER_STAMP,) if key == 'stamp' else ()) + TRICKY:
@@ -45,6 +45,7 @@ def garbage_statuses(seq, stamp):
 
 
 def garbage_ranges(stamp):
+    """Return Ranges no sensor writes: unusable limits, NaN, stamps before 1970 or past 1e9 ns."""
     out = []
     for rng, lo, hi, sec, nanosec in (
             (0.01, math.nan, 0.02, 1, 0), (0.01, -math.inf, math.inf, 1, 0),

@@ -133,8 +133,7 @@ def _parse_float(text, what):
     except ValueError:
         value = None
     if value is None or not math.isfinite(value) or repr(value) != text:
-        raise ValueError(f'{what} {text[:40]!r} is not a finite float written as Python\'s '
-                         'repr')
+        raise ValueError(f'{what} {text[:40]!r} is not a finite float written as its repr')
     return value
 
 
@@ -150,7 +149,7 @@ def _optional_stamp(text, what):
 
 def _values(msg, what, name, keys):
     """
-    The values ``keys`` of status ``msg``, each given exactly once; ValueError naming the fault.
+    Return the values ``keys`` of status ``msg``, each given once; else ValueError naming why.
 
     Checks the status's ``name``, that it is OK or ERROR, and the length of its texts; values
     of other keys are ignored (a later field must not break an older reader).
@@ -284,8 +283,8 @@ def predicted_state(seq, stamp_ns, edge, R, throw_kind):
 def parse_predicted_state(msg):
     """Parse a ``predicted/state`` as :func:`predicted_state` writes it; ValueError if not."""
     what = 'predicted/state'
-    values = _values(msg, what, PREDICTED_STATE_NAME, ('seq', 'stamp', 'edge', 'R',
-                                                        'throw_kind'))
+    keys = ('seq', 'stamp', 'edge', 'R', 'throw_kind')
+    values = _values(msg, what, PREDICTED_STATE_NAME, keys)
     if msg.level != DiagnosticStatus.OK:
         raise ValueError(f'{what} of a level other than OK')
     seq = parse_seq(values['seq'], f'{what} seq')

@@ -96,7 +96,7 @@ def harness():
 
 
 def next_seq(node):
-    """The seq after the monitor's last one (0 if none, or at the top of the range)."""
+    """Return the seq after the monitor's last one (0 if none, or at the top of the range)."""
     last = node._monitor.last_seq
     return last + 1 if last is not None and last < messages.MAX_SEQ else 0
 
