@@ -97,6 +97,12 @@ def _text(what, text, limit=MAX_TEXT):
     return text
 
 
+def _clip(text):
+    """Return ``str(text)`` cut to MAX_TEXT characters (its end an ellipsis when cut)."""
+    text = str(text)
+    return text if len(text) <= MAX_TEXT else text[:MAX_TEXT - 1] + '\u2026'
+
+
 def parse_seq(text, what='seq'):
     """
     Parse a ``seq`` as the builders write it: ASCII decimal digits, below 2**63.
@@ -189,10 +195,14 @@ class CycleStatus:
 
 
 def cycle_status(seq, ok, message, sensor, stamp_ns, hardware_id):
-    """Build a ``cycle_status``; ``sensor`` True/False, or None for a failed cycle."""
+    """
+    Build a ``cycle_status``; ``sensor`` True/False, or None for a failed cycle.
+
+    ``message`` and ``hardware_id`` are cut to MAX_TEXT characters (what a parser takes).
+    """
     return DiagnosticStatus(
         level=DiagnosticStatus.OK if ok else DiagnosticStatus.ERROR, name=CYCLE_STATUS_NAME,
-        message=message, hardware_id=hardware_id,
+        message=_clip(message), hardware_id=_clip(hardware_id),
         values=[KeyValue(key='seq', value=str(int(seq))),
                 KeyValue(key='sensor', value=_SENSOR_TEXT[sensor]),
                 KeyValue(key='stamp', value=stamp_text(stamp_ns))])
@@ -225,15 +235,19 @@ class EdgeVerdict:
 
 
 def edge_verdict(seq, stamp_ns, ready, state, anomaly=None, hardware_id=''):
-    """Build an ``edge1_verdict``; ``stamp_ns`` None: the cycle had no usable stamp."""
+    """
+    Build an ``edge1_verdict``; ``stamp_ns`` None: the cycle had no usable stamp.
+
+    Its texts are cut to MAX_TEXT characters (an anomaly can quote a failed cycle's reason).
+    """
     return DiagnosticStatus(
         level=DiagnosticStatus.ERROR if anomaly else DiagnosticStatus.OK, name=VERDICT_NAME,
-        message=anomaly or state, hardware_id=hardware_id,
+        message=_clip(anomaly or state), hardware_id=_clip(hardware_id),
         values=[KeyValue(key='seq', value=str(int(seq))),
                 KeyValue(key='stamp', value='none' if stamp_ns is None
                          else stamp_text(stamp_ns)),
                 KeyValue(key='ready', value=_READY_TEXT[bool(ready)]),
-                KeyValue(key='state', value=str(state))])
+                KeyValue(key='state', value=_clip(state))])
 
 
 def parse_edge_verdict(msg):

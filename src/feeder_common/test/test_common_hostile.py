@@ -243,6 +243,17 @@ def test_any_time_is_nanoseconds_or_a_value_error(stamp):
 
 # ---- and what the builders write still reads back ------------------------------------------
 
+def test_a_builder_cuts_a_text_too_long_for_the_parser():
+    # A failed cycle's reason goes into the verdict's anomaly; neither may be unreadable.
+    reason = 'r' * (messages.MAX_TEXT + 10)
+    st = messages.parse_cycle_status(messages.cycle_status(3, False, reason, None, 0, 'x' * 10**5))
+    assert len(st.message) == len(st.hardware_id) == messages.MAX_TEXT
+    assert st.message.startswith('r' * 100) and st.message.endswith('\u2026')
+    v = messages.parse_edge_verdict(messages.edge_verdict(3, 0, False, 'anomaly',
+                                                          f'cycle 3 failed: {st.message}'))
+    assert len(v.anomaly) == messages.MAX_TEXT and v.anomaly.startswith('cycle 3 failed: r')
+
+
 @SETTINGS
 @given(seq=st.integers(0, messages.MAX_SEQ), ok=st.booleans(),
        sensor=st.sampled_from([True, False, None]), stamp=st.integers(0, stamps.MAX_STAMP_NS),
