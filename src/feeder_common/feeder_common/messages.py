@@ -85,7 +85,7 @@ def time_ns(stamp):
     """
     sec, nanosec = stamp.sec, stamp.nanosec
     if sec < 0 or not 0 <= nanosec < NS:
-        raise ValueError(f'stamp sec={sec} nanosec={nanosec} is not a time after 1970 with '
+        raise ValueError(f'stamp sec={sec} nanosec={nanosec} is not a time from 1970 on with '
                          'nanosec in [0, 1e9)')
     return sec * NS + nanosec
 
@@ -110,6 +110,8 @@ def parse_seq(text, what='seq'):
     ValueError naming the problem for anything else (a sign, spaces, ``_``, digits of other
     scripts, a leading zero, too many digits).
     """
+    if not isinstance(text, str):
+        raise ValueError(f'{what} is text, not {type(text).__name__}')
     if len(text) > len(str(MAX_SEQ)):
         raise ValueError(f'{what} is {len(text)} characters long; a seq has at most '
                          f'{len(str(MAX_SEQ))} digits')
