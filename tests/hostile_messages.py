@@ -68,6 +68,14 @@ TEXT = st.one_of(st.sampled_from(TRICKY), VALID_TEXT, BEYOND_TEXT, st.text(max_s
                  st.text(alphabet='0123456789.-+_ eEnaif\u0661\u0663', max_size=30), HUGE_TEXT)
 KEY = st.one_of(st.sampled_from(KEYS), st.sampled_from(KEYS).map(lambda k: k + ' '),
                 st.text(max_size=12))
+# Per key: the builder's form of a value beyond what a parser may take (a seq past 2**63, a
+# stamp past Time's int32 seconds, an edge past int32, R past the largest float).
+BEYOND = {
+    'seq': st.integers(2**63, 10**420).map(str),
+    'stamp': st.integers(2**31, 10**420).map(lambda sec: f'{sec}.000000000'),
+    'edge': st.integers(2**31, 10**420).map(str),
+    'R': st.sampled_from(('1e400', '-1e400', '1' + '0' * 400 + '.0', 'inf', 'nan')),
+}
 VALUES = st.lists(st.builds(KeyValue, key=KEY, value=TEXT), max_size=9)
 
 
@@ -108,11 +116,14 @@ def mutated(draw):
     msg = draw(canonical())
     values = list(msg.values)
     for _ in range(draw(st.integers(0, 3))):
-        op = draw(st.sampled_from(('value', 'value', 'drop', 'twice', 'add', 'name', 'level',
-                                   'message')))
+        op = draw(st.sampled_from(('value', 'value', 'beyond', 'beyond', 'drop', 'twice', 'add',
+                                   'name', 'level', 'message')))
         k = draw(st.integers(0, max(0, len(values) - 1)))
         if op == 'value' and values:
             values[k] = KeyValue(key=values[k].key, value=draw(TEXT))
+        elif op == 'beyond' and values:
+            key = values[k].key
+            values[k] = KeyValue(key=key, value=draw(BEYOND.get(key, TEXT)))
         elif op == 'drop' and values:
             del values[k]
         elif op == 'twice' and values:
