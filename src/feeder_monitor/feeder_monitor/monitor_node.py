@@ -239,12 +239,18 @@ class MonitorNode(Node):
             self._set_statement(seq, stamp_ns, False, Verdict.STATE_CYCLING)
 
     def _on_proximity(self, msg):
-        detected = proximity_detected(msg)
-        if detected is None:
+        try:
+            detected = proximity_detected(msg)
+            stamp_ns = time_ns(msg.header.stamp)
+            problem = None if detected is not None else 'proximity without a reading (NaN)'
+        except ValueError as exc:
+            problem = str(exc)
+        if problem:
             self._bad_input += 1
+            self.get_logger().warning(f'{problem}; ignored', throttle_duration_sec=5.0)
             return
-        self._remember(self._recent_proximity, time_ns(msg.header.stamp), detected)
-        self._cross_check(time_ns(msg.header.stamp))
+        self._remember(self._recent_proximity, stamp_ns, detected)
+        self._cross_check(stamp_ns)
 
     @staticmethod
     def _remember(table, stamp_ns, value):
