@@ -16,8 +16,8 @@
 Issue 20 (attack 3, deliverable 5): no message crashes the monitor; bad input is counted.
 
 The real MonitorNode runs in-process (own context, own domain); each of its subscription
-callbacks (``proximity``, ``cycle_status``, the driver's ``transition_event``, found by topic
-among the node's subscriptions) is called with hypothesis-generated messages as a subscriber
+callbacks (``proximity``, ``cycle_status``, ``cycle_fired``, the driver's ``transition_event``,
+found by topic among the node's subscriptions) is called with hypothesis-generated messages as a subscriber
 receives them (tests/hostile_messages.py). No exception may escape, the node's own count of
 bad input (/diagnostics) is exactly the number of messages the parsers refuse, and afterwards
 a valid cycle still gets its verdict.
@@ -27,7 +27,7 @@ import pathlib
 import sys
 import time
 
-from feeder_common import messages
+from feeder_common import auth, messages
 from hypothesis import given, HealthCheck, settings, strategies as st
 import pytest
 import rclpy
@@ -62,17 +62,20 @@ def spy(node, topic, parse=lambda msg: msg):
 class Harness:
     """The monitor in its own context: its callbacks by topic, what it publishes."""
 
-    def __init__(self):
+    def __init__(self, key_file):
         from feeder_monitor.monitor_node import MonitorNode
         self.ctx = Context()
         rclpy.init(context=self.ctx, domain_id=reserve_domain_id())
         self.node = MonitorNode(context=self.ctx, namespace=NS, parameter_overrides=[
             Parameter('scene', value=TRIANGLE), Parameter('orbit_throws', value=1000),
-            Parameter('diagnostics_period', value=0.1)])
+            Parameter('diagnostics_period', value=0.1),
+            Parameter('key_file', value=str(key_file))])
+        self.signer = messages.CycleSigner(auth.load_key(key_file), f'{NS}/feeder_driver')
+        self.seq = 0
         self.on = {sub.topic_name: sub.callback for sub in self.node.subscriptions}
-        assert set(self.on) == {f'{NS}/proximity', f'{NS}/cycle_status',
+        assert set(self.on) == {f'{NS}/proximity', f'{NS}/cycle_status', f'{NS}/cycle_fired',
                                 f'{NS}/feeder_driver/transition_event'}, self.on
-        self.verdicts = spy(self.node, f'{NS}/edge1_verdict', messages.parse_edge_verdict)
+        self.verdicts = spy(self.node, f'{NS}/edge1_verdict')
         self.diagnostics = spy(self.node, '/diagnostics')
         self.refused = 0            # messages the parsers refuse, sent so far
         self.executor = SingleThreadedExecutor(context=self.ctx)
@@ -88,6 +91,10 @@ class Harness:
         self.refused += _refused(messages.parse_cycle_status, msg)
         self.on[f'{NS}/cycle_status'](msg)
 
+    def fired(self, msg):
+        self.refused += _refused(messages.parse_cycle_fired, msg)
+        self.on[f'{NS}/cycle_fired'](msg)
+
     def proximity(self, msg):
         self.refused += _proximity_refused(msg)
         self.on[f'{NS}/proximity'](msg)
@@ -102,14 +109,13 @@ class Harness:
         inputs = next(s for s in self.diagnostics[-1].status if s.name.endswith(': inputs'))
         return int({kv.key: kv.value for kv in inputs.values}['bad_input'])
 
-    def valid_cycle(self, seq=0):
-        """Send one valid cycle (proximity, then cycle_status); return its verdict or None."""
-        # Whatever waits for its other half expires first (pair_timeout).
-        self.spin_until(lambda: False, 0.6)
-        stamp = time.time_ns()
+    def valid_cycle(self):
+        """Send one valid signed cycle (proximity, then cycle_status); its verdict or None."""
+        self.seq += 1
+        seq, stamp = self.seq, time.time_ns()
         n = len(self.verdicts)
         self.proximity(wire(messages.proximity(stamp, True, 0.02)))
-        self.status(wire(messages.cycle_status(seq, True, 'completed', True, stamp, 'test')))
+        self.status(wire(self.signer.cycle_status(seq, True, 'completed', True, stamp, 'test')))
         self.spin_until(lambda: any(v.seq == seq for v in self.verdicts[n:]), 2.0)
         return next((v for v in self.verdicts[n:] if v.seq == seq), None)
 
@@ -120,8 +126,10 @@ class Harness:
 
 
 @pytest.fixture(scope='module')
-def harness():
-    h = Harness()
+def harness(tmp_path_factory):
+    key_file = tmp_path_factory.mktemp('key') / 'hmac.key'
+    auth.ensure_key(key_file)
+    h = Harness(key_file)
     try:
         yield h
     finally:
@@ -153,10 +161,11 @@ def test_the_killer_status_of_issue_20_is_counted_and_the_next_cycle_judged(harn
     assert harness.refused == 6
     assert harness.bad_input() == 6
     assert not [v for v in harness.verdicts if v.seq in (7, 12, 9999990)]
-    assert harness.valid_cycle(1) is not None
+    assert harness.valid_cycle() is not None
 
 
 MESSAGES = st.lists(st.one_of(statuses().map(lambda m: ('status', m)),
+                              statuses().map(lambda m: ('fired', m)),
                               ranges().map(lambda m: ('proximity', m)),
                               TRANSITION_EVENTS.map(lambda m: ('transition', m))),
                     min_size=1, max_size=6)
