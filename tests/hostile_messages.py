@@ -63,7 +63,7 @@ BEYOND_TEXT = st.one_of(
     st.integers(2**63 - 2, 10**420).map(str),
     st.integers(2**31 - 2, 10**420).map(lambda sec: f'{sec}.000000000'),
     st.integers(2**31 - 2, 10**420).map(str))
-HUGE_TEXT = st.builds(lambda c, n: c * n, st.characters(), st.integers(0, 20_000))
+HUGE_TEXT = st.builds(lambda c, n: c * n, st.characters(codec='utf-8'), st.integers(0, 20_000))
 TEXT = st.one_of(st.sampled_from(TRICKY), VALID_TEXT, BEYOND_TEXT, st.text(max_size=40),
                  st.text(alphabet='0123456789.-+_ eEnaif\u0661\u0663', max_size=30), HUGE_TEXT)
 KEY = st.one_of(st.sampled_from(KEYS), st.sampled_from(KEYS).map(lambda k: k + ' '),

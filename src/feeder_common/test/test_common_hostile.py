@@ -95,8 +95,15 @@ def test_a_value_given_twice_is_refused_not_overwritten():
     with pytest.raises(ValueError, match='seq twice'):
         messages.parse_cycle_status(msg)
     msg = good_cycle()
-    msg.values.append(KeyValue(key='mac', value='later fields are not read here'))
+    msg.values.append(KeyValue(key='later', value='fields this parser does not know'))
     assert messages.parse_cycle_status(msg).seq == 42
+    # The signature is read: given twice, or not as CycleSigner writes it, is refused.
+    for extra in ([KeyValue(key='mac', value='ab' * 32)] * 2, [KeyValue(key='mac', value='x')],
+                  [KeyValue(key='session', value='A' * 8)]):
+        msg = good_cycle()
+        msg.values.extend(extra)
+        with pytest.raises(ValueError, match='mac|session'):
+            messages.parse_cycle_status(msg)
 
 
 @pytest.mark.parametrize('R', ['1e400', '-1e400', 'inf', 'nan', '1_0.5', ' 0.1', '0.10',

@@ -159,7 +159,7 @@ class DriverNode(FeederLifecycleNode):
             self._apply(self.core.stop(time.monotonic(), self._stamp(), reason))
             # The aborted cycle's status must reach its readers before the writer goes (DDS
             # drops what a destroyed writer has not delivered).
-            for pub in self._publishers():
+            for pub in self._own_publishers():
                 flush(pub)
         if self.link is not None:
             self.link.close()
@@ -167,11 +167,11 @@ class DriverNode(FeederLifecycleNode):
         if self._tick_timer is not None:
             self.destroy_timer(self._tick_timer)
             self._tick_timer = None
-        for pub in self._publishers():
+        for pub in self._own_publishers():
             self.destroy_lifecycle_publisher(pub)
         self._pub_prox = self._pub_status = self._pub_joint = self._pub_fired = None
 
-    def _publishers(self):
+    def _own_publishers(self):
         return [pub for pub in (self._pub_prox, self._pub_status, self._pub_joint,
                                 self._pub_fired) if pub is not None]
 
