@@ -1,0 +1,255 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A disk that refuses writes (ENOSPC, EDQUOT, EFBIG, EIO) under the bag writer and bag_reindex.
+
+The files are opened through a stand-in for ``open`` whose writes take their new bytes from a
+budget shared by every file of the bag (a disk with N bytes free): a write that goes past it
+writes what fits, and the next one raises the error, as write(2) does. Writes within a file's
+size and truncation need no new space (truncation gives it back). For budgets that end in every
+part of the writing (the header, a chunk, the channel records, metadata.yaml, the summary at
+close) the bag must end up readable by rosbags and by the mcap library with every message
+flushed before the fault, exactly the ones the writer says it holds (issue 20, attack 9).
+"""
+
+import errno
+import os
+
+from feeder_monitor import bag as bagmod
+from feeder_monitor.bag import BagError, BagWriter, McapLog, qos, reindex, reindex_main
+import pytest
+from rosbags.rosbag2 import Reader
+import yaml
+
+VOLATILE = qos(1, 10, 1, 2)
+TOPICS = ('/disk/a', '/disk/b')
+
+
+class Disk:
+    """A disk with ``free`` bytes left; files opened through ``open`` draw on it."""
+
+    def __init__(self, free, err=errno.ENOSPC):
+        self.free = free
+        self.err = err
+        self.refused = 0
+
+    def open(self, path, mode='r', *args, **kwargs):
+        return DiskFile(self, open(path, mode, *args, **kwargs))
+
+
+class DiskFile:
+    """A binary file whose writes past its end take space from its ``Disk``."""
+
+    def __init__(self, disk, raw):
+        self.disk = disk
+        self.raw = raw
+        self.size = os.fstat(raw.fileno()).st_size
+
+    def write(self, data):
+        data = memoryview(data).cast('B')
+        pos = self.raw.tell()
+        room = max(0, self.size - pos) + self.disk.free
+        if room == 0 and len(data):
+            self.disk.refused += 1
+            raise OSError(self.disk.err, os.strerror(self.disk.err))
+        n = self.raw.write(data[:room])
+        grown = max(0, pos + n - self.size)
+        self.disk.free -= grown
+        self.size += grown
+        return n
+
+    def truncate(self, size=None):
+        size = self.raw.tell() if size is None else size
+        if size < self.size:
+            self.disk.free += self.size - size
+        self.size = size
+        return self.raw.truncate(size)
+
+    def __getattr__(self, name):
+        return getattr(self.raw, name)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.raw.close()
+
+
+def payload(k):
+    """CDR of a std_msgs/Int32 ``k`` with some padding bytes so chunks have some size."""
+    return b'\x00\x01\x00\x00' + k.to_bytes(4, 'little') + bytes(200)
+
+
+def record(path, disk=None, monkeypatch=None, flushes=6, per_flush=40):
+    """
+    Write ``flushes`` flushes of messages (the second topic appears in the third), then close.
+
+    With ``disk``, every write after the bag's creation draws on it. Returns the writer, the
+    values written, and how many of them the last flush before the fault put on disk.
+    """
+    writer = BagWriter(path)
+    if disk is not None:
+        monkeypatch.setattr(bagmod, 'open', disk.open, raising=False)
+    writer.add_topic(TOPICS[0], 'std_msgs/msg/Int32', [VOLATILE])
+    written = []
+    flushed = 0
+    for f in range(flushes):
+        if f == 2:
+            writer.add_topic(TOPICS[1], 'std_msgs/msg/Int32', [VOLATILE])
+        for _ in range(per_flush):
+            k = len(written) + 1
+            written.append(k)
+            writer.write(TOPICS[k % 2 if f >= 2 else 0], 1000 * k, payload(k))
+        writer.flush()
+        if writer.fault is None:
+            flushed = len(written)
+    writer.close()
+    if disk is not None:
+        monkeypatch.undo()
+    return writer, written, flushed
+
+
+def read_both(bag):
+    """The values in the bag by rosbags and by the mcap library; they must agree."""
+    from mcap.reader import make_reader
+    with Reader(bag) as reader:
+        by_rosbags = [int.from_bytes(raw[4:8], 'little') for _, _, raw in reader.messages()]
+    with open(bag / f'{bag.name}.mcap', 'rb') as fh:
+        by_mcap = [int.from_bytes(m.data[4:8], 'little')
+                   for _, _, m in make_reader(fh).iter_messages()]
+    assert by_rosbags == by_mcap
+    return by_rosbags
+
+
+def test_the_fault_free_run_is_the_reference(tmp_path):
+    writer, written, flushed = record(tmp_path / 'bag')
+    assert writer.fault is None and flushed == len(written) == 240
+    assert read_both(tmp_path / 'bag') == written
+
+
+def _needed(tmp_path):
+    """Bytes the whole recording writes after creation (the .mcap growth and metadata.yaml)."""
+    disk = Disk(1 << 30)
+    mp = pytest.MonkeyPatch()
+    record(tmp_path / 'probe', disk, mp)
+    return (1 << 30) - disk.free
+
+
+@pytest.mark.parametrize('err', [errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO])
+def test_a_refused_write_anywhere_leaves_a_readable_bag_of_what_was_flushed(
+        tmp_path, monkeypatch, err):
+    needed = _needed(tmp_path)
+    # The first chunk, the channel record of the second topic, mid-chunks, the summary.
+    budgets = sorted({0, 1, 13, 49, 50, 51, 400, 5000, 9000, 11000,
+                      needed - 600, needed - 200, needed - 60, needed - 1,
+                      *range(0, needed, max(1, needed // 23))})
+    seen = set()
+    for free in budgets:
+        bag = tmp_path / f'bag{free}'
+        disk = Disk(free, err)
+        writer, written, flushed = record(bag, disk, monkeypatch)
+        what = f'{errno.errorcode[err]} with {free} of {needed} bytes free'
+        assert writer.fault is not None, what
+        assert writer.fault.errno == err, what
+        got = read_both(bag)
+        assert got == written[:len(got)], what
+        assert len(got) >= flushed, f'{what}: {len(got)} read, {flushed} were flushed'
+        assert len(got) == writer.fault.flushed, what
+        assert writer.fault.received == len(written), what
+        meta = yaml.safe_load((bag / 'metadata.yaml').read_text())
+        assert meta['rosbag2_bagfile_information']['message_count'] <= len(got), what
+        assert not (bag / 'metadata.yaml.tmp').exists(), what
+        seen.add(writer.fault.finished)
+        # bag_reindex (space again) gives it its summary and the same messages.
+        assert 'metadata.yaml rebuilt' in reindex(bag), what
+        assert read_both(bag) == got, what
+    # Some faults left room for the summary at close, some did not.
+    assert seen == {True, False}
+
+
+def test_the_fault_line_names_cause_file_counts_and_fix(tmp_path, monkeypatch):
+    disk = Disk(20000)
+    writer, written, _ = record(tmp_path / 'bag', disk, monkeypatch)
+    line = writer.fault.line()
+    assert '\n' not in line
+    assert line.startswith(f'disk full (ENOSPC) writing {tmp_path / "bag"}/')
+    assert f'after {len(written)} messages' in line
+    assert f'holds the {writer.fault.flushed} messages flushed before' in line
+    assert 'free space' in line and 'record again' in line
+
+
+@pytest.mark.parametrize('err, fix', [(errno.EDQUOT, 'quota'), (errno.EFBIG, 'file size'),
+                                      (errno.EIO, 'dmesg')])
+def test_each_cause_has_its_fix(tmp_path, monkeypatch, err, fix):
+    writer, _, _ = record(tmp_path / 'bag', Disk(3000, err), monkeypatch)
+    assert errno.errorcode[err] in writer.fault.line() and fix in writer.fault.line()
+
+
+def _killed_bag(path, cut=0):
+    """A bag whose writer was killed after 3 flushes (and ``cut`` bytes into a 4th write)."""
+    writer = BagWriter(path)
+    writer.add_topic(TOPICS[0], 'std_msgs/msg/Int32', [VOLATILE])
+    for k in range(1, 121):
+        writer.write(TOPICS[0], 1000 * k, payload(k))
+        if k % 40 == 0:
+            writer.flush()
+    writer._log.close()
+    mcap = path / f'{path.name}.mcap'
+    if cut:
+        with open(mcap, 'r+b') as fh:
+            fh.seek(-50, os.SEEK_END)
+            fh.write(bytes(range(256)) * (cut // 256 + 1))
+            fh.truncate(os.fstat(fh.fileno()).st_size - 50 + cut)
+    return mcap
+
+
+@pytest.mark.parametrize('cut', [0, 30, 5000])
+def test_reindex_on_a_full_disk_works_in_place_or_leaves_the_bag_as_it_was(
+        tmp_path, monkeypatch, capsys, cut):
+    for free in (0, 40, 400, 4000, 1 << 20):
+        bag = tmp_path / f'bag{cut}_{free}'
+        mcap = _killed_bag(bag, cut)
+        before = mcap.read_bytes()
+        meta_before = (bag / 'metadata.yaml').read_bytes()
+        disk = Disk(free)
+        monkeypatch.setattr(bagmod, 'open', disk.open, raising=False)
+        status = reindex_main([str(bag)])
+        monkeypatch.undo()
+        out, err = capsys.readouterr()
+        what = f'cut {cut}, {free} bytes free: {out}{err}'
+        assert read_both(bag) == list(range(1, 121)), what
+        assert not (bag / 'metadata.yaml.tmp').exists(), what
+        if status == 0:
+            assert '120 messages on 1 topics' in out and not err, what
+            assert yaml.safe_load((bag / 'metadata.yaml').read_text())[
+                'rosbag2_bagfile_information']['message_count'] == 120
+            continue
+        assert status == 3 and not out and err.count('\n') == 1, what
+        assert err.startswith(f'bag_reindex: disk full (ENOSPC) writing {bag}/'), what
+        assert 'free' in err and 'run bag_reindex' in err, what
+        assert (bag / 'metadata.yaml').read_bytes() == meta_before, what
+        after = mcap.read_bytes()
+        # Unchanged, or finished up to where the disk allowed: never worse.
+        if after != before:
+            assert len(after) <= len(before) or cut == 0, what
+            log, _, dropped = McapLog.recover(mcap)
+            log.close()
+            assert dropped == 0, what
+    # With no byte free, a provisional end (cut 0) cannot get its summary.
+    with pytest.raises(BagError, match='disk full'):
+        bag = tmp_path / 'again'
+        _killed_bag(bag)
+        monkeypatch.setattr(bagmod, 'open', Disk(0).open, raising=False)
+        reindex(bag)
