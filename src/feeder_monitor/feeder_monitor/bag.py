@@ -34,9 +34,18 @@ any moment the directory is a readable bag holding all but the last flush period
 statistics, chunk and metadata indexes) and the footer. ``reindex`` (``bag_reindex BAG``, like
 ``ros2 bag reindex``) rebuilds ``metadata.yaml`` from the ``.mcap`` and gives an ``.mcap``
 without a summary (a killed writer's, or one cut off mid-record) a summary and footer.
+
+A disk that refuses a write (ENOSPC, EDQUOT, EFBIG, EIO, ...) never leaves an unreadable bag:
+every write to the .mcap goes at the end of what is on disk, over the provisional end, and a
+refused one is undone by writing the provisional end back where it was (within the file's old
+size: no new space) and cutting the file there. ``BagWriter`` then stops writing, keeps the
+cause in ``fault`` (a :class:`WriteFault`; nothing is raised), and at ``close`` tries once to
+write the summary, which fits in the space the undone write gave back more often than not.
+``reindex`` on a full disk finishes the .mcap if the end fits, else puts back what it found.
 """
 
 from collections import defaultdict
+import errno
 import io
 import os
 import pathlib
@@ -65,6 +74,8 @@ CHUNK_BYTES = 1 << 20
 _MESSAGE = struct.Struct('<BQHIQQ')
 _RECORD_HEAD = struct.Struct('<BQ')
 _DUMPER = getattr(yaml, 'CSafeDumper', yaml.SafeDumper)
+# Exit status of bag_recorder and bag_reindex when the disk refused a write (2: bad input).
+WRITE_FAULT_STATUS = 3
 
 
 def qos_time(nanoseconds):
@@ -103,6 +114,61 @@ class BagError(Exception):
     """A bag that cannot be read or repaired; the text says what and where."""
 
 
+class BagWriteError(BagError):
+    """The disk refused a write of ``reindex``; the bag is no worse than it was."""
+
+
+# What a refused write means and what to do about it, by errno (others: their strerror).
+_CAUSES = {
+    errno.ENOSPC: ('disk full', 'free space'),
+    errno.EDQUOT: ('disk quota exceeded', 'free space or raise the quota'),
+    errno.EFBIG: ('file too large', 'lift the file size limit (ulimit -f) or record to '
+                  'another filesystem, in shorter bags (--duration)'),
+    errno.EIO: ('I/O error', 'check the device (dmesg), record to another one'),
+}
+
+
+def write_cause(exc):
+    """Return (what, fix) of a refused write: ('disk full (ENOSPC)', 'free space')."""
+    name = errno.errorcode.get(exc.errno, str(exc.errno))
+    what, fix = _CAUSES.get(exc.errno, (exc.strerror or str(exc), 'fix that'))
+    return f'{what} ({name})', fix
+
+
+class WriteFault:
+    """
+    A write the disk refused while recording; the writer wrote nothing after it.
+
+    ``errno``, ``path`` (the file), ``received`` (messages given to the writer by then),
+    ``flushed`` (messages in the bag: those put on disk before the fault), ``intact`` (the
+    .mcap was put back to a readable end) and ``finished`` (the summary fit at close).
+    """
+
+    def __init__(self, exc, path, received, flushed, intact):
+        self.errno = exc.errno
+        self.cause, self.fix = write_cause(exc)
+        self.path = path
+        self.received = received
+        self.flushed = flushed
+        self.intact = intact
+        self.finished = False
+
+    def line(self):
+        """The one line that says what happened, what the bag holds and what to do."""
+        bag = pathlib.Path(self.path).parent
+        if not self.intact:
+            state = (f'the .mcap may end in a cut-off record: bag_reindex {bag} finishes it '
+                     f'after its last whole record (of the {self.flushed} messages flushed '
+                     'before)')
+        else:
+            state = (f'the bag holds the {self.flushed} messages flushed before, '
+                     + ('closed with its summary' if self.finished else
+                        f'without summary (bag_reindex {bag} adds it once there is space)')
+                     + ' (read it with rosbags.rosbag2.Reader or the mcap library)')
+        return (f'{self.cause} writing {self.path} after {self.received} messages; {state}; '
+                f'{self.fix} and record again')
+
+
 class McapLog:
     """
     An MCAP file that is a readable MCAP after every ``flush``.
@@ -126,6 +192,9 @@ class McapLog:
         self._index = defaultdict(list)
         self._chunk_times = None        # [start, end] of the chunk in memory
         self._last_entries = {}         # message index entries of the last chunk read
+        self._tail = _provisional_end()     # the bytes on disk from data_end to the file's end
+        self.intact = True              # False: a refused write could not be undone
+        self._mark()
 
     @classmethod
     def create(cls, path, profile, library):
@@ -140,6 +209,52 @@ class McapLog:
         view = memoryview(data)
         while view:
             view = view[self._stream.write(view):]
+
+    def _mark(self):
+        """Remember what is on disk: a refused write goes back to it (``_undo``)."""
+        self._marked = (self.data_end, len(self.chunk_indexes), len(self.metadata_indexes),
+                        len(self.schemas), len(self.channels),
+                        {c: list(st) for c, st in self.stats.items()})
+
+    def _write_end(self, data):
+        """
+        Write ``data`` at data_end; if the disk refuses it, put the old end back and raise.
+
+        The old end (a provisional end, or what reindex found after the last whole record)
+        is written back where it was, within the file's old size, so it needs no new space,
+        and the file is cut after it. ``intact`` says whether that worked.
+        """
+        try:
+            self._write_at(self.data_end, data)
+        except OSError:
+            self._undo()
+            raise
+
+    def _undo(self):
+        """Put the file and the records held in memory back to the last mark."""
+        end, chunks, metas, schemas, channels, stats = self._marked
+        self.data_end = end
+        del self.chunk_indexes[chunks:]
+        del self.metadata_indexes[metas:]
+        self.metadata_names = {m.name for m in self.metadata_indexes}
+        for records, keep in ((self.schemas, schemas), (self.channels, channels)):
+            for key in list(records)[keep:]:
+                del records[key]
+        self.stats = {c: list(st) for c, st in stats.items()}
+        self._pending = bytearray()
+        self._chunk = bytearray()
+        self._index = defaultdict(list)
+        self._chunk_times = None
+        # A tail shorter than a provisional end goes back as it was (a cut record reindex
+        # found); else a provisional end takes its place (readable, and no longer).
+        tail = self._tail if len(self._tail) < len(_provisional_end()) else _provisional_end()
+        try:
+            self._write_at(end, tail)
+            self._stream.truncate(end + len(tail))
+            self.intact = True
+        except OSError:
+            self.intact = False
+        self._tail = tail
 
     def add_schema(self, name, encoding, data):
         schema_id = len(self.schemas) + 1
@@ -217,9 +332,11 @@ class McapLog:
         if not out:
             return False
         # One write: a kill leaves either the old provisional end or the new one intact
-        # (or, mid-write, a cut record that reindex drops).
-        self._write_at(self.data_end, out + _provisional_end())
+        # (or, mid-write, a cut record that reindex drops); a refused one is undone.
+        self._write_end(out + _provisional_end())
         self.data_end += len(out)
+        self._tail = _provisional_end()
+        self._mark()
         return True
 
     @property
@@ -268,9 +385,11 @@ class McapLog:
         out += summary + _record(Footer(summary_start=summary_start,
                                         summary_offset_start=summary_offset_start,
                                         summary_crc=crc)) + MAGIC
-        self._write_at(self.data_end, out)
-        self._stream.truncate(self.data_end + len(out))
-        self._stream.close()
+        try:
+            self._write_end(out)
+            self._stream.truncate(self.data_end + len(out))
+        finally:
+            self._stream.close()
 
     def close(self):
         """Close the file as it stands (flushed data and the provisional end stay readable)."""
@@ -292,6 +411,11 @@ class McapLog:
             raise BagError(f'cannot be read after byte {log.data_end} ({dropped} bytes follow, '
                            'more than a killed writer leaves); not repaired')
         log._stream = open(path, 'r+b', buffering=0)
+        if not complete:
+            # What follows the last whole record: a refused end goes back to it.
+            log._stream.seek(log.data_end)
+            log._tail = log._stream.read()
+            log._mark()
         return log, complete, dropped
 
     @classmethod
@@ -452,7 +576,16 @@ def bag_metadata(log, file_name, qos_cache=None):
 def _write_metadata_yaml(bag_dir, info):
     """Replace metadata.yaml atomically (a reader never sees half a file)."""
     tmp = bag_dir / 'metadata.yaml.tmp'
-    tmp.write_text(_yaml({'rosbag2_bagfile_information': info}))
+    data = _yaml({'rosbag2_bagfile_information': info}).encode()
+    try:
+        with open(tmp, 'wb', buffering=0) as fh:
+            view = memoryview(data)
+            while view:
+                view = view[fh.write(view):]
+    except OSError:
+        # The old metadata.yaml stays; the partial new one would only take space.
+        tmp.unlink(missing_ok=True)
+        raise
     os.replace(tmp, bag_dir / 'metadata.yaml')
 
 
@@ -473,6 +606,8 @@ class BagWriter:
         self._qos_cache = {}
         self._last_log_time = 0
         self.closed = False
+        self.fault = None           # a WriteFault once the disk refused a write
+        self._received = 0
         _write_metadata_yaml(self.path, self.metadata())
 
     def knows(self, msgtype):
@@ -492,6 +627,8 @@ class BagWriter:
         """
         if topic in self._channels:
             raise ValueError(f'{topic} is already in the bag')
+        if self.fault is not None:
+            return              # nothing more is written (its schema may be undone)
         if msgtype not in self._schemas:
             msgdef, _ = self.typestore.generate_msgdef(msgtype, ros_version=2)
             self._schemas[msgtype] = self._log.add_schema(msgtype, 'ros2msg', msgdef.encode())
@@ -511,20 +648,46 @@ class BagWriter:
         over after it is logged at the previous one's time): a killed writer's .mcap has no
         index, and readers of unindexed MCAP (rosbags) require log-time order.
         """
+        self._received += 1
+        if self.fault is not None:
+            return              # the disk refused a write: nothing more is written
         log_time_ns = max(int(log_time_ns), self._last_log_time)
         self._last_log_time = log_time_ns
-        self._log.add_message(self._channels[topic], log_time_ns, data,
-                              log_time_ns if publish_time_ns is None else int(publish_time_ns),
-                              int(sequence) & 0xFFFFFFFF)
+        try:
+            self._log.add_message(self._channels[topic], log_time_ns, data,
+                                  log_time_ns if publish_time_ns is None
+                                  else int(publish_time_ns), int(sequence) & 0xFFFFFFFF)
+        except OSError as exc:      # a full chunk is written at once
+            self._failed(exc, self.path / self.file_name)
 
     def flush(self):
         """Put the messages held in memory on disk and bring metadata.yaml up to date."""
-        if not self.closed and self._log.flush():
+        if self.closed or self.fault is not None:
+            return
+        before = self._log._marked
+        try:
+            if not self._log.flush():
+                return
+        except OSError as exc:
+            self._failed(exc, self.path / self.file_name)
+            return
+        try:
             _write_metadata_yaml(self.path, self.metadata())
+        except OSError as exc:
+            # rosbags reads the topics metadata.yaml lists: the .mcap goes back to the
+            # flush the old one describes.
+            self._log._marked = before
+            self._log._undo()
+            self._failed(exc, self.path / 'metadata.yaml')
+
+    def _failed(self, exc, path):
+        """Keep the first refused write (the .mcap is already back to its last flush)."""
+        self.fault = WriteFault(exc, path, self._received, self._log.message_count,
+                                self._log.intact)
 
     @property
     def counts(self):
-        return {topic: self._log.stats[c][0] for topic, c in self._channels.items()}
+        return {topic: self._log.stats.get(c, (0,))[0] for topic, c in self._channels.items()}
 
     @property
     def total(self):
@@ -535,13 +698,32 @@ class BagWriter:
         return bag_metadata(self._log, self.file_name, self._qos_cache)
 
     def close(self):
-        """Finish the MCAP file (summary, metadata record) and write metadata.yaml."""
+        """
+        Finish the MCAP file (summary, metadata record) and write metadata.yaml.
+
+        After a refused write (``fault``), or when the disk refuses these, the bag is left
+        with what was flushed and a provisional end (readable; ``reindex`` adds the summary),
+        and ``fault`` says so; nothing is raised.
+        """
         if self.closed:
             return
+        self.flush()                # what is in memory, with its metadata.yaml
         self.closed = True
         info = self.metadata()
-        self._log.finish([('rosbag2', {'serialized_metadata': _yaml(info)})])
-        _write_metadata_yaml(self.path, info)
+        try:
+            self._log.finish([('rosbag2', {'serialized_metadata': _yaml(info)})])
+        except OSError as exc:
+            if self.fault is None:
+                self._failed(exc, self.path / self.file_name)
+            self.fault.intact = self.fault.intact and self._log.intact
+            return
+        if self.fault is not None:
+            self.fault.finished = True
+        try:
+            _write_metadata_yaml(self.path, info)
+        except OSError as exc:
+            if self.fault is None:
+                self._failed(exc, self.path / 'metadata.yaml')
 
 
 def reindex(bag_dir):
@@ -572,10 +754,30 @@ def reindex(bag_dir):
     else:
         extra = [] if 'rosbag2' in log.metadata_names else [
             ('rosbag2', {'serialized_metadata': _yaml(info)})]
-        log.finish(extra)
+        found = log._tail
+        try:
+            log.finish(extra)
+        except OSError as exc:
+            cause, fix = write_cause(exc)
+            if not log.intact:
+                left = 'may now end in a cut-off record'
+            elif log._tail == found:
+                left = 'is as it was (readable as it is)'
+            else:
+                left = 'ends after its last whole record with a provisional end (readable)'
+            raise BagWriteError(
+                f'{cause} writing {path}: no room for its summary and footer; {path.name} '
+                f'{left}, metadata.yaml untouched; {fix} and run bag_reindex {bag_dir} '
+                'again') from None
         what = 'had no summary (writer killed?): summary and footer written' + (
             f', {dropped} bytes of a record cut off at its end dropped' if dropped else '')
-    _write_metadata_yaml(bag_dir, info)
+    try:
+        _write_metadata_yaml(bag_dir, info)
+    except OSError as exc:
+        cause, fix = write_cause(exc)
+        raise BagWriteError(
+            f'{cause} writing {bag_dir / "metadata.yaml"}: it is as it was; {path.name} '
+            f'{what}; {fix} and run bag_reindex {bag_dir} again') from None
     return (f'{bag_dir}: {info["message_count"]} messages on '
             f'{len(info["topics_with_message_count"])} topics; {path.name} {what}; '
             'metadata.yaml rebuilt')
@@ -594,7 +796,10 @@ def reindex_main(argv=None):
     for bag in args.bags:
         try:
             print(f'bag_reindex: {reindex(bag)}', flush=True)
+        except BagWriteError as exc:
+            print(f'bag_reindex: {exc}', file=sys.stderr, flush=True)
+            status = max(status, WRITE_FAULT_STATUS)
         except BagError as exc:
             print(f'bag_reindex: {exc}', file=sys.stderr, flush=True)
-            status = 2
+            status = max(status, 2)
     return status
