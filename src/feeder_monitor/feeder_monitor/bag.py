@@ -119,7 +119,7 @@ class BagWriteError(BagError):
 
 
 # What a refused write means and what to do about it, by errno (others: their strerror).
-_CAUSES = {
+WRITE_FAULT_CAUSES = {
     errno.ENOSPC: ('disk full', 'free space'),
     errno.EDQUOT: ('disk quota exceeded', 'free space or raise the quota'),
     errno.EFBIG: ('file too large', 'lift the file size limit (ulimit -f) or record to '
@@ -131,7 +131,7 @@ _CAUSES = {
 def write_cause(exc):
     """Return (what, fix) of a refused write: ('disk full (ENOSPC)', 'free space')."""
     name = errno.errorcode.get(exc.errno, str(exc.errno))
-    what, fix = _CAUSES.get(exc.errno, (exc.strerror or str(exc), 'fix that'))
+    what, fix = WRITE_FAULT_CAUSES.get(exc.errno, (exc.strerror or str(exc), 'fix that'))
     return f'{what} ({name})', fix
 
 
@@ -201,7 +201,11 @@ class McapLog:
         stream = open(path, 'xb', buffering=0)
         head = MAGIC + _record(Header(profile=profile, library=library))
         log = cls(stream, len(head))
-        log._write_at(0, head + _provisional_end())
+        try:
+            log._write_at(0, head + _provisional_end())
+        except OSError:
+            stream.close()
+            raise
         return log
 
     def _write_at(self, offset, data):
@@ -600,7 +604,15 @@ class BagWriter:
         self.typestore = get_typestore(Stores.ROS2_KILTED)
         self.file_name = f'{self.path.name}.mcap'
         # rosbag2's defaults: chunked, no compression.
-        self._log = McapLog.create(self.path / self.file_name, 'ros2', LIBRARY)
+        try:
+            self._log = McapLog.create(self.path / self.file_name, 'ros2', LIBRARY)
+            _write_metadata_yaml(self.path, bag_metadata(self._log, self.file_name))
+        except OSError:
+            # A disk that refuses the first bytes: no half-made bag is left to trip over.
+            for name in (self.file_name, 'metadata.yaml'):
+                (self.path / name).unlink(missing_ok=True)
+            self.path.rmdir()
+            raise
         self._schemas = {}
         self._channels = {}
         self._qos_cache = {}
@@ -608,7 +620,6 @@ class BagWriter:
         self.closed = False
         self.fault = None           # a WriteFault once the disk refused a write
         self._received = 0
-        _write_metadata_yaml(self.path, self.metadata())
 
     def knows(self, msgtype):
         """Whether the Kilted type store has ``msgtype`` (e.g. 'std_msgs/msg/Bool')."""

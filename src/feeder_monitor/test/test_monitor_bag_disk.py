@@ -277,3 +277,17 @@ def test_reindex_with_no_byte_free_says_so(tmp_path, monkeypatch):
                        r'summary and footer; bag.mcap is as it was \(readable as it is\)'):
         reindex(bag)
     assert mcap.read_bytes() == before
+
+
+@pytest.mark.parametrize('free', [0, 100, 560])
+def test_a_disk_full_at_creation_is_one_line_exit_3_and_leaves_nothing(
+        tmp_path, monkeypatch, capsys, free):
+    from feeder_monitor import bag_recorder
+    bag = tmp_path / 'bag'
+    monkeypatch.setattr(bagmod, 'open', Disk(free).open, raising=False)
+    assert bag_recorder.main(['bag_recorder', str(bag)]) == 3
+    out, err = capsys.readouterr()
+    assert not out and err == (f'bag_recorder: error: disk full (ENOSPC) creating the bag {bag} '
+                               '(nothing recorded, nothing left there); free space and record '
+                               'again\n')
+    assert not bag.exists()
