@@ -22,7 +22,8 @@ itself with exit status 3 and one line naming the cause and the fix, and the bag
 rosbags and by the mcap library alike, the messages it says it flushed, without a gap. Then
 the filesystem is filled to the last byte and bag_reindex runs in place: it works or says in
 one line why not (exit status 3), and the bag reads the same after it; with space again it
-rebuilds metadata.yaml.
+rebuilds metadata.yaml. The same with a file size limit (RLIMIT_FSIZE: EFBIG), which needs
+no root.
 """
 
 import errno
@@ -92,8 +93,8 @@ def _one_error_line(log, prog):
     return lines[0]
 
 
-def test_a_full_filesystem_ends_the_recorder_with_one_line_and_a_readable_bag(
-        graph, ros, small_fs):
+def _record_until_refused(graph, ros, bag, cause, wrapper=()):
+    """Publish 2 KB messages at 200 Hz into a recorder until the disk stops it; check it."""
     pub = ros.node.create_publisher(String, TOPIC,
                                     QoSProfile(depth=1000,
                                                reliability=ReliabilityPolicy.RELIABLE))
@@ -104,10 +105,9 @@ def test_a_full_filesystem_ends_the_recorder_with_one_line_and_a_readable_bag(
         pub.publish(String(data=f'{sent[0]:08d}{PAD}'))
 
     timer = ros.node.create_timer(PERIOD, tick)
-    bag = small_fs / 'bag'
     try:
         rec = graph.start('feeder_monitor', 'bag_recorder', bag, '--topics', TOPIC,
-                          name='disk_recorder')
+                          name='disk_recorder', wrapper=wrapper)
         ros.spin_until(lambda: rec.poll() is not None, 25.0, 'the recorder to stop by itself')
     finally:
         ros.node.destroy_timer(timer)
@@ -115,8 +115,8 @@ def test_a_full_filesystem_ends_the_recorder_with_one_line_and_a_readable_bag(
     log = graph.log(rec)
     assert rec.returncode == 3, log
     line = _one_error_line(log, 'bag_recorder')
-    assert line.startswith(f'bag_recorder: error: disk full (ENOSPC) writing {bag}/'), line
-    assert 'free space' in line and 'record again' in line, line
+    assert line.startswith(f'bag_recorder: error: {cause} writing {bag}/'), line
+    assert line.endswith(', then record again'), line
     got = read_counters(bag)
     assert got, line
     assert got == list(range(got[0], got[0] + len(got))), f'gaps in {got[0]}..{got[-1]}'
@@ -124,6 +124,25 @@ def test_a_full_filesystem_ends_the_recorder_with_one_line_and_a_readable_bag(
     meta = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
     assert meta['message_count'] <= len(got)
     print(line)
+    return got
+
+
+def test_a_file_size_limit_ends_the_recorder_with_one_line_and_a_readable_bag(
+        graph, ros, tmp_path):
+    # RLIMIT_FSIZE (ulimit -f): write(2) fails with EFBIG past it (Python ignores SIGXFSZ).
+    bag = tmp_path / 'bag'
+    got = _record_until_refused(graph, ros, bag, 'file too large (EFBIG)',
+                                wrapper=('prlimit', '--fsize=200000'))
+    assert (bag / 'bag.mcap').stat().st_size <= 200000
+    rx = graph.start('feeder_monitor', 'bag_reindex', bag, name='reindex')
+    assert rx.wait(timeout=25) == 0, graph.log(rx)
+    assert read_counters(bag) == got
+
+
+def test_a_full_filesystem_ends_the_recorder_with_one_line_and_a_readable_bag(
+        graph, ros, small_fs):
+    bag = small_fs / 'bag'
+    got = _record_until_refused(graph, ros, bag, 'disk full (ENOSPC)')
 
     # bag_reindex in place with not one byte free: works, or one line and the bag unharmed.
     filler = _fill(small_fs)

@@ -122,9 +122,9 @@ class BagWriteError(BagError):
 WRITE_FAULT_CAUSES = {
     errno.ENOSPC: ('disk full', 'free space'),
     errno.EDQUOT: ('disk quota exceeded', 'free space or raise the quota'),
-    errno.EFBIG: ('file too large', 'lift the file size limit (ulimit -f) or record to '
-                  'another filesystem, in shorter bags (--duration)'),
-    errno.EIO: ('I/O error', 'check the device (dmesg), record to another one'),
+    errno.EFBIG: ('file too large', 'lift the file size limit (ulimit -f) or write shorter '
+                  'bags (--duration)'),
+    errno.EIO: ('I/O error', 'check the device (dmesg) or use another one'),
 }
 
 
@@ -166,7 +166,7 @@ class WriteFault:
                         f'without summary (bag_reindex {bag} adds it once there is space)')
                      + ' (read it with rosbags.rosbag2.Reader or the mcap library)')
         return (f'{self.cause} writing {self.path} after {self.received} messages; {state}; '
-                f'{self.fix} and record again')
+                f'{self.fix}, then record again')
 
 
 class McapLog:
@@ -778,7 +778,7 @@ def reindex(bag_dir):
                 left = 'ends after its last whole record with a provisional end (readable)'
             raise BagWriteError(
                 f'{cause} writing {path}: no room for its summary and footer; {path.name} '
-                f'{left}, metadata.yaml untouched; {fix} and run bag_reindex {bag_dir} '
+                f'{left}, metadata.yaml untouched; {fix}, then run bag_reindex {bag_dir} '
                 'again') from None
         what = 'had no summary (writer killed?): summary and footer written' + (
             f', {dropped} bytes of a record cut off at its end dropped' if dropped else '')
@@ -788,7 +788,7 @@ def reindex(bag_dir):
         cause, fix = write_cause(exc)
         raise BagWriteError(
             f'{cause} writing {bag_dir / "metadata.yaml"}: it is as it was; {path.name} '
-            f'{what}; {fix} and run bag_reindex {bag_dir} again') from None
+            f'{what}; {fix}, then run bag_reindex {bag_dir} again') from None
     return (f'{bag_dir}: {info["message_count"]} messages on '
             f'{len(info["topics_with_message_count"])} topics; {path.name} {what}; '
             'metadata.yaml rebuilt')

@@ -312,7 +312,7 @@ def main(argv=None):
         if exc.errno in WRITE_FAULT_CAUSES:
             cause, fix = write_cause(exc)
             print(f'bag_recorder: error: {cause} creating the bag {args.output} (nothing '
-                  f'recorded, nothing left there); {fix} and record again', file=sys.stderr)
+                  f'recorded, nothing left there); {fix}, then record again', file=sys.stderr)
             return WRITE_FAULT_STATUS
         print(f'bag_recorder: error: cannot create the bag {args.output}: {exc.strerror}; '
               'give a new directory where you can write', file=sys.stderr)

@@ -192,7 +192,7 @@ def test_the_fault_line_names_cause_file_counts_and_fix(tmp_path, monkeypatch):
     assert f'after {writer.fault.received} messages' in line
     assert writer.fault.flushed < writer.fault.received <= len(written)
     assert f'holds the {writer.fault.flushed} messages flushed before' in line
-    assert 'free space' in line and 'record again' in line
+    assert 'free space, then record again' in line
 
 
 @pytest.mark.parametrize('err, fix', [(errno.EDQUOT, 'quota'), (errno.EFBIG, 'file size'),
@@ -253,7 +253,7 @@ def test_reindex_on_a_full_disk_works_in_place_or_leaves_the_bag_as_it_was(
             continue
         assert status == 3 and not out and err.count('\n') == 1, what
         assert err.startswith(f'bag_reindex: disk full (ENOSPC) writing {bag}/'), what
-        assert 'free space and run bag_reindex' in err, what
+        assert 'free space, then run bag_reindex' in err, what
         assert (bag / 'metadata.yaml').read_bytes() == meta_before, what
         # Never worse: unchanged, or readable after its last whole record (a cut record
         # replaced by a provisional end, the summary written when it fit).
@@ -288,6 +288,6 @@ def test_a_disk_full_at_creation_is_one_line_exit_3_and_leaves_nothing(
     assert bag_recorder.main(['bag_recorder', str(bag)]) == 3
     out, err = capsys.readouterr()
     assert not out and err == (f'bag_recorder: error: disk full (ENOSPC) creating the bag {bag} '
-                               '(nothing recorded, nothing left there); free space and record '
+                               '(nothing recorded, nothing left there); free space, then record '
                                'again\n')
     assert not bag.exists()
