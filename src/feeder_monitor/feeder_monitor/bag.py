@@ -733,8 +733,10 @@ class BagWriter:
         try:
             _write_metadata_yaml(self.path, info)
         except OSError as exc:
+            # The one written at the flush above says the same.
             if self.fault is None:
                 self._failed(exc, self.path / 'metadata.yaml')
+                self.fault.finished = True
 
 
 def reindex(bag_dir):

@@ -40,9 +40,10 @@ TOPICS = ('/disk/a', '/disk/b')
 class Disk:
     """A disk with ``free`` bytes left; files opened through ``open`` draw on it."""
 
-    def __init__(self, free, err=errno.ENOSPC):
+    def __init__(self, free, err=errno.ENOSPC, dead=False):
         self.free = free
         self.err = err
+        self.dead = dead        # True: once full, no write at all succeeds (a failed device)
         self.refused = 0
 
     def open(self, path, mode='r', *args, **kwargs):
@@ -61,6 +62,8 @@ class DiskFile:
         data = memoryview(data).cast('B')
         pos = self.raw.tell()
         room = max(0, self.size - pos) + self.disk.free
+        if self.disk.dead and self.disk.refused:
+            room = 0
         if room == 0 and len(data):
             self.disk.refused += 1
             raise OSError(self.disk.err, os.strerror(self.disk.err))
@@ -200,6 +203,31 @@ def test_the_fault_line_names_cause_file_counts_and_fix(tmp_path, monkeypatch):
 def test_each_cause_has_its_fix(tmp_path, monkeypatch, err, fix):
     writer, _, _ = record(tmp_path / 'bag', Disk(8000, err), monkeypatch)
     assert errno.errorcode[err] in writer.fault.line() and fix in writer.fault.line()
+
+
+def test_a_device_that_fails_for_good_is_said_and_reindex_recovers_what_was_flushed(
+        tmp_path, monkeypatch):
+    created, needed = _needed(tmp_path)
+    cut = 0
+    for free in range(created, created + needed, needed // 11):
+        bag = tmp_path / f'bag{free}'
+        writer, written, flushed = record(bag, Disk(free, errno.EIO, dead=True), monkeypatch)
+        line = writer.fault.line()
+        if writer.fault.intact:
+            # The last metadata.yaml at close, after the summary: nothing to undo.
+            assert writer.fault.path.name == 'metadata.yaml' and writer.fault.finished
+            assert f'holds the {writer.fault.flushed} messages flushed before' in line, line
+            assert read_both(bag) == written[:writer.fault.flushed]
+            continue
+        cut += 1
+        assert not writer.fault.finished
+        assert line.startswith(f'I/O error (EIO) writing {bag}/'), line
+        assert f'may end in a cut-off record: bag_reindex {bag} finishes it' in line, line
+        assert 'check the device (dmesg)' in line, line
+        assert 'metadata.yaml rebuilt' in reindex(bag)
+        got = read_both(bag)
+        assert got == written[:len(got)] and len(got) >= flushed, (free, len(got), flushed)
+    assert cut >= 5
 
 
 def _killed_bag(path, cut=0):
