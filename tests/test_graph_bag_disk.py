@@ -55,7 +55,7 @@ def read_counters(bag):
 
 @pytest.fixture
 def small_fs(tmp_path):
-    """A 256 KiB tmpfs at tmp_path/disk; skips (saying why) where mounting is not permitted."""
+    """Mount a 256 KiB tmpfs at tmp_path/disk; skip, saying why, where that is not permitted."""
     where = tmp_path / 'disk'
     where.mkdir()
     if os.geteuid() != 0:

@@ -154,7 +154,7 @@ class WriteFault:
         self.finished = False
 
     def line(self):
-        """The one line that says what happened, what the bag holds and what to do."""
+        """Return the one line that says what happened, what the bag holds, what to do."""
         bag = pathlib.Path(self.path).parent
         if not self.intact:
             state = (f'the .mcap may end in a cut-off record: bag_reindex {bag} finishes it '

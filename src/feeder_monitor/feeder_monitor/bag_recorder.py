@@ -46,7 +46,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 import rclpy.utilities
 
-from .bag import BagWriter, qos, WRITE_FAULT_CAUSES, WRITE_FAULT_STATUS, write_cause
+from .bag import BagWriter, qos, write_cause, WRITE_FAULT_CAUSES, WRITE_FAULT_STATUS
 
 NODE_NAME = 'feeder_bag_recorder'
 ALWAYS_EXCLUDED = ('/rosout', '/parameter_events')

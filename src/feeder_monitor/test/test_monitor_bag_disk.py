@@ -38,7 +38,7 @@ TOPICS = ('/disk/a', '/disk/b')
 
 
 class Disk:
-    """A disk with ``free`` bytes left; files opened through ``open`` draw on it."""
+    """A disk with ``free`` bytes left; files opened through ``open_file`` draw on it."""
 
     def __init__(self, free, err=errno.ENOSPC, dead=False):
         self.free = free
@@ -46,7 +46,8 @@ class Disk:
         self.dead = dead        # True: once full, no write at all succeeds (a failed device)
         self.refused = 0
 
-    def open(self, path, mode='r', *args, **kwargs):
+    def open_file(self, path, mode='r', *args, **kwargs):
+        """Open ``path`` as ``open`` does, its writes drawing on this disk."""
         return DiskFile(self, open(path, mode, *args, **kwargs))
 
 
@@ -103,7 +104,7 @@ def record(path, disk=None, monkeypatch=None, flushes=6, per_flush=40):
     the values written, and how many of them the last flush before the fault put on disk.
     """
     if disk is not None:
-        monkeypatch.setattr(bagmod, 'open', disk.open, raising=False)
+        monkeypatch.setattr(bagmod, 'open', disk.open_file, raising=False)
     writer = BagWriter(path)
     writer.add_topic(TOPICS[0], 'std_msgs/msg/Int32', [VOLATILE])
     written = []
@@ -125,7 +126,7 @@ def record(path, disk=None, monkeypatch=None, flushes=6, per_flush=40):
 
 
 def read_both(bag):
-    """The values in the bag by rosbags and by the mcap library; they must agree."""
+    """Return the values in the bag by rosbags and by the mcap library (they agree)."""
     from mcap.reader import make_reader
     with Reader(bag) as reader:
         by_rosbags = [int.from_bytes(raw[4:8], 'little') for _, _, raw in reader.messages()]
@@ -146,7 +147,7 @@ def _needed(tmp_path):
     """Bytes the bag's creation takes, and the whole recording (.mcap and metadata.yaml)."""
     disk = Disk(1 << 30)
     mp = pytest.MonkeyPatch()
-    mp.setattr(bagmod, 'open', disk.open, raising=False)
+    mp.setattr(bagmod, 'open', disk.open_file, raising=False)
     BagWriter(tmp_path / 'probe0')
     created = (1 << 30) - disk.free
     record(tmp_path / 'probe', disk, mp)
@@ -231,7 +232,7 @@ def test_a_device_that_fails_for_good_is_said_and_reindex_recovers_what_was_flus
 
 
 def _killed_bag(path, cut=0):
-    """A bag whose writer was killed after 3 flushes (and ``cut`` bytes into a 4th write)."""
+    """Make a bag whose writer was killed after 3 flushes (and ``cut`` bytes into a 4th)."""
     writer = BagWriter(path)
     writer.add_topic(TOPICS[0], 'std_msgs/msg/Int32', [VOLATILE])
     for k in range(1, 121):
@@ -266,7 +267,7 @@ def test_reindex_on_a_full_disk_works_in_place_or_leaves_the_bag_as_it_was(
         meta_before = (bag / 'metadata.yaml').read_bytes()
         readable_before = _readable(bag)
         disk = Disk(free)
-        monkeypatch.setattr(bagmod, 'open', disk.open, raising=False)
+        monkeypatch.setattr(bagmod, 'open', disk.open_file, raising=False)
         status = reindex_main([str(bag)])
         monkeypatch.undo()
         out, err = capsys.readouterr()
@@ -300,7 +301,7 @@ def test_reindex_with_no_byte_free_says_so(tmp_path, monkeypatch):
     bag = tmp_path / 'bag'
     mcap = _killed_bag(bag)
     before = mcap.read_bytes()
-    monkeypatch.setattr(bagmod, 'open', Disk(0).open, raising=False)
+    monkeypatch.setattr(bagmod, 'open', Disk(0).open_file, raising=False)
     with pytest.raises(BagError, match=r'^disk full \(ENOSPC\) writing .*no room for its '
                        r'summary and footer; bag.mcap is as it was \(readable as it is\)'):
         reindex(bag)
@@ -312,7 +313,7 @@ def test_a_disk_full_at_creation_is_one_line_exit_3_and_leaves_nothing(
         tmp_path, monkeypatch, capsys, free):
     from feeder_monitor import bag_recorder
     bag = tmp_path / 'bag'
-    monkeypatch.setattr(bagmod, 'open', Disk(free).open, raising=False)
+    monkeypatch.setattr(bagmod, 'open', Disk(free).open_file, raising=False)
     assert bag_recorder.main(['bag_recorder', str(bag)]) == 3
     out, err = capsys.readouterr()
     assert not out and err == (f'bag_recorder: error: disk full (ENOSPC) creating the bag {bag} '
