@@ -36,9 +36,18 @@ any moment the directory is a readable bag holding all but the last flush period
 statistics, chunk and metadata indexes) and the footer. ``reindex`` (``bag_reindex BAG``, like
 ``ros2 bag reindex``) rebuilds ``metadata.yaml`` from the ``.mcap`` and gives an ``.mcap``
 without a summary (a killed writer's, or one cut off mid-record) a summary and footer.
+
+A disk that refuses a write (ENOSPC, EDQUOT, EFBIG, EIO, ...) never leaves an unreadable bag:
+every write to the .mcap goes at the end of what is on disk, over the provisional end, and a
+refused one is undone by writing the provisional end back where it was (within the file's old
+size: no new space) and cutting the file there. ``BagWriter`` then stops writing, keeps the
+cause in ``fault`` (a :class:`WriteFault`; nothing is raised), and at ``close`` tries once to
+write the summary, which fits in the space the undone write gave back more often than not.
+``reindex`` on a full disk finishes the .mcap if the end fits, else puts back what it found.
 """
 
 from collections import defaultdict
+import errno
 import io
 import os
 import pathlib
@@ -67,6 +76,8 @@ CHUNK_BYTES = 1 << 20
 _MESSAGE = struct.Struct('<BQHIQQ')
 _RECORD_HEAD = struct.Struct('<BQ')
 _DUMPER = getattr(yaml, 'CSafeDumper', yaml.SafeDumper)
+# Exit status of bag_recorder and bag_reindex when the disk refused a write (2: bad input).
+WRITE_FAULT_STATUS = 3
 
 
 def qos_time(nanoseconds):
@@ -160,6 +171,61 @@ class BagError(Exception):
     """A bag that cannot be read or repaired; the text says what and where."""
 
 
+class BagWriteError(BagError):
+    """The disk refused a write of ``reindex``; the bag is no worse than it was."""
+
+
+# What a refused write means and what to do about it, by errno (others: their strerror).
+WRITE_FAULT_CAUSES = {
+    errno.ENOSPC: ('disk full', 'free space'),
+    errno.EDQUOT: ('disk quota exceeded', 'free space or raise the quota'),
+    errno.EFBIG: ('file too large', 'lift the file size limit (ulimit -f) or write shorter '
+                  'bags (--duration)'),
+    errno.EIO: ('I/O error', 'check the device (dmesg) or use another one'),
+}
+
+
+def write_cause(exc):
+    """Return (what, fix) of a refused write: ('disk full (ENOSPC)', 'free space')."""
+    name = errno.errorcode.get(exc.errno, str(exc.errno))
+    what, fix = WRITE_FAULT_CAUSES.get(exc.errno, (exc.strerror or str(exc), 'fix that'))
+    return f'{what} ({name})', fix
+
+
+class WriteFault:
+    """
+    A write the disk refused while recording; the writer wrote nothing after it.
+
+    ``errno``, ``path`` (the file), ``received`` (messages given to the writer by then),
+    ``flushed`` (messages in the bag: those put on disk before the fault), ``intact`` (the
+    .mcap was put back to a readable end) and ``finished`` (the summary fit at close).
+    """
+
+    def __init__(self, exc, path, received, flushed, intact):
+        self.errno = exc.errno
+        self.cause, self.fix = write_cause(exc)
+        self.path = path
+        self.received = received
+        self.flushed = flushed
+        self.intact = intact
+        self.finished = False
+
+    def line(self):
+        """Return the one line that says what happened, what the bag holds, what to do."""
+        bag = pathlib.Path(self.path).parent
+        if not self.intact:
+            state = (f'the .mcap may end in a cut-off record: bag_reindex {bag} finishes it '
+                     f'after its last whole record (of the {self.flushed} messages flushed '
+                     'before)')
+        else:
+            state = (f'the bag holds the {self.flushed} messages flushed before, '
+                     + ('closed with its summary' if self.finished else
+                        f'without summary (bag_reindex {bag} adds it once there is space)')
+                     + ' (read it with rosbags.rosbag2.Reader or the mcap library)')
+        return (f'{self.cause} writing {self.path} after {self.received} messages; {state}; '
+                f'{self.fix}, then record again')
+
+
 class McapLog:
     """
     An MCAP file that is a readable MCAP after every ``flush``.
@@ -183,13 +249,20 @@ class McapLog:
         self._index = defaultdict(list)
         self._chunk_times = None        # [start, end] of the chunk in memory
         self._last_entries = {}         # message index entries of the last chunk read
+        self._tail = _provisional_end()     # the bytes on disk from data_end to the file's end
+        self.intact = True              # False: a refused write could not be undone
+        self._mark()
 
     @classmethod
     def create(cls, path, profile, library):
         stream = open(path, 'xb', buffering=0)
         head = MAGIC + _record(Header(profile=profile, library=library))
         log = cls(stream, len(head))
-        log._write_at(0, head + _provisional_end())
+        try:
+            log._write_at(0, head + _provisional_end())
+        except OSError:
+            stream.close()
+            raise
         return log
 
     def _write_at(self, offset, data):
@@ -197,6 +270,52 @@ class McapLog:
         view = memoryview(data)
         while view:
             view = view[self._stream.write(view):]
+
+    def _mark(self):
+        """Remember what is on disk: a refused write goes back to it (``_undo``)."""
+        self._marked = (self.data_end, len(self.chunk_indexes), len(self.metadata_indexes),
+                        len(self.schemas), len(self.channels),
+                        {c: list(st) for c, st in self.stats.items()})
+
+    def _write_end(self, data):
+        """
+        Write ``data`` at data_end; if the disk refuses it, put the old end back and raise.
+
+        The old end (a provisional end, or what reindex found after the last whole record)
+        is written back where it was, within the file's old size, so it needs no new space,
+        and the file is cut after it. ``intact`` says whether that worked.
+        """
+        try:
+            self._write_at(self.data_end, data)
+        except OSError:
+            self._undo()
+            raise
+
+    def _undo(self):
+        """Put the file and the records held in memory back to the last mark."""
+        end, chunks, metas, schemas, channels, stats = self._marked
+        self.data_end = end
+        del self.chunk_indexes[chunks:]
+        del self.metadata_indexes[metas:]
+        self.metadata_names = {m.name for m in self.metadata_indexes}
+        for records, keep in ((self.schemas, schemas), (self.channels, channels)):
+            for key in list(records)[keep:]:
+                del records[key]
+        self.stats = {c: list(st) for c, st in stats.items()}
+        self._pending = bytearray()
+        self._chunk = bytearray()
+        self._index = defaultdict(list)
+        self._chunk_times = None
+        # A tail shorter than a provisional end goes back as it was (a cut record reindex
+        # found); else a provisional end takes its place (readable, and no longer).
+        tail = self._tail if len(self._tail) < len(_provisional_end()) else _provisional_end()
+        try:
+            self._write_at(end, tail)
+            self._stream.truncate(end + len(tail))
+            self.intact = True
+        except OSError:
+            self.intact = False
+        self._tail = tail
 
     def add_schema(self, name, encoding, data):
         schema_id = len(self.schemas) + 1
@@ -274,9 +393,11 @@ class McapLog:
         if not out:
             return False
         # One write: a kill leaves either the old provisional end or the new one intact
-        # (or, mid-write, a cut record that reindex drops).
-        self._write_at(self.data_end, out + _provisional_end())
+        # (or, mid-write, a cut record that reindex drops); a refused one is undone.
+        self._write_end(out + _provisional_end())
         self.data_end += len(out)
+        self._tail = _provisional_end()
+        self._mark()
         return True
 
     @property
@@ -325,9 +446,11 @@ class McapLog:
         out += summary + _record(Footer(summary_start=summary_start,
                                         summary_offset_start=summary_offset_start,
                                         summary_crc=crc)) + MAGIC
-        self._write_at(self.data_end, out)
-        self._stream.truncate(self.data_end + len(out))
-        self._stream.close()
+        try:
+            self._write_end(out)
+            self._stream.truncate(self.data_end + len(out))
+        finally:
+            self._stream.close()
 
     def close(self):
         """Close the file as it stands (flushed data and the provisional end stay readable)."""
@@ -349,6 +472,11 @@ class McapLog:
             raise BagError(f'cannot be read after byte {log.data_end} ({dropped} bytes follow, '
                            'more than a killed writer leaves); not repaired')
         log._stream = open(path, 'r+b', buffering=0)
+        if not complete:
+            # What follows the last whole record: a refused end goes back to it.
+            log._stream.seek(log.data_end)
+            log._tail = log._stream.read()
+            log._mark()
         return log, complete, dropped
 
     @classmethod
@@ -509,7 +637,16 @@ def bag_metadata(log, file_name, qos_cache=None):
 def _write_metadata_yaml(bag_dir, info):
     """Replace metadata.yaml atomically (a reader never sees half a file)."""
     tmp = bag_dir / 'metadata.yaml.tmp'
-    tmp.write_text(_yaml({'rosbag2_bagfile_information': info}))
+    data = _yaml({'rosbag2_bagfile_information': info}).encode()
+    try:
+        with open(tmp, 'wb', buffering=0) as fh:
+            view = memoryview(data)
+            while view:
+                view = view[fh.write(view):]
+    except OSError:
+        # The old metadata.yaml stays; the partial new one would only take space.
+        tmp.unlink(missing_ok=True)
+        raise
     os.replace(tmp, bag_dir / 'metadata.yaml')
 
 
@@ -524,13 +661,22 @@ class BagWriter:
         self.typestore = get_typestore(Stores.ROS2_KILTED)
         self.file_name = f'{self.path.name}.mcap'
         # rosbag2's defaults: chunked, no compression.
-        self._log = McapLog.create(self.path / self.file_name, 'ros2', LIBRARY)
+        try:
+            self._log = McapLog.create(self.path / self.file_name, 'ros2', LIBRARY)
+            _write_metadata_yaml(self.path, bag_metadata(self._log, self.file_name))
+        except OSError:
+            # A disk that refuses the first bytes: no half-made bag is left to trip over.
+            for name in (self.file_name, 'metadata.yaml'):
+                (self.path / name).unlink(missing_ok=True)
+            self.path.rmdir()
+            raise
         self._schemas = {}
         self._channels = {}
         self._qos_cache = {}
         self._last_log_time = 0
         self.closed = False
-        _write_metadata_yaml(self.path, self.metadata())
+        self.fault = None           # a WriteFault once the disk refused a write
+        self._received = 0
 
     def knows(self, msgtype):
         """
@@ -558,6 +704,8 @@ class BagWriter:
             raise ValueError(f'{msgtype} is neither in the Kilted type store nor an installed '
                              'message (share/<pkg>/msg/<Type>.msg on AMENT_PREFIX_PATH): build '
                              'and source the package that defines it')
+        if self.fault is not None:
+            return              # nothing more is written (its schema may be undone)
         if msgtype not in self._schemas:
             msgdef, _ = self.typestore.generate_msgdef(msgtype, ros_version=2)
             self._schemas[msgtype] = self._log.add_schema(msgtype, 'ros2msg', msgdef.encode())
@@ -577,20 +725,46 @@ class BagWriter:
         over after it is logged at the previous one's time): a killed writer's .mcap has no
         index, and readers of unindexed MCAP (rosbags) require log-time order.
         """
+        self._received += 1
+        if self.fault is not None:
+            return              # the disk refused a write: nothing more is written
         log_time_ns = max(int(log_time_ns), self._last_log_time)
         self._last_log_time = log_time_ns
-        self._log.add_message(self._channels[topic], log_time_ns, data,
-                              log_time_ns if publish_time_ns is None else int(publish_time_ns),
-                              int(sequence) & 0xFFFFFFFF)
+        try:
+            self._log.add_message(self._channels[topic], log_time_ns, data,
+                                  log_time_ns if publish_time_ns is None
+                                  else int(publish_time_ns), int(sequence) & 0xFFFFFFFF)
+        except OSError as exc:      # a full chunk is written at once
+            self._failed(exc, self.path / self.file_name)
 
     def flush(self):
         """Put the messages held in memory on disk and bring metadata.yaml up to date."""
-        if not self.closed and self._log.flush():
+        if self.closed or self.fault is not None:
+            return
+        before = self._log._marked
+        try:
+            if not self._log.flush():
+                return
+        except OSError as exc:
+            self._failed(exc, self.path / self.file_name)
+            return
+        try:
             _write_metadata_yaml(self.path, self.metadata())
+        except OSError as exc:
+            # rosbags reads the topics metadata.yaml lists: the .mcap goes back to the
+            # flush the old one describes.
+            self._log._marked = before
+            self._log._undo()
+            self._failed(exc, self.path / 'metadata.yaml')
+
+    def _failed(self, exc, path):
+        """Keep the first refused write (the .mcap is already back to its last flush)."""
+        self.fault = WriteFault(exc, path, self._received, self._log.message_count,
+                                self._log.intact)
 
     @property
     def counts(self):
-        return {topic: self._log.stats[c][0] for topic, c in self._channels.items()}
+        return {topic: self._log.stats.get(c, (0,))[0] for topic, c in self._channels.items()}
 
     @property
     def total(self):
@@ -601,13 +775,34 @@ class BagWriter:
         return bag_metadata(self._log, self.file_name, self._qos_cache)
 
     def close(self):
-        """Finish the MCAP file (summary, metadata record) and write metadata.yaml."""
+        """
+        Finish the MCAP file (summary, metadata record) and write metadata.yaml.
+
+        After a refused write (``fault``), or when the disk refuses these, the bag is left
+        with what was flushed and a provisional end (readable; ``reindex`` adds the summary),
+        and ``fault`` says so; nothing is raised.
+        """
         if self.closed:
             return
+        self.flush()                # what is in memory, with its metadata.yaml
         self.closed = True
         info = self.metadata()
-        self._log.finish([('rosbag2', {'serialized_metadata': _yaml(info)})])
-        _write_metadata_yaml(self.path, info)
+        try:
+            self._log.finish([('rosbag2', {'serialized_metadata': _yaml(info)})])
+        except OSError as exc:
+            if self.fault is None:
+                self._failed(exc, self.path / self.file_name)
+            self.fault.intact = self.fault.intact and self._log.intact
+            return
+        if self.fault is not None:
+            self.fault.finished = True
+        try:
+            _write_metadata_yaml(self.path, info)
+        except OSError as exc:
+            # The one written at the flush above says the same.
+            if self.fault is None:
+                self._failed(exc, self.path / 'metadata.yaml')
+                self.fault.finished = True
 
 
 def reindex(bag_dir):
@@ -638,10 +833,30 @@ def reindex(bag_dir):
     else:
         extra = [] if 'rosbag2' in log.metadata_names else [
             ('rosbag2', {'serialized_metadata': _yaml(info)})]
-        log.finish(extra)
+        found = log._tail
+        try:
+            log.finish(extra)
+        except OSError as exc:
+            cause, fix = write_cause(exc)
+            if not log.intact:
+                left = 'may now end in a cut-off record'
+            elif log._tail == found:
+                left = 'is as it was (readable as it is)'
+            else:
+                left = 'ends after its last whole record with a provisional end (readable)'
+            raise BagWriteError(
+                f'{cause} writing {path}: no room for its summary and footer; {path.name} '
+                f'{left}, metadata.yaml untouched; {fix}, then run bag_reindex {bag_dir} '
+                'again') from None
         what = 'had no summary (writer killed?): summary and footer written' + (
             f', {dropped} bytes of a record cut off at its end dropped' if dropped else '')
-    _write_metadata_yaml(bag_dir, info)
+    try:
+        _write_metadata_yaml(bag_dir, info)
+    except OSError as exc:
+        cause, fix = write_cause(exc)
+        raise BagWriteError(
+            f'{cause} writing {bag_dir / "metadata.yaml"}: it is as it was; {path.name} '
+            f'{what}; {fix}, then run bag_reindex {bag_dir} again') from None
     return (f'{bag_dir}: {info["message_count"]} messages on '
             f'{len(info["topics_with_message_count"])} topics; {path.name} {what}; '
             'metadata.yaml rebuilt')
@@ -660,7 +875,10 @@ def reindex_main(argv=None):
     for bag in args.bags:
         try:
             print(f'bag_reindex: {reindex(bag)}', flush=True)
+        except BagWriteError as exc:
+            print(f'bag_reindex: {exc}', file=sys.stderr, flush=True)
+            status = max(status, WRITE_FAULT_STATUS)
         except BagError as exc:
             print(f'bag_reindex: {exc}', file=sys.stderr, flush=True)
-            status = 2
+            status = max(status, 2)
     return status

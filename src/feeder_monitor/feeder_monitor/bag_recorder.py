@@ -27,7 +27,9 @@ hash they announce. Each message is stored with its receive time (log time) and 
 written) and printing a summary. Killed (SIGKILL, a crash), it loses at most the messages of the
 last ``--flush-period`` (0.5 s) + DRAIN_PERIOD (0.1 s): every flush puts them on disk and
 rewrites metadata.yaml, and the bag stays readable as it is (``bag_reindex`` gives its .mcap
-the summary a clean stop writes; see feeder_monitor.bag).
+the summary a clean stop writes; see feeder_monitor.bag). A write the disk refuses (full,
+quota, file size limit, I/O error) ends it with exit status 3 and one line naming the cause,
+what the bag holds and the fix; the bag keeps every message flushed before (feeder_monitor.bag).
 """
 
 import argparse
@@ -44,7 +46,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 import rclpy.utilities
 
-from .bag import BagWriter, qos
+from .bag import BagWriter, qos, write_cause, WRITE_FAULT_CAUSES, WRITE_FAULT_STATUS
 
 NODE_NAME = 'feeder_bag_recorder'
 ALWAYS_EXCLUDED = ('/rosout', '/parameter_events')
@@ -198,6 +200,8 @@ class BagRecorder(Node):
 
     def finished(self):
         """Why recording is over (the run helper stops the process), or None."""
+        if self.done is None and self.writer.fault is not None:
+            self.done = 'the disk refused a write'
         return self.done
 
     def _duration_over(self):
@@ -302,8 +306,17 @@ def main(argv=None):
     args = parse_args(rclpy.utilities.remove_ros_args(argv)[1:])
     try:
         writer = BagWriter(args.output)
-    except OSError as exc:      # FileExistsError included
+    except FileExistsError as exc:
         print(f'bag_recorder: {exc}', file=sys.stderr)
+        return 2
+    except OSError as exc:
+        if exc.errno in WRITE_FAULT_CAUSES:
+            cause, fix = write_cause(exc)
+            print(f'bag_recorder: error: {cause} creating the bag {args.output} (nothing '
+                  f'recorded, nothing left there); {fix}, then record again', file=sys.stderr)
+            return WRITE_FAULT_STATUS
+        print(f'bag_recorder: error: cannot create the bag {args.output}: {exc.strerror}; '
+              'give a new directory where you can write', file=sys.stderr)
         return 2
     made = []
 
@@ -317,6 +330,10 @@ def main(argv=None):
         status = run_node(make_node, 'bag_recorder', argv)
     finally:
         writer.close()
+    if writer.fault is not None:
+        # One line, instead of the summary: what failed, what the bag holds, the fix.
+        print(f'bag_recorder: error: {writer.fault.line()}', file=sys.stderr, flush=True)
+        return WRITE_FAULT_STATUS
     reason = (made[0].done or made[0].exit_reason) if made else 'not started'
     counts = ', '.join(f'{t}: {n}' for t, n in sorted(writer.counts.items()))
     print(f'bag_recorder: stopped: {reason}; {writer.total} messages on {len(writer.counts)} '
