@@ -64,10 +64,10 @@ def _parse_key(text, path):
         key = bytes.fromhex(body)
     except ValueError:
         raise KeyFileError(f'key file {path} does not hold a key in hex; make a new one with: '
-                        f'rm {path} (the nodes and the launch create it again)') from None
+                           f'rm {path} (the nodes and the launch create it again)') from None
     if len(key) < KEY_BYTES:
         raise KeyFileError(f'key file {path} holds {len(key)} bytes; at least {KEY_BYTES} are '
-                        f'needed: rm {path} (the nodes and the launch create it again)')
+                           f'needed: rm {path} (the nodes and the launch create it again)')
     return key
 
 
@@ -78,7 +78,7 @@ def load_key(path):
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, 'O_NOFOLLOW', 0))
     except FileNotFoundError:
         raise KeyFileError(f'key file {path} does not exist; create it with the launch, or give '
-                        'key_file:="" to use (and create) the default one') from None
+                           'key_file:="" to use (and create) the default one') from None
     except OSError as exc:
         if exc.errno == errno.ELOOP:
             raise KeyFileError(f'key file {path} is a symbolic link; give the file itself') \
@@ -90,11 +90,11 @@ def load_key(path):
             raise KeyFileError(f'key file {path} is not a regular file')
         if st.st_mode & 0o077:
             raise KeyFileError(f'key file {path} can be read by others (mode '
-                            f'{stat.S_IMODE(st.st_mode):04o}); make it private: chmod 600 '
-                            f'{path}')
+                               f'{stat.S_IMODE(st.st_mode):04o}); make it private: chmod 600 '
+                               f'{path}')
         if st.st_size > MAX_KEY_FILE_BYTES:
             raise KeyFileError(f'key file {path} is {st.st_size} bytes; a key file holds one key '
-                            f'in hex (at most {MAX_KEY_FILE_BYTES} bytes)')
+                               f'in hex (at most {MAX_KEY_FILE_BYTES} bytes)')
         data = os.read(fd, MAX_KEY_FILE_BYTES + 1)
     finally:
         os.close(fd)
@@ -134,7 +134,7 @@ def ensure_key(path):
 
 def node_key(path):
     """
-    The key a node signs or checks with: ``path``'s, or the default file's when ``path`` is ''.
+    Return the key a node signs or checks with: ``path``'s, or the default file's if it is ''.
 
     The default file is created when absent (so ``ros2 run`` works without a launch); a given
     path must exist: a mistyped path would otherwise make a key nobody else has.
@@ -147,6 +147,7 @@ def node_key(path):
                                f'{exc.strerror}; give key_file:=<a file of mode 0600>') \
                 from None
     return load_key(path)
+
 
 def _encode(label, fields):
     parts = []
@@ -169,7 +170,7 @@ def mac_ok(key, label, fields, tag):
 
 
 def new_session():
-    """A run's session id: 16 random hex digits, new at every start of a node."""
+    """Return a run's session id: 16 random hex digits, new at every start of a node."""
     return secrets.token_hex(8)
 
 

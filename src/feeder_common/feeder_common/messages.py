@@ -400,7 +400,7 @@ class VerdictCheck:
 
 def check_verdict(msg, key, monitor, now_ns, max_age_s=1.0):
     """
-    The one-call check of an ``edge1_ready`` / ``edge1_verdict`` message for a consumer.
+    Check an ``edge1_ready`` / ``edge1_verdict`` message in one call, for a consumer.
 
     ``ready_now`` only when the MAC verifies for ``monitor`` (e.g. '/feeder/feeder_monitor')
     under ``key`` (:func:`feeder_common.auth.node_key`), ``ready`` is true, and the monitor
@@ -430,10 +430,9 @@ def check_verdict(msg, key, monitor, now_ns, max_age_s=1.0):
     return VerdictCheck(not reason, authentic, int(msg.seq), stamp_ns, age, reason)
 
 
-
 def _signature(values):
     """
-    The ``session`` and ``mac`` of a signed status (a list of KeyValue); ('', b'') unsigned.
+    Return the ``session`` and ``mac`` of a signed status's values; ('', b'') unsigned.
 
     Either may be absent (an unsigned report still parses, so that the monitor can say it was
     unsigned); given twice, or not as CycleSigner writes them, is a ValueError.
@@ -489,7 +488,7 @@ class CycleSigner:
         self.session = session or auth.new_session()
 
     def cycle_status(self, seq, ok, message, sensor, stamp_ns, hardware_id):
-        """A signed ``cycle_status`` (values ``session`` and ``mac`` besides the usual)."""
+        """Build a signed ``cycle_status`` (values ``session`` and ``mac`` besides the usual)."""
         msg = cycle_status(seq, ok, message, sensor, stamp_ns, hardware_id)
         tag = auth.mac(self.key, auth.CYCLE_LABEL, auth.cycle_fields(
             self.node, self.session, seq, stamp_ns, 'completed' if ok else 'failed',
@@ -499,7 +498,7 @@ class CycleSigner:
         return msg
 
     def cycle_fired(self, seq, stamp_ns, hardware_id):
-        """A signed ``cycle_fired``: cycle ``seq`` is being fired (sent before the actuator moves)."""
+        """Build a signed ``cycle_fired``: cycle ``seq`` is being fired (before the arm moves)."""
         tag = auth.mac(self.key, auth.FIRED_LABEL,
                        auth.fired_fields(self.node, self.session, seq, stamp_ns))
         return DiagnosticStatus(

@@ -135,7 +135,7 @@ REALTIME_PRIORITY = ParamSpec(
 # of this file (feeder_common.auth); they must share it.
 KEY_FILE = ParamSpec(
     'key_file', '', 'HMAC key file shared by the driver (or its stand-in) and the monitor: one '
-    "key in hex, mode 0600; empty: $ROS_HOME/feeder/hmac.key (~/.ros/feeder/hmac.key), created "
+    'key in hex, mode 0600; empty: $ROS_HOME/feeder/hmac.key (~/.ros/feeder/hmac.key), created '
     'when absent; a given file must exist (the launch creates it)', read_only=True,
     max_length=4096)
 

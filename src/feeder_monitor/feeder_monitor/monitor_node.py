@@ -261,7 +261,7 @@ class MonitorNode(Node):
             table.popitem(last=False)
 
     def _cross_check(self, stamp_ns):
-        """A proximity that contradicts the signed bit of its cycle: the sensor path is broken."""
+        """Interrupt when a proximity contradicts the signed bit of its cycle (a broken path)."""
         if stamp_ns is None or stamp_ns not in self._recent_bits or \
                 stamp_ns not in self._recent_proximity:
             return
@@ -384,6 +384,7 @@ class MonitorNode(Node):
         stat.update({**self._gate.counts, **self._counts, 'bad_input': self._bad_input,
                      'cycle_status_publishers':
                          self.count_publishers(self.resolve_topic_name('cycle_status'))})
+
 
 def main(args=None):
     return run_node(MonitorNode, 'monitor_node', args)

@@ -483,7 +483,7 @@ class ReadinessMonitor:
 
     def new_run(self, reason):
         """
-        The driver started a new run (it restarted): an anomaly, and its seqs start afresh.
+        Take a new run of the driver (it restarted): an anomaly, and its seqs start afresh.
 
         Nothing of the old run's numbering carries over: neither the last seq judged nor the
         highest seq reported fired.

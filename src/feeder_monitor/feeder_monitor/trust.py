@@ -79,7 +79,7 @@ class ReportGate:
             return 'unsigned', 'unsigned report (no mac): not from a driver that holds the key'
         if not auth.mac_ok(self.key, label, fields, tag):
             return 'bad_mac', (f'report with a bad MAC: not signed by {self.driver_node} under '
-                               f'this monitor\'s key (key id {auth.key_id(self.key)}); the '
+                               f"this monitor's key (key id {auth.key_id(self.key)}); the "
                                'driver and the monitor must share one key file')
         return None
 

@@ -17,10 +17,10 @@ Issue 20 (attack 3, deliverable 5): no message crashes the monitor; bad input is
 
 The real MonitorNode runs in-process (own context, own domain); each of its subscription
 callbacks (``proximity``, ``cycle_status``, ``cycle_fired``, the driver's ``transition_event``,
-found by topic among the node's subscriptions) is called with hypothesis-generated messages as a subscriber
-receives them (tests/hostile_messages.py). No exception may escape, the node's own count of
-bad input (/diagnostics) is exactly the number of messages the parsers refuse, and afterwards
-a valid cycle still gets its verdict.
+found by topic among the node's subscriptions) is called with hypothesis-generated messages as
+a subscriber receives them (tests/hostile_messages.py). No exception may escape, the node's own
+count of bad input (/diagnostics) is exactly the number of messages the parsers refuse, and
+afterwards a valid cycle still gets its verdict.
 """
 
 import pathlib
