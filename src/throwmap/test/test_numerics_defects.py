@@ -126,3 +126,53 @@ def test_plate_drag_is_continuous_across_the_switch_to_the_series():
         below = drag(model, vx, vy, om * (1.0 - 1e-12), phi, edge)
         above = drag(model, vx, vy, om * (1.0 + 1e-12), phi, edge)
         assert np.abs(below - above).max() < 5e-14 * prm.coef
+
+
+# ------------------------------------------------------------ 2: mu = inf with restitution
+def random_impact(rng):
+    rx, ry = rng.uniform(-0.05, 0.05, 2)
+    vx, vy = rng.uniform(-3, 3), rng.uniform(-3, -0.1)
+    om, rho2 = rng.uniform(-8, 8), rng.uniform(1e-4, 2e-3)
+    return rx, ry, vx, vy, om, rho2
+
+
+def test_unbounded_friction_with_restitution_is_the_limit_of_large_mu():
+    """
+    mu = inf equals mu = 1e9 on random impacts with e > 0 (and the issue's named case).
+
+    Where the approach stops before the slip does (the case the old law got wrong, about 15 %
+    of these impacts) the limit leaves at u_n = e |u_n0|; brute-force Routh (reference_impact)
+    at mu = 1e3 is on the way there (O(1 / mu) off).
+    """
+    from reference_impact import routh_impact
+    from throwmap.internal import routh_stronge_impact
+    args = (-0.00528, 0.011585, -2.197713, -0.201155, -2.624605, 0.000268)
+    rx = args[0]
+    un0 = args[3] + args[4] * rx
+    got = routh_stronge_impact(*args, 0.5, math.inf)
+    assert got[1] + got[2] * rx == pytest.approx(0.5 * abs(un0), rel=1e-12)
+    assert got[2] == pytest.approx(-55.834, abs=1e-3)
+    big = np.array(routh_stronge_impact(*args, 0.5, 1e9))
+    assert np.abs(np.array(got) - big).max() < 1e-6
+    # brute force (small impulse steps) approaches it as mu grows: O(1 / mu)
+    errs = [np.abs(np.array(got) - np.array(routh_impact(*args, 0.5, mu, steps=steps)[0])).max()
+            for mu, steps in ((1e2, 200_000), (1e3, 2_000_000))]
+    assert errs[1] < 0.2 * errs[0] and errs[1] < 0.3, errs
+    rng = np.random.default_rng(1009)
+    early = 0
+    for _ in range(1009):
+        args = random_impact(rng)
+        rx, ry, vx, vy, om, rho2 = args
+        e = rng.uniform(0.05, 1.0)
+        inv = 1.0 / rho2
+        ut, un = vx - om * ry, vy + om * rx
+        if un < 0.0 and un - rx * ry * inv * (-ut / (1.0 + ry * ry * inv)) >= 0.0:
+            early += 1
+        got = np.array(routh_stronge_impact(*args, e, math.inf))
+        big = np.array(routh_stronge_impact(*args, e, 1e9))
+        weights = np.array([1.0, 1.0, math.sqrt(rho2)])
+        scale = abs(vx) + abs(vy) + math.sqrt(rho2) * abs(om)
+        assert (np.abs(got - big) * weights).max() < 1e-7 * scale, (args, e, got, big)
+        ke0 = vx * vx + vy * vy + rho2 * om * om
+        assert got[0] ** 2 + got[1] ** 2 + rho2 * got[2] ** 2 <= ke0 * (1 + 1e-12)
+    assert early > 50

@@ -120,7 +120,8 @@ def routh_stronge_impact(rx, ry, vx, vy, om, rho2, e, mu):
     Frictional impact at a contact point r = (rx, ry) from the CM on the arm (normal +y).
 
     Routh's method with Stronge's energetic restitution (module docstring). mu = inf is the
-    limit mu -> inf: slip stops at zero normal impulse unless the approach stops first; with
+    limit mu -> inf: slip stops at zero normal impulse unless the approach stops first (then
+    the contact leaves at u_n = e |u_n0|, or at the u_n where the slip stops if lower); with
     e = 0 the result is the sticking impact of eqs 7-9 wherever that impulse pushes (>= 0).
     Returns (vx, vy, om).
     """
@@ -137,11 +138,16 @@ def routh_stronge_impact(rx, ry, vx, vy, om, rho2, e, mu):
     eps = 1e-13 * (abs(ut) + abs(un))
     if math.isinf(mu) and ut != 0.0:
         # Unbounded friction (Routh as mu -> inf): a tangential impulse at zero normal impulse
-        # until the slip stops or, if sooner, the approach does (compression then ends with
-        # zero work, so restitution adds nothing and the point leaves still slipping).
+        # until the slip stops, u_n = u_n0 + ktn p_t on the way. If the approach stops first,
+        # compression and restitution both happen within this slip: their works are
+        # int u_n dp_t / mu, in the same ratio for every large mu, so Stronge's restitution
+        # (e^2 of the compression work given back, u_n linear in p_t) ends at u_n = e |u_n0|,
+        # or where the slip stops if that comes first. (Stopping at u_n = 0 was the e = 0
+        # answer for every e: not the limit of large mu.)
         d_pt = -ut / ktt
-        if un + ktn * d_pt >= 0.0:
-            d_pt = -un / ktn
+        un_stop = un + ktn * d_pt
+        if un_stop >= 0.0:
+            d_pt = (min(-e * un, un_stop) - un) / ktn
             return vx + d_pt, vy, om - ry * d_pt * inv
         pt += d_pt
         ut = 0.0
