@@ -163,7 +163,6 @@ def plate_drag_regularised(outline, cm, vx, vy, om, coef, v_reg, epsrel=1e-13):
     return -coef * s * fx / area, -coef * s * fy / area, -coef * s * tq / area
 
 
-
 def plate_drag_mp(outline, vx, vy, om, coef=1.0, dps=40, tol=1e-24):
     """
     Return the exact drag (force, torque about the origin) in high precision (mpmath).

@@ -164,8 +164,8 @@ def plate_moments(ou, ov, size, order=SERIES_ORDER):
         zk = np.ones_like(z)
         for k in range(order + 1):
             zl = np.ones_like(z)
-            for l in range(order + 2):
-                out[e, k, l] = (wz * zk * zl).sum()
+            for m in range(order + 2):
+                out[e, k, m] = (wz * zk * zl).sum()
                 zl = zl * zc
             zk = zk * z
         out[e] /= 0.5 * jac.sum()
@@ -284,10 +284,10 @@ def plate_drag_series(bx, by, om, size, mom):
     ck = 1.0 + 0j
     for k in range(order + 1):
         term = a_k * ck
-        for l in range(order + 1 - k):
-            force += term * mom[k, l]
-            torque += term * mom[k, l + 1]
-            term *= cc * ((-0.5 - l) / (l + 1.0))
+        for m in range(order + 1 - k):
+            force += term * mom[k, m]
+            torque += term * mom[k, m + 1]
+            term *= cc * ((-0.5 - m) / (m + 1.0))
         a_k *= (0.5 - k) / (k + 1.0)
         ck *= c
     force *= e_hat
