@@ -38,7 +38,8 @@ Phases (per unit mass, frame F, heights over the arm surface):
   graze shorter than a step is missed; the accuracy benchmark shows how often.
 * IMPACT at one vertex: the impact hook. A vertex that stays on the arm has its normal velocity
   removed (a further normal impulse, which only dissipates); a pinned pivot (not
-  ``unilateral``) is then caught by a sticking impulse.
+  ``unilateral``) is then caught by a sticking impulse. A pinned pivot also holds a vertex that
+  bounces off with no way back (free normal acceleration >= 0): that bounce is plastic.
 * CONTACT at one vertex P: sticking (rolling about P) or sliding along the arm, integrated with
   RK4 at ``roll_step``. Events: another vertex lands (impact there; if the old pivot would then
   be driven into the arm, the edge lands flat instead), the normal force turns negative

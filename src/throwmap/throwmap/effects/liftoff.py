@@ -28,10 +28,13 @@ normal force of the slipping contact turns negative (measured: docs/physics.md).
 Model: the closed-form catch (throwmap.catch) is run; the first roll that leaves the friction
 cone |Ft| <= mu N (N < 0 leaves it for every mu) is cut where it does (its path sampled, then
 bisection to 1e-14 rad), and from that rolling state the event simulator (throwmap.event_sim,
-no body force, the sticking impact law, a unilateral Coulomb contact with friction mu) slips,
-lifts off, flies, lands and settles. A throw whose rolls all stay in the cone is the base model's
-own, bit for bit (tested). mu: ``liftoff.mu``, else the scene's ``contact.mu``, else 1000 (the
-sticking limit: slip starts where N falls to |Ft| / 1000).
+no body force, the plastic impact with friction mu: Routh at e = 0, a unilateral Coulomb
+contact with friction mu) slips, lifts off, flies, lands and settles. The catch's impacts must
+use the same mu: where the e = 0 impact with friction mu is not the sticking one (the flight
+impact, a landing, or the rocking on the final edge that the exact settling rule skips), the
+whole throw is simulated from the release. A throw whose rolls and impacts all stay in the
+cone is the base model's own, bit for bit (tested). mu: ``liftoff.mu``, else the scene's
+``contact.mu``, else 1000 (the sticking limit: slip starts where N falls to |Ft| / 1000).
 
 With another effect that needs the event simulator (air_drag, backplate_friction), the whole
 throw runs there under this contact law. impact_restitution sets the contact law itself (its
@@ -47,8 +50,7 @@ import math
 
 import numpy as np
 
-from ._common import check_keys, number
-from .impact_restitution import routh_stronge_impact
+from ._common import check_keys, number, routh_stronge_impact
 from .. import event_sim
 from ..ballistic import first_contact, state_at
 from ..catch import (catch_at_contact, flat_landing_edge, pivot_normal, record, roll_pieces,
