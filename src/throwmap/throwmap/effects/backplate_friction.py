@@ -142,7 +142,8 @@ def plate_moments(ou, ov, size, order=SERIES_ORDER):
     ou, ov: the outline from the CM in every edge frame (Part.outline_frames), shape (n, m).
     Returns shape (n, order + 1, order + 2), complex. Exact up to rounding: a Gauss-Legendre
     rule in collapsed coordinates over the signed triangles (CM, a, b) integrates these
-    polynomials of degree <= 2 order + 1 exactly.
+    polynomials of degree <= 2 order + 1 exactly. Computed in the first frame; the others are
+    rotations of it (w_i = w_0 r_i, so their moments are r_i^(k - l) times the first's).
     """
     ou = np.atleast_2d(np.asarray(ou, dtype=float)) / size
     ov = np.atleast_2d(np.asarray(ov, dtype=float)) / size
@@ -151,25 +152,20 @@ def plate_moments(ou, ov, size, order=SERIES_ORDER):
     w = 0.5 * w
     su, sv = np.meshgrid(x, x, indexing='ij')          # u: out from the CM; v: along the edge
     wt = (np.outer(w, w) * su).ravel()
-    su = su.ravel()
-    sv = sv.ravel()
-    out = np.zeros((ou.shape[0], order + 1, order + 2), dtype=complex)
-    for e in range(ou.shape[0]):
-        a = ou[e] + 1j * ov[e]
-        b = np.roll(a, -1)
-        jac = (a.conj() * b).imag                          # twice each signed triangle's area
-        z = su[None, :] * ((1.0 - sv)[None, :] * a[:, None] + sv[None, :] * b[:, None])
-        wz = wt[None, :] * jac[:, None]
-        zc = z.conj()
-        zk = np.ones_like(z)
-        for k in range(order + 1):
-            zl = np.ones_like(z)
-            for m in range(order + 2):
-                out[e, k, m] = (wz * zk * zl).sum()
-                zl = zl * zc
-            zk = zk * z
-        out[e] /= 0.5 * jac.sum()
-    return out
+    a = ou[0] + 1j * ov[0]
+    b = np.roll(a, -1)
+    jac = (a.conj() * b).imag                          # twice each signed triangle's area
+    z = (su.ravel()[None, :] * ((1.0 - sv.ravel())[None, :] * a[:, None]
+                                + sv.ravel()[None, :] * b[:, None])).ravel()
+    wz = (wt[None, :] * jac[:, None]).ravel() / (0.5 * jac.sum())
+    powers = np.cumprod(np.vstack([np.ones_like(z), np.tile(z, (order + 1, 1))]), axis=0)
+    first = (powers[:order + 1] * wz) @ powers[:order + 2].conj().T
+    far = np.argmax(np.abs(a))
+    turn = (ou[:, far] + 1j * ov[:, far]) / a[far]     # frame i from frame 0: unit rotations
+    turn /= np.abs(turn)
+    k = np.arange(order + 1)[:, None]
+    m = np.arange(order + 2)[None, :]
+    return first[None, :, :] * turn[:, None, None] ** (k - m)[None, :, :]
 
 
 @njit
