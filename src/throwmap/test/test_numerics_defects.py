@@ -234,7 +234,7 @@ def test_liftoff_impacts_stay_inside_the_friction_cone():
         sx, sy, _ = sticking_impact(rx, ry, vx, vy, om, rho2)
         if sy - vy > 0.0:
             ratios.append(abs(sx - vx) / (sy - vy))
-        vx1, vy1, om1, bounces = liftoff.impact_law(rx, ry, vx, vy, om, rho2, prm)
+        vx1, vy1, om1, bounces = liftoff.impact(rx, ry, vx, vy, om, rho2, prm)
         pt, pn = vx1 - vx, vy1 - vy
         assert not bounces and pn >= 0.0
         assert abs(pt) <= mu * pn * (1.0 + 1e-12) + 1e-15, (rx, ry, vx, vy, om, pt, pn)
@@ -263,3 +263,26 @@ def test_liftoff_equals_the_consistent_model_state_by_state():
     assert (a['status'] == 0).all() and (b['status'] == 0).all()
     assert (a['edge'] == b['edge']).all()
     assert np.abs(a['R'] - b['R']).max() < 1e-9
+
+
+def test_liftoff_with_a_force_uses_its_mu_at_impacts_too():
+    """
+    With air_drag the whole throw is simulated; liftoff's impacts there use its mu as well.
+
+    liftoff + air_drag at mu 0.6 is impact_restitution (e = 0, unilateral, mu 0.6) + air_drag,
+    state by state (before: the composed simulator's impacts were the sticking ones).
+    """
+    mu = 0.6
+    air = {'density': 1.2, 'drag_coefficient': 1.2, 'frontal_area_cm2': 4, 'mass_g': 20}
+    lift = scene('triangle', effects=['air_drag', 'liftoff'], liftoff={'mu': mu}, air=air).model
+    cons = scene('triangle', contact={'mu': mu, 'restitution': 0.0, 'pivot': 'unilateral'},
+                 effects=['air_drag', 'impact_restitution'], air=air).model
+    rng = np.random.default_rng(8)
+    n = 40
+    edges = rng.choice(lift.part.stable_edges, n)
+    radii = np.array([lift.r_min(e) * 1.001 for e in edges]) + rng.uniform(0, 0.25, n)
+    a = lift.f_batch(edges, radii)
+    b = cons.f_batch(edges, radii)
+    assert (a['status'] == 0).all() and (b['status'] == 0).all()
+    assert (a['edge'] == b['edge']).all()
+    assert np.abs(a['R'] - b['R']).max() < 1e-12

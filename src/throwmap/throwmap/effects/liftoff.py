@@ -40,7 +40,8 @@ With another effect that needs the event simulator (air_drag, backplate_friction
 throw runs there under this contact law. impact_restitution sets the contact law itself (its
 ``contact.pivot: unilateral`` is this physics with restitution): a scene names one of them.
 
-Hooks: ``closed_motion``; Python: ``contact_law``. Scene: ``effects: [liftoff]``, optional
+Hooks: ``closed_motion``, ``impact`` (used where a force puts the whole throw in the event
+simulator); Python: ``contact_law``. Scene: ``effects: [liftoff]``, optional
 ``liftoff: {mu: 1000}``.
 """
 
@@ -92,8 +93,8 @@ def parse(scene):
 
 
 def slots(params):
-    """Fill the closed-form motion."""
-    return ('closed_motion',)
+    """Fill the closed-form motion, and the impact law (for a throw in the event simulator)."""
+    return ('closed_motion', 'impact')
 
 
 def contact_law(params):
@@ -108,15 +109,15 @@ def bundle(params, part, knobs):
 
 
 @njit
-def impact_law(rx, ry, vx, vy, om, rho2, prm):
-    """Apply the plastic impact with the rolls' friction mu (Routh, e = 0): in the cone."""
+def impact(rx, ry, vx, vy, om, rho2, prm):
+    """Apply the plastic impact with the rolls' friction mu (Routh, e = 0): in the cone (hook)."""
     vx1, vy1, om1 = routh_stronge_impact(rx, ry, vx, vy, om, rho2, 0.0, prm.mu)
     return vx1, vy1, om1, False
 
 
 # After the cone (or from the release, when an impact leaves it): slip, flight, impacts with
 # friction mu, settling (no body force).
-simulate = event_sim.build(impact=impact_law)
+simulate = event_sim.build(impact=impact)
 
 # An impact is the sticking one (eqs 7-9) when the e = 0 impact with friction mu agrees with it
 # to this fraction of the speeds (it does exactly, up to rounding, when it ends stuck).
