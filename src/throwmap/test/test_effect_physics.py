@@ -332,10 +332,11 @@ def test_plate_drag_is_the_exact_drag_of_a_uniform_lamina(vertices):
     """
     from reference_plate import plate_drag_exact as reference
     from throwmap import Part
-    from throwmap.internal import plate_drag_exact
+    from throwmap.internal import plate_drag_exact, plate_moments
     part = Part(np.array(vertices, dtype=float))
     ou, ov, cu, cv = part.outline_frames()
     size = float(part.vertex_radius.max())
+    mom = plate_moments(ou, ov, size)
     rng = np.random.default_rng(5)
     for _ in range(300):
         edge = int(rng.integers(part.n))
@@ -345,7 +346,7 @@ def test_plate_drag_is_the_exact_drag_of_a_uniform_lamina(vertices):
         # forms lose digits to cancellation: about 1e-7 at 200 m); 10 % pure translation
         om = math.copysign(rng.uniform(1, 20), rng.uniform(-1, 1)) if rng.uniform() < 0.9 else 0.0
         got = plate_drag_exact(vx, vy, om, phi, ou[edge], ov[edge], cu[edge], cv[edge], size,
-                               1.0, 0.0)
+                               mom[edge], 1.0, 0.0)
         c, s = math.cos(phi), math.sin(phi)
         outline = np.stack([c * ou[edge] - s * ov[edge], s * ou[edge] + c * ov[edge]], axis=1)
         ref = reference(outline, [0.0, 0.0], vx, vy, om, 1.0)
@@ -355,8 +356,8 @@ def test_plate_drag_is_the_exact_drag_of_a_uniform_lamina(vertices):
     k = 0
     px, py = ou[1][k], ov[1][k]
     om = 3.0
-    got = plate_drag_exact(om * py, -om * px, om, 0.0, ou[1], ov[1], cu[1], cv[1], size, 1.0,
-                           0.0)
+    got = plate_drag_exact(om * py, -om * px, om, 0.0, ou[1], ov[1], cu[1], cv[1], size,
+                           mom[1], 1.0, 0.0)
     ref = reference(np.stack([ou[1], ov[1]], axis=1), [0.0, 0.0], om * py, -om * px, om, 1.0)
     assert np.all(np.isfinite(got)) and got == pytest.approx(ref, abs=1e-9)
 

@@ -156,6 +156,18 @@ def states(model, count, seed=0):
     return edges, radii
 
 
+def flight_impact_normal_impulse(model, knobs, edge, R):
+    """Return the normal impulse of the base model's sticking impact ending the flight."""
+    from throwmap.ballistic import first_contact, state_at
+    from throwmap.catch import sticking_impact
+    from throwmap.pipeline import release_state
+    part = model.part.arrays
+    x0, y0, phi0, vx, vy, om = release_state(edge, R, model.w, model.h, part.d)
+    _, t, k = first_contact(edge, y0, phi0, vy, om, model.g, part, knobs)
+    rx, ry, _, xdot, ydot, _, _ = state_at(t, edge, k, x0, y0, phi0, vx, vy, om, model.g, part)
+    return sticking_impact(rx, ry, xdot, ydot, om, part.rho2)[1] - ydot
+
+
 def test_liftoff_is_the_base_model_bit_for_bit_where_the_arm_pushes():
     base = scene().model
     lift = scene(['liftoff']).model      # mu 1000: slip starts where N falls to |Ft| / 1000
@@ -163,8 +175,14 @@ def test_liftoff_is_the_base_model_bit_for_bit_where_the_arm_pushes():
     rb = base.f_batch(edges, radii)
     rl = lift.f_batch(edges, radii)
     low = np.array([base.throw(int(e), float(r)).min_normal_force for e, r in zip(edges, radii)])
-    push = low > 0.1    # |Ft| < 100 m/s^2 on these rolls: inside the cone throughout
-    assert push.sum() > 50 and (~push).sum() > 20
+    # |Ft| < 100 m/s^2 on these rolls: inside the cone throughout; and the impact at the end of
+    # the flight pushes (a grazing one can need a pulling impulse to stick, 2 of these 300:
+    # liftoff's impact does not pull there, issue 24)
+    pn = np.array([flight_impact_normal_impulse(base, lift.ctx.knobs, int(e), float(r))
+                   for e, r in zip(edges, radii)])
+    push = (low > 0.1) & (pn >= 0.0)
+    assert push.sum() > 50 and (~push).sum() > 20 and ((low > 0.1) & (pn < 0.0)).sum() <= 5
+    assert np.all(rb['R'][(low > 0.1) & (pn < 0.0)] != rl['R'][(low > 0.1) & (pn < 0.0)])
     for key in ('edge', 'R', 'net_rotation', 'status'):
         np.testing.assert_array_equal(rb[key][push], rl[key][push])
     # Where a roll needs a pull the result is the simulated one, not the base model's.

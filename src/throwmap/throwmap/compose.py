@@ -38,7 +38,7 @@ import os
 import sys
 import tempfile
 
-from .effects import EVENT_SLOTS
+from .effects import event_simulated, EVENT_SLOTS
 from .errors import ThrowmapError
 from .jit import COMPOSED_DIR_NAME, HERE, SOURCE_FINGERPRINT
 
@@ -153,7 +153,7 @@ def source(slots):
     text += '\n'
     for slot in ('perturb', 'release', 'check'):
         text += _slot(slot, fillers[slot])
-    if any(fillers[s] for s in EVENT_SLOTS):
+    if event_simulated(s for s in SLOT_CODE if fillers[s]):
         for slot in EVENT_SLOTS:
             text += _slot(slot, fillers[slot])
         text += ('simulate = event_sim.build(body_force, static_hold, impact)\n'

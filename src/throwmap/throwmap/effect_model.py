@@ -33,7 +33,7 @@ import numpy as np
 from . import compose
 from .accuracy import compiled_knobs, SimulatorAccuracy
 from .catch import throw_kind
-from .effects import EffectSet, EVENT_SLOTS, knob_defaults
+from .effects import EffectSet, event_simulated, EVENT_SLOTS, knob_defaults
 from .errors import ThrowmapError
 from .event_sim import STICKING_CONTACT
 from .jit import entry_point
@@ -105,7 +105,7 @@ class EffectModel(ThrowModel):
                                                        settle_rule),
                            laws[0][1] if laws else STICKING_CONTACT)
         filled = {s for slots in self.slots.values() for s in slots}
-        self._event_motion = bool(filled & set(EVENT_SLOTS))    # compose: the event simulator
+        self._event_motion = event_simulated(filled)    # compose: the event simulator
         self._draws = 'perturb' in filled
         self._sensor_models = [(m.read_sensor, p) for _, m, p in modules
                                if hasattr(m, 'read_sensor')]

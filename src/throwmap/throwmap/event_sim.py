@@ -38,7 +38,8 @@ Phases (per unit mass, frame F, heights over the arm surface):
   graze shorter than a step is missed; the accuracy benchmark shows how often.
 * IMPACT at one vertex: the impact hook. A vertex that stays on the arm has its normal velocity
   removed (a further normal impulse, which only dissipates); a pinned pivot (not
-  ``unilateral``) is then caught by a sticking impulse.
+  ``unilateral``) is then caught by a sticking impulse. A pinned pivot also holds a vertex that
+  bounces off with no way back (free normal acceleration >= 0): that bounce is plastic.
 * CONTACT at one vertex P: sticking (rolling about P) or sliding along the arm, integrated with
   RK4 at ``roll_step``. Events: another vertex lands (impact there; if the old pivot would then
   be driven into the arm, the edge lands flat instead), the normal force turns negative
@@ -218,7 +219,7 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         return x_new, y_new, p_new, vx_new, vy_new, om_new
 
     @njit(cache=False)
-    def bounce_resolved(rx, ry, vx, vy, om, phi, g, rho2, root, scale, edge, prm):
+    def bounce_resolved(rx, ry, vx, vy, om, phi, g, rho2, root, scale, edge, prm, unilateral):
         """
         Tell whether a bounce of the vertex at (rx, ry) is one the simulation can resolve.
 
@@ -226,13 +227,16 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         when it would come back (a_n < 0) sooner than ``root`` or rise by less than a few ulps
         of the coordinates (``scale``), the bounce is below resolution: a plastic contact. So
         restitution e -> 0 tends to the sticking model instead of a train of unresolved
-        micro-bounces.
+        micro-bounces. A vertex that would not come back (a_n >= 0: a roll about it needs a
+        pull) leaves a unilateral contact for good; a hinge (not ``unilateral``) holds it, so
+        that bounce is plastic too: the pivot stays bilateral, and e -> 0 tends to the hinge
+        model of e = 0 (the base model) state by state.
         """
         un = vy + om * rx
         _, ay, alpha = flight_rhs(vx, vy, om, phi, g, rho2, edge, prm)
         an = ay + alpha * rx - om * om * ry
         if an >= 0.0:
-            return True
+            return unilateral
         return -2.0 * un / an > root and -0.5 * un * un / an > 8.0 * EPS * scale
 
     @njit(cache=False)
@@ -482,7 +486,8 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
                     continue
                 vxa, vya, oma, bounces = impact(rx, ry, vx, vy, om, rho2, prm)
                 if bounces and bounce_resolved(rx, ry, vxa, vya, oma, phi, g, rho2, root,
-                                               abs(x) + abs(y) + size, edge, prm):
+                                               abs(x) + abs(y) + size, edge, prm,
+                                               unilateral):
                     nrec = _event(rec, nrec, EV_BOUNCE, k, -1, xk, om, oma, e_before,
                                   energy(vxa, vya, oma, y, g, rho2))
                     vx, vy, om = vxa, vya, oma
@@ -624,7 +629,8 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
                         mode = MODE_DONE
                     continue
                 if bounces and bounce_resolved(rx, ry, vxa, vya, oma, phi, g, rho2, root,
-                                               abs(x) + abs(y) + size, edge, prm):
+                                               abs(x) + abs(y) + size, edge, prm,
+                                               unilateral):
                     nrec = _event(rec, nrec, EV_BOUNCE, q, j, xq, om, oma, e_before,
                                   energy(vxa, vya, oma, y, g, rho2))
                     vx, vy, om = vxa, vya, oma

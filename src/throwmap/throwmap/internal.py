@@ -29,9 +29,10 @@ names what it reaches into, and a refactor sees it.
 
 from .catch import sticking_impact
 from .compose import source as composed_source
-from .effects.backplate_friction import plate_drag, plate_drag_exact
+from .effects.backplate_friction import plate_drag, plate_drag_exact, plate_moments
 from .effects.finite_carry import carry_margin, release_state as carry_release_state
 from .effects.impact_restitution import routh_stronge_impact
 
 __all__ = ['carry_margin', 'carry_release_state', 'composed_source', 'plate_drag',
-           'plate_drag_exact', 'routh_stronge_impact', 'sticking_impact']
+           'plate_drag_exact', 'plate_moments', 'routh_stronge_impact',
+           'sticking_impact']

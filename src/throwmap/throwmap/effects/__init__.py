@@ -71,6 +71,19 @@ SLOTS = ('perturb', 'release', 'body_force', 'static_hold', 'impact', 'check', '
 EVENT_SLOTS = ('body_force', 'static_hold', 'impact')     # these need the event simulator
 
 
+def event_simulated(filled):
+    """
+    Tell whether a throw with these filled slots runs in the event simulator.
+
+    A body force or a static hold needs it; so does an impact law, unless the same effect set
+    brings its own closed-form motion (liftoff: its impact law is for the event simulator it
+    runs itself, and for the whole throw when a force needs the simulator).
+    """
+    filled = set(filled)
+    return bool(filled & {'body_force', 'static_hold'}) or (
+        'impact' in filled and 'closed_motion' not in filled)
+
+
 def owned_keys():
     """Return {section: {key: effect}} for every scene key an effect owns."""
     owned = {}
@@ -175,5 +188,5 @@ def compose(names, scene):
     return EffectSet(tuple(names), {n: MODULES[n].parse(scene) for n in names})
 
 
-__all__ = ['compose', 'EffectSet', 'EVENT_SLOTS', 'knob_defaults', 'MODULES', 'NAMES',
-           'owned_keys', 'parse_names', 'REGISTRY', 'SceneValues', 'SLOTS']
+__all__ = ['compose', 'EffectSet', 'event_simulated', 'EVENT_SLOTS', 'knob_defaults', 'MODULES',
+           'NAMES', 'owned_keys', 'parse_names', 'REGISTRY', 'SceneValues', 'SLOTS']

@@ -36,7 +36,8 @@ negative).
 * 'hinge' (default, the paper's rolling model): the foam grips it; the part turns about it
   without slipping or lifting off (a vertex still slipping after the clipped impact is caught
   by a further sticking impulse, which only dissipates). mu then acts in impacts and in flat
-  sliding.
+  sliding. A bounce that would not come back by itself (a roll about the vertex needs a pull)
+  is held by the hinge: plastic, so e -> 0 tends to the e = 0 hinge model (event_sim).
 * 'unilateral': full Coulomb contact: the vertex slides when the friction force needed to hold
   it exceeds mu N, and lifts off (the part flies again) when N would turn negative.
 
@@ -56,7 +57,7 @@ from collections import namedtuple
 from dataclasses import dataclass
 import math
 
-from ._common import number
+from ._common import number, routh_stronge_impact
 from ..errors import InputError
 from ..event_sim import ContactLaw
 from ..jit import njit
@@ -112,106 +113,6 @@ def contact_law(params):
     """Friction and pivot model of the contact phases; sticking when e = 0 and mu = inf."""
     return ContactLaw(float(params.mu), bool(params.unilateral),
                       params.restitution == 0.0 and math.isinf(params.mu))
-
-
-@njit
-def routh_stronge_impact(rx, ry, vx, vy, om, rho2, e, mu):
-    """
-    Frictional impact at a contact point r = (rx, ry) from the CM on the arm (normal +y).
-
-    Routh's method with Stronge's energetic restitution (module docstring). mu = inf is the
-    limit mu -> inf: slip stops at zero normal impulse unless the approach stops first; with
-    e = 0 the result is the sticking impact of eqs 7-9 wherever that impulse pushes (>= 0).
-    Returns (vx, vy, om).
-    """
-    ut = vx - om * ry
-    un = vy + om * rx
-    if un >= 0.0:
-        return vx, vy, om    # separating or resting: no impact
-    inv = 1.0 / rho2
-    ktt = 1.0 + ry * ry * inv
-    knn = 1.0 + rx * rx * inv
-    ktn = -rx * ry * inv
-    pt = 0.0
-    pn = 0.0
-    eps = 1e-13 * (abs(ut) + abs(un))
-    if math.isinf(mu) and ut != 0.0:
-        # Unbounded friction (Routh as mu -> inf): a tangential impulse at zero normal impulse
-        # until the slip stops or, if sooner, the approach does (compression then ends with
-        # zero work, so restitution adds nothing and the point leaves still slipping).
-        d_pt = -ut / ktt
-        if un + ktn * d_pt >= 0.0:
-            d_pt = -un / ktn
-            return vx + d_pt, vy, om - ry * d_pt * inv
-        pt += d_pt
-        ut = 0.0
-        un += ktn * d_pt
-    work = 0.0
-    compressing = True
-    target = 0.0
-    for _ in range(16):
-        if abs(ut) > eps:
-            sigma = 1.0 if ut > 0.0 else -1.0
-            rate_t = -mu * sigma
-            stuck = False
-        else:
-            ut = 0.0
-            lam = -ktn / ktt
-            if abs(lam) <= mu:
-                rate_t = lam
-                stuck = True
-            else:
-                rate_t = mu if lam > 0.0 else -mu
-                stuck = False
-        dut = ktt * rate_t + ktn
-        dun = ktn * rate_t + knn
-        step = math.inf
-        ends_slip = False
-        if not stuck and ut != 0.0 and dut * ut < 0.0:
-            step = -ut / dut
-            ends_slip = True
-        if compressing:
-            if dun > 0.0:
-                s_c = -un / dun
-                if s_c <= step:
-                    step = s_c
-                    ends_slip = False
-            elif not ends_slip:
-                # No normal impulse stops the approach and the slip never ends: cannot happen
-                # for a rigid lamina (a jam's slip dies out, below), kept as a guard: stick.
-                det = ktt * knn - ktn * ktn
-                pt -= (knn * ut - ktn * un) / det
-                pn -= (-ktn * ut + ktt * un) / det
-                return vx + pt, vy + pn, om + (rx * pn - ry * pt) * inv
-            # Else a jam (Painleve): while slipping the approach speeds up, but the slip dies
-            # out first; the contact then sticks (|ktn| / ktt < knn / |ktn| <= mu) and
-            # compression ends with the point at rest; restitution follows as always.
-        else:
-            # W(p + s) = work + un s + dun s^2 / 2 reaches the target
-            rem = target - work
-            if dun > 0.0:
-                s_r = (-un + math.sqrt(un * un + 2.0 * dun * rem)) / dun
-            else:
-                s_r = rem / un if un > 0.0 else 0.0
-            if s_r <= step:
-                step = s_r
-                ends_slip = False
-        work += un * step + 0.5 * dun * step * step
-        pn += step
-        pt += rate_t * step
-        ut = 0.0 if ends_slip else ut + dut * step
-        un = un + dun * step
-        if ends_slip:
-            continue
-        if compressing:
-            compressing = False
-            un = 0.0
-            target = work * (1.0 - e * e)
-            if e == 0.0:
-                break
-        elif not ends_slip:
-            break
-    return vx + pt, vy + pn, om + (rx * pn - ry * pt) * inv
 
 
 @njit

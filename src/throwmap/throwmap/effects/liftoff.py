@@ -28,16 +28,20 @@ normal force of the slipping contact turns negative (measured: docs/physics.md).
 Model: the closed-form catch (throwmap.catch) is run; the first roll that leaves the friction
 cone |Ft| <= mu N (N < 0 leaves it for every mu) is cut where it does (its path sampled, then
 bisection to 1e-14 rad), and from that rolling state the event simulator (throwmap.event_sim,
-no body force, the sticking impact law, a unilateral Coulomb contact with friction mu) slips,
-lifts off, flies, lands and settles. A throw whose rolls all stay in the cone is the base model's
-own, bit for bit (tested). mu: ``liftoff.mu``, else the scene's ``contact.mu``, else 1000 (the
-sticking limit: slip starts where N falls to |Ft| / 1000).
+no body force, the plastic impact with friction mu: Routh at e = 0, a unilateral Coulomb
+contact with friction mu) slips, lifts off, flies, lands and settles. The catch's impacts must
+use the same mu: where the e = 0 impact with friction mu is not the sticking one (the flight
+impact, a landing, or the rocking on the final edge that the exact settling rule skips), the
+whole throw is simulated from the release. A throw whose rolls and impacts all stay in the
+cone is the base model's own, bit for bit (tested). mu: ``liftoff.mu``, else the scene's
+``contact.mu``, else 1000 (the sticking limit: slip starts where N falls to |Ft| / 1000).
 
 With another effect that needs the event simulator (air_drag, backplate_friction), the whole
 throw runs there under this contact law. impact_restitution sets the contact law itself (its
 ``contact.pivot: unilateral`` is this physics with restitution): a scene names one of them.
 
-Hooks: ``closed_motion``; Python: ``contact_law``. Scene: ``effects: [liftoff]``, optional
+Hooks: ``closed_motion``, ``impact`` (used where a force puts the whole throw in the event
+simulator); Python: ``contact_law``. Scene: ``effects: [liftoff]``, optional
 ``liftoff: {mu: 1000}``.
 """
 
@@ -47,10 +51,11 @@ import math
 
 import numpy as np
 
-from ._common import check_keys, number
+from ._common import check_keys, number, routh_stronge_impact
 from .. import event_sim
 from ..ballistic import first_contact, state_at
-from ..catch import catch_at_contact, pivot_normal, record, roll_pieces
+from ..catch import (catch_at_contact, flat_landing_edge, pivot_normal, record, roll_pieces,
+                     sticking_impact)
 from ..jit import njit
 from ..status import (ERR_SETTLE_CAP, EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_LANDING, EV_LIFTOFF,
                       OK, REC_COLS)
@@ -88,13 +93,13 @@ def parse(scene):
 
 
 def slots(params):
-    """Fill the closed-form motion."""
-    return ('closed_motion',)
+    """Fill the closed-form motion, and the impact law (for a throw in the event simulator)."""
+    return ('closed_motion', 'impact')
 
 
 def contact_law(params):
     """For the event simulator: Coulomb friction mu, a pivot that may slip and lift off."""
-    return event_sim.ContactLaw(float(params.mu), True, True)
+    return event_sim.ContactLaw(float(params.mu), True, math.isinf(params.mu))
 
 
 def bundle(params, part, knobs):
@@ -103,8 +108,43 @@ def bundle(params, part, knobs):
     return LiftoffParams(float(params.mu), np.zeros((rows, REC_COLS)))
 
 
-# After the cone: slip, flight, impacts under the sticking law, settling (no body force).
-simulate = event_sim.build()
+@njit
+def impact(rx, ry, vx, vy, om, rho2, prm):
+    """Apply the plastic impact with the rolls' friction mu (Routh, e = 0): in the cone (hook)."""
+    vx1, vy1, om1 = routh_stronge_impact(rx, ry, vx, vy, om, rho2, 0.0, prm.mu)
+    return vx1, vy1, om1, False
+
+
+# After the cone (or from the release, when an impact leaves it): slip, flight, impacts with
+# friction mu, settling (no body force).
+simulate = event_sim.build(impact=impact)
+
+# An impact is the sticking one (eqs 7-9) when the e = 0 impact with friction mu agrees with it
+# to this fraction of the speeds (it does exactly, up to rounding, when it ends stuck).
+STICK_RTOL = 1e-12
+
+
+@njit
+def sticks(rx, ry, vx, vy, om, rho2, mu):
+    """Tell whether the e = 0 impact with friction mu is the sticking impact of eqs 7-9."""
+    rho = math.sqrt(rho2)
+    ax, ay, ao = sticking_impact(rx, ry, vx, vy, om, rho2)
+    bx, by, bo = routh_stronge_impact(rx, ry, vx, vy, om, rho2, 0.0, mu)
+    tol = STICK_RTOL * (abs(vx) + abs(vy) + rho * abs(om))
+    return abs(ax - bx) <= tol and abs(ay - by) <= tol and rho * abs(ao - bo) <= tol
+
+
+@njit
+def landing_sticks(i, rec, part, mu):
+    """Tell whether the closed-form catch's landing in row i is the impact with friction mu."""
+    q = int(rec[i, 1])
+    j = int(rec[i, 2])
+    p = int(rec[i, 8])
+    om = rec[i, 4]
+    # just before it: rolling about p at rate om with edge j flat (its resting frame)
+    vx = om * part.V[j][p]
+    vy = -om * part.U[j][p]
+    return sticks(part.U[j][q], part.V[j][q], vx, vy, om, part.rho2, mu)
 
 
 @njit
@@ -170,6 +210,39 @@ def roll_cone_exit(alpha, omega, target, lp, rho2, g_abs, mu):
 
 
 @njit
+def rocking_sticks(i, rec, part, g_abs, mu):
+    """
+    Tell whether the rocking after the last landing (row i) stays stuck with friction mu.
+
+    The closed-form catch ends a throw whose last landing keeps turning on a stable edge by
+    the exact settling rule (it rocks down to rest where it landed). Each rock rolls about the
+    landed vertex q up to a turning point and back, then lands on the other vertex p of the
+    edge: the friction the roll needs is checked along its path, the landing's impact like
+    the catch's (its impulse ratio does not depend on the rate, so one check covers them all).
+    """
+    q = int(rec[i, 1])
+    j = int(rec[i, 2])
+    p = int(rec[i, 8])
+    om = rec[i, 5]
+    lq = part.vrad[q]
+    inertia = part.rho2 + lq * lq
+    a0 = part.acw[q] if q == j else part.accw[q]
+    energy_k = om * om + 2.0 * g_abs * lq * math.sin(a0) / inertia
+    peak = min(energy_k * inertia / (2.0 * g_abs * lq), 1.0)
+    a_turn = math.asin(peak)
+    if a0 > 0.5 * math.pi:
+        a_turn = math.pi - a_turn
+    for k in range(CONE_SAMPLES + 1):
+        a = a0 + (a_turn - a0) * k / CONE_SAMPLES
+        n, ft = roll_forces(a, energy_k, lq, inertia, g_abs)
+        if n < 0.0 or abs(ft) > mu * n:
+            return False
+    # back down, rolling about q at -om, onto p (edge j flat)
+    return sticks(part.U[j][p], part.V[j][p], -om * part.V[j][q], om * part.U[j][q], -om,
+                  part.rho2, mu)
+
+
+@njit
 def _touch(lo, hi, x):
     if math.isfinite(x):
         return min(lo, x), max(hi, x)
@@ -202,6 +275,15 @@ def closed_motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec):
         return status, -1, nan, nan, nan, 0, -1, 0, math.inf, -math.inf
     rx, ry, x_cm, xdot, ydot, phi, energy = state_at(t, edge, k, x0, y0, phi0, vx, vy, om, g,
                                                      part)
+    # The closed-form catch's impacts stick; where the e = 0 impact with friction mu does not
+    # (outside the cone, or a slip that outlasts compression), the whole throw is simulated
+    # with it from the release: the impacts and the rolls then use the same friction.
+    if flat_landing_edge(math.atan2(-ry, -rx), k, knobs.flat_landing_tol, part) >= 0:
+        inside = abs(xdot) <= prm.mu * max(-ydot, 0.0)
+    else:
+        inside = sticks(rx, ry, xdot, ydot, om, part.rho2, prm.mu)
+    if not inside:
+        return simulate(edge, x0, y0, phi0, vx, vy, om, g, part, knobs, ctx.law, prm, rec)
     st, j, r1, rot, imp, ns, lo, hi = catch_at_contact(k, phi, rx, ry, x_cm, xdot, ydot, om,
                                                        energy, g_abs, part, knobs, scratch)
     lift = -1
@@ -210,13 +292,22 @@ def closed_motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec):
     if st == OK:
         for i in range(min(ns, scratch.shape[0])):
             if scratch[i, 0] == EV_LANDING:
+                # the roll that ends in this landing, then the landing's impact
                 a_lift, w_lift = roll_cone_exit(scratch[i, 9], scratch[i, 10], scratch[i, 11],
                                                 part.vrad[int(scratch[i, 8])], part.rho2, g_abs,
                                                 prm.mu)
                 if not math.isnan(a_lift):
                     lift = i
                     break
+                if not landing_sticks(i, scratch, part, prm.mu):
+                    return simulate(edge, x0, y0, phi0, vx, vy, om, g, part, knobs, ctx.law,
+                                    prm, rec)
     if lift < 0:
+        last = min(ns, scratch.shape[0]) - 1
+        if (st == OK and not knobs.first_stable and last >= 0 and scratch[last, 0] == EV_LANDING
+                and scratch[last, 5] != 0.0
+                and not rocking_sticks(last, scratch, part, g_abs, prm.mu)):
+            return simulate(edge, x0, y0, phi0, vx, vy, om, g, part, knobs, ctx.law, prm, rec)
         for i in range(min(ns, scratch.shape[0])):
             if i < rec.shape[0]:
                 _copy_row(rec, i, scratch, i)
