@@ -120,42 +120,6 @@ def parse_cycle_status(msg):
 
 
 @dataclass(frozen=True)
-class EdgeVerdict:
-    """A parsed ``edge1_verdict``: the monitor's answer for cycle ``seq``."""
-
-    seq: int
-    stamp_ns: Optional[int]
-    ready: bool
-    state: str
-    anomaly: str            # '' unless the cycle revealed an anomaly
-
-
-def edge_verdict(seq, stamp_ns, ready, state, anomaly=None, hardware_id=''):
-    """Build an ``edge1_verdict``; ``stamp_ns`` None: the cycle had no usable stamp."""
-    return DiagnosticStatus(
-        level=DiagnosticStatus.ERROR if anomaly else DiagnosticStatus.OK, name=VERDICT_NAME,
-        message=anomaly or state, hardware_id=hardware_id,
-        values=[KeyValue(key='seq', value=str(int(seq))),
-                KeyValue(key='stamp', value='none' if stamp_ns is None
-                         else stamp_text(stamp_ns)),
-                KeyValue(key='ready', value='true' if ready else 'false'),
-                KeyValue(key='state', value=str(state))])
-
-
-def parse_edge_verdict(msg):
-    """Parse an ``edge1_verdict``; ValueError naming what is wrong."""
-    values = {kv.key: kv.value for kv in msg.values}
-    try:
-        seq = int(values['seq'])
-        ready = {'true': True, 'false': False}[values['ready']]
-    except (KeyError, ValueError) as exc:
-        raise ValueError(f'edge1_verdict without a usable seq/ready ({exc!r})') from None
-    stamp = _optional_stamp(values)
-    return EdgeVerdict(seq, stamp, ready, values.get('state', ''),
-                       msg.message if msg.level == DiagnosticStatus.ERROR else '')
-
-
-@dataclass(frozen=True)
 class PredictedState:
     """A parsed ``predicted/state``: where the predictor has the part after cycle ``seq``."""
 
