@@ -208,6 +208,7 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
         list(range(1, N + 1))
     # The signed statements and verdicts read back as sent: every one still verifies under the
     # run's key (a bag is evidence), seq by seq as the test saw them live.
+
     def fields(v):
         return (v.seq, v.stamp.sec, v.stamp.nanosec, v.ready, v.state, v.anomaly, v.session,
                 v.sent.sec, v.sent.nanosec, bytes(v.mac))

@@ -20,7 +20,8 @@ The sim stands in for the hardware with the design scene of `throwmap design-sea
 (s = 0.005: +-s w, +-s d_min) and writes its truth log; the monitor runs on the noise-free
 design scene, as it would beside a real feeder. Every verdict is checked against the true
 part (no false ready) and the readies per cycle after the warm-up and the settling (issue 20:
-no ready while a pattern check is off) against the design's prediction (a 99.7 % Wilson interval that fails when the rate is off by about 40 %).
+no ready while a pattern check is off) against the design's prediction (a 99.7 % Wilson
+interval that fails when the rate is off by about 40 %).
 The long run: bench/design_graph.py.
 """
 

@@ -29,11 +29,11 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from feeder_common import auth
+from feeder_common import auth, qos
 from feeder_common.messages import check_verdict, cycle_status
 from feeder_interfaces.msg import Verdict
 from feeder_nodes import (Collector, Diagnostics, LATCHED, MONITOR, monitor, PredictedStates,
-                          predictor, RELIABLE, STARTUP_TIMEOUT, sim_as_hardware, Statements,
+                          predictor, STARTUP_TIMEOUT, sim_as_hardware, Statements,
                           status_values, TRIANGLE, Verdicts, wait_for_monitor,
                           wait_for_readers, watch_monitor)
 import pytest
@@ -49,23 +49,22 @@ FORGED = 50
 # waits until the monitor (and the test) read its writers, publishes ``count`` reports of
 # sensor 1 from seq ``first`` with a matching proximity each, unsigned or signed as the driver
 # (its name and current session) under a key that is not the feeder's, waits until the readers
-# acknowledged them, and leaves the graph at once.
+# acknowledged them, and leaves the graph at once (about 50 ms after its last report).
 FORGER = """
 import sys, time
 import rclpy
 from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.duration import Duration
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Range
-from feeder_common import auth
+from feeder_common import auth, qos
 from feeder_common.messages import CycleSigner, cycle_status, proximity
 mode, first, count, key_path, session, readers = sys.argv[1:7]
 first, count, readers = int(first), int(count), int(readers)
 rclpy.init()
 node = rclpy.create_node('forger')
-qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-status_pub = node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', qos)
-prox_pub = node.create_publisher(Range, '/feeder/proximity', qos)
+# the driver's own QoS (the monitor's reader asks for a liveliness lease of 1 s)
+status_pub = node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
+prox_pub = node.create_publisher(Range, '/feeder/proximity', qos.PROXIMITY)
 end = time.monotonic() + 30
 while status_pub.get_subscription_count() < readers or prox_pub.get_subscription_count() < 1:
     if time.monotonic() > end:
@@ -175,7 +174,7 @@ def test_a_replayed_report_is_refused_and_a_replayed_ready_reads_stale(graph, ro
     genuine = next(m for m in statuses.msgs if int(status_values(m)['seq']) == last.seq)
     ready_stmt = next(m for m, c in zip(ready.msgs, ready.checked)
                       if c.ready_now and c.seq == last.seq)
-    pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', RELIABLE)
+    pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
     ros.spin_until(lambda: pub.get_subscription_count() >= 2, 20.0, 'the monitor')
 
     # At once: the same seq again (a duplicate) is refused.
@@ -283,7 +282,7 @@ def test_a_huge_seq_does_not_hang_the_predictor(graph, ros):
     pred = predictor(graph)
     states = PredictedStates(ros)
     diags = Diagnostics(ros)
-    pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', RELIABLE)
+    pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
     ros.spin_until(lambda: pub.get_subscription_count() >= 1, 60.0, 'the predictor')
     ros.spin_for(0.5)
     stamp = ros.node.get_clock().now().nanoseconds
