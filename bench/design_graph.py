@@ -23,7 +23,8 @@ hardware on the design plus release errors within the floor's box (every throw's
 throwmap.search.noisy_design_scene) and writes its truth log; a predictor and the monitor run on
 the noise-free design scene, as beside a real feeder. Processes on loopback DDS, own
 ROS_DOMAIN_ID. After N cycles the edge1_verdict stream is judged against the truth
-(feeder_monitor.feed_check): readies per cycle after the warm-up with a 95 % Wilson interval
+(feeder_monitor.feed_check; every verdict's signature checked under the run's own key):
+readies per cycle after the warm-up and the settling with a 95 % Wilson interval
 against the prediction (the monitor's analysis: the sensor's detection rate in the limit set;
 the design kernel's figure printed beside it), false readies (must be 0), anomalies.
 
@@ -64,13 +65,14 @@ class Listener(BenchNode):
 
     def __init__(self, rclpy):
         from diagnostic_msgs.msg import DiagnosticStatus
+        from feeder_interfaces.msg import Verdict
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         super().__init__(rclpy, 'feeder_design_graph')
         qos = QoSProfile(depth=10_000, reliability=ReliabilityPolicy.RELIABLE)
         self.statuses, self.verdicts = [], []
         self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
                                       self.statuses.append, qos)
-        self.node.create_subscription(DiagnosticStatus, '/feeder/edge1_verdict',
+        self.node.create_subscription(Verdict, '/feeder/edge1_verdict',
                                       self.verdicts.append, qos)
 
 
@@ -83,7 +85,8 @@ def kernel_prediction(scene):
 
 
 def run_one(rclpy, design_path, floor, args, out):
-    from feeder_common.messages import parse_edge_verdict
+    from feeder_common import auth
+    from feeder_common.messages import check_verdict
     from feeder_monitor.feed_check import design_prediction, judge_feed
     from feeder_sim.truth import read_truth_log
     from throwmap import load_scene
@@ -99,15 +102,18 @@ def run_one(rclpy, design_path, floor, args, out):
     procs = Processes(logs)
     lis = Listener(rclpy)
     ns = ['-r', '__ns:=/feeder']
+    key_file = logs / 'hmac.key'        # the run's own key (mode 0600)
+    key = auth.ensure_key(key_file)
+    k = ['-p', f'key_file:={key_file}']
     try:
         procs.start('sim_hw', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-r',
                     '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p',
                     f'scene:={noisy}', '-p', f'cycle_period:={args.period}', '-p',
-                    f'truth_log:={truth_path}')
+                    f'truth_log:={truth_path}', *k)
         procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-p',
-                    f'scene:={design_path}')
+                    f'scene:={design_path}', *k)
         procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
-                    f'scene:={design_path}')
+                    f'scene:={design_path}', *k)
         lis.spin_until(lambda: lis.node.count_subscribers('/feeder/cycle_status') >= 3, 120,
                        'the readers of cycle_status', procs)
         lis.spin_until(lambda: lis.node.count_publishers('/feeder/edge1_verdict') >= 1, 120,
@@ -128,17 +134,22 @@ def run_one(rclpy, design_path, floor, args, out):
         lis.close()
         procs.stop_all()
     header, truth = read_truth_log(truth_path)
-    verdicts = {}
-    for msg in lis.verdicts:
-        v = parse_edge_verdict(msg)
-        verdicts[v.seq] = (v.ready, v.anomaly)
-    report = judge_feed(verdicts, truth, an.sensor.goal_edge, an.sensor.detection_rate,
-                        rules.warmup_cycles)
+    verdicts, unsigned = {}, 0
+    for v in lis.verdicts:
+        ok = check_verdict(v, key, '/feeder/feeder_monitor', 0, max_age_s=float('inf')).authentic
+        unsigned += not ok
+        verdicts[v.seq] = (v.ready and ok, v.anomaly or ('' if ok else 'unsigned verdict'))
+    if unsigned:
+        print(f'  {unsigned} verdicts NOT signed by /feeder/feeder_monitor under the run key')
+    # Rates from the first cycle that can be ready: the warm-up and the settling done.
+    first = max(rules.warmup_cycles, rules.settle_cycles)
+    report = judge_feed(verdicts, truth, an.sensor.goal_edge, an.sensor.detection_rate, first)
     kernel = kernel_prediction(design)
     fired = len(truth)
     print(f'\n{name}: h {design.h * 100:.4f} cm, {design.release_speed * 57.29578:.2f} deg/s, '
           f'goal edge {an.sensor.goal_edge}, sensor {an.sensor.radius * 100:.2f} cm, warm-up '
-          f'{rules.warmup_cycles} cycles; release errors {args.distribution} within '
+          f'{rules.warmup_cycles} cycles, settling {rules.settle_cycles}; release errors '
+          f'{args.distribution} within '
           f'+-{floor * design.release_speed * 57.29578:.3f} deg/s, '
           f'+-{floor * design.part.d_min * 1000:.3f} mm (s = {floor})')
     print(f'  {fired} cycles fired in {wall:.1f} s, {len(verdicts)} verdicts')

@@ -116,8 +116,8 @@ class Probe(BenchNode):
     def __init__(self, rclpy):
         from diagnostic_msgs.msg import DiagnosticStatus
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from feeder_interfaces.msg import Verdict
         from sensor_msgs.msg import Range
-        from std_msgs.msg import Bool
         super().__init__(rclpy, 'feeder_bench')
         reliable = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE)
         latched = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE,
@@ -125,14 +125,15 @@ class Probe(BenchNode):
         self.prox, self.ready, self.status, self.verdicts = [], [], [], []
         self.node.create_subscription(Range, '/feeder/proximity',
                                       lambda m, i: self.prox.append(i), reliable)
-        self.node.create_subscription(Bool, '/feeder/edge1_ready',
+        self.node.create_subscription(Verdict, '/feeder/edge1_ready',
                                       lambda m, i: self.ready.append(i), latched)
         self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
                                       lambda m, i: self.status.append((_seq(m), i)), reliable)
-        # The monitor publishes edge1_ready, then the cycle's edge1_verdict (with its seq); it
-        # also republishes edge1_ready while idle, so cycles are matched through the verdicts.
-        self.node.create_subscription(DiagnosticStatus, '/feeder/edge1_verdict',
-                                      lambda m, i: self.verdicts.append((_seq(m), i)), reliable)
+        # The monitor publishes edge1_ready, then the cycle's edge1_verdict (the same signed
+        # Verdict, with its seq); it also republishes edge1_ready while idle (and lowers it when
+        # a cycle fires), so cycles are matched through the verdicts.
+        self.node.create_subscription(Verdict, '/feeder/edge1_verdict',
+                                      lambda m, i: self.verdicts.append((m.seq, i)), reliable)
 
     def spin_for(self, seconds):
         end = time.monotonic() + seconds
@@ -165,8 +166,17 @@ def probe_realtime():
         set_realtime_priority(PROBE_PRIORITY, inherit=False)
 
 
+def run_key(log_dir):
+    """``('-p', 'key_file:=...')``: the run's own HMAC key file (made in ``log_dir``, 0600)."""
+    from feeder_common import auth
+    path = pathlib.Path(log_dir) / 'hmac.key'
+    auth.ensure_key(path)
+    return ('-p', f'key_file:={path}')
+
+
 def start(procs, which, period):
     rt = ('-p', f'realtime_priority:={REALTIME_PRIORITY}') if REALTIME_PRIORITY else ()
+    rt += run_key(procs.log_dir)
     if 'sim' in which:
         procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
                     '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p',

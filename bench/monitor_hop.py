@@ -20,9 +20,10 @@ The sim runs as hardware (a process, 100 Hz); the monitor runs in this process w
 time.perf_counter_ns() around its callbacks and the calls inside them, so the figures are the
 monitor's own work (robust to other load on the machine, unlike a wall-clock p99 across
 processes). ``cycle_status entry -> edge1_ready published`` is the part of the hop the
-monitor's code adds before ``edge1_ready`` leaves; ``stamp -> ... entry`` is the cycle's stamp
-(system clock, set by the sim before it publishes) to the callback's start: sim work after the
-stamp, transport and the executor's dispatch. Asserts nothing. Usage (after
+monitor's code adds before ``edge1_ready`` leaves (parsing, the report's MAC check in
+``ReportGate.admit``, the rules, the signed ``Verdict``); ``stamp -> ... entry`` is the
+cycle's stamp (system clock, set by the sim before it publishes) to the callback's start: sim
+work after the stamp, transport and the executor's dispatch. Asserts nothing. Usage (after
 ``. scripts/setup.sh``):
 
     python bench/monitor_hop.py [--executor events|single] [--seconds 10]
@@ -60,12 +61,12 @@ def timed(times, key, fn):
 
 def instrument(times):
     """Wrap the monitor's callbacks and the calls inside them (class attributes)."""
-    from feeder_common import graph, messages
-    from feeder_monitor import monitor_node, readiness
+    from feeder_common import messages
+    from feeder_monitor import monitor_node, readiness, trust
     mark = {}
     node_cls = monitor_node.MonitorNode
     on_status, on_proximity, publish_ready = (node_cls._on_cycle_status, node_cls._on_proximity,
-                                              node_cls._publish_ready)
+                                              node_cls._publish_statement)
 
     def cycle_status(self, msg):
         mark['status'] = t0 = time.perf_counter_ns()
@@ -83,19 +84,19 @@ def instrument(times):
         on_proximity(self, msg)
         times.setdefault('proximity callback (whole)', []).append(time.perf_counter_ns() - t0)
 
-    def ready(self, value):
-        publish_ready(self, value)
+    def ready(self):
+        msg = publish_ready(self)
         if 'status' in mark:
             times.setdefault('cycle_status entry -> edge1_ready published', []).append(
                 time.perf_counter_ns() - mark.pop('status'))
+        return msg
 
-    node_cls._on_cycle_status, node_cls._on_proximity, node_cls._publish_ready = \
+    node_cls._on_cycle_status, node_cls._on_proximity, node_cls._publish_statement = \
         cycle_status, proximity, ready
-    graph.PublisherGuard.crowded = timed(times, '  PublisherGuard.crowded',
-                                         graph.PublisherGuard.crowded)
-    graph.PublisherGuard.check = timed(times, '  PublisherGuard.check', graph.PublisherGuard.check)
-    readiness.CyclePairer.add_status = timed(times, '  CyclePairer.add_status',
-                                             readiness.CyclePairer.add_status)
+    trust.ReportGate.admit = timed(times, '  ReportGate.admit (MAC, age, session, seq)',
+                                   trust.ReportGate.admit)
+    monitor_node.signed_verdict = timed(times, '  signed_verdict',
+                                        monitor_node.signed_verdict)
     readiness.ReadinessMonitor.completed = timed(times, '  ReadinessMonitor.completed',
                                                  readiness.ReadinessMonitor.completed)
     monitor_node.parse_cycle_status = timed(times, '  parse_cycle_status',
@@ -119,15 +120,20 @@ def main():
     from std_srvs.srv import SetBool
     times = {}
     node_cls = instrument(times)
+    from feeder_common import auth
     procs = Processes(pathlib.Path(tempfile.mkdtemp(prefix='monitor_hop-')))
+    key_file = str(procs.log_dir / 'hmac.key')      # the run's own key (mode 0600)
+    auth.ensure_key(key_file)
     rclpy.init()
     try:
         procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
                     '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p',
-                    f'scene:={SCENE}', '-p', f'cycle_period:={args.period}')
+                    f'scene:={SCENE}', '-p', f'cycle_period:={args.period}',
+                    '-p', f'key_file:={key_file}')
         executor = make_executor(args.executor)
         node = node_cls(namespace='/feeder',
-                        parameter_overrides=[Parameter('scene', value=SCENE)])
+                        parameter_overrides=[Parameter('scene', value=SCENE),
+                                             Parameter('key_file', value=key_file)])
         executor.add_node(node)
         client = node.create_client(SetBool, '/feeder/feeder_driver/enable')
 

@@ -26,9 +26,12 @@ read with the mcap reader (not the recorder's code) and every cycle is checked:
 * the truth of a cycle is the geometry of the predicted state (the scene is deterministic, so
   the predictor's state is the simulated part's): the sensor sees the part, and whether it
   lies on the goal edge; the sim's sensor bit must equal it;
-* ``edge1_verdict``: one per cycle; ready exactly when the part is seen on the goal edge after
-  the warm-up. It counts false ready, missed ready after the warm-up, and anomalies (the
-  triangle's orbit has none: each one is false);
+* ``edge1_verdict`` (signed ``feeder_interfaces/Verdict``): one per cycle, every one signed by
+  the monitor under the run's key (``hmac.key`` in the output folder); ready exactly when the
+  part is seen on the goal edge after the warm-up and the settling (the monitor's rules,
+  derived here as the node derives them). It counts false ready, missed ready after the
+  warm-up and settling, and anomalies (the triangle's orbit has none: each one is false);
+  ``edge1_ready`` statements: signed, and ready only for a cycle whose verdict was ready;
 * memory: every node's RSS (/proc/<pid>/status) sampled every few seconds; the growth over
   the second half of the run, per 1000 cycles. The recorder holds the index of every chunk
   it wrote (the bag's summary needs it at the end, as rosbag2's MCAP writer holds its own):
@@ -70,15 +73,24 @@ def rss_kb(pid):
     return 0
 
 
-def start(procs, bag):
+def key_path(out):
+    """The run's HMAC key file (made, mode 0600, when absent): the sim and the monitor's."""
+    from feeder_common import auth
+    path = pathlib.Path(out) / 'hmac.key'
+    auth.ensure_key(path)
+    return path
+
+
+def start(procs, bag, key):
     ns = ['-r', '__ns:=/feeder']
+    k = ['-p', f'key_file:={key}']
     procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-r',
                 '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p', f'scene:={SCENE}',
-                '-p', f'cycle_period:={PERIOD}')
+                '-p', f'cycle_period:={PERIOD}', *k)
     procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-p',
-                f'scene:={SCENE}')
+                f'scene:={SCENE}', *k)
     procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
-                f'scene:={SCENE}')
+                f'scene:={SCENE}', *k)
     procs.start('recorder', 'feeder_monitor', 'bag_recorder', bag, '--topics', *TOPICS,
                 '--ros-args', *ns)
 
@@ -121,14 +133,28 @@ def read_bag(bag):
     return out
 
 
-def reconcile(msgs):
+def first_ready_throw(scene):
+    """The first judged throw that can be ready: after the monitor's warm-up and settling."""
+    from feeder_monitor.readiness import limit_set_orbit, rules_from_analysis
+    from throwmap import analyse, scene_analysis
+    base = analyse(scene)
+    rules = rules_from_analysis(scene, scene_analysis(scene, 0.0, base),
+                                limit_set_orbit(scene, base, 20000))
+    return max(rules.warmup_cycles, rules.settle_cycles + 1)
+
+
+def reconcile(msgs, key):
     """Count, cycle by cycle, what the bag shows against the geometry's truth."""
     import numpy as np
-    from feeder_common.messages import (parse_cycle_status, parse_edge_verdict,
+    from feeder_common.messages import (check_verdict, parse_cycle_status,
                                         parse_predicted_state)
     from throwmap import analyse, load_scene, sees
     scene = load_scene(SCENE)
     sensor = analyse(scene).sensor
+    monitor = '/feeder/feeder_monitor'
+
+    def signed(v):
+        return check_verdict(v, key, monitor, 0, max_age_s=float('inf')).authentic
     statuses = [parse_cycle_status(m) for m in msgs.get('/feeder/cycle_status', [])]
     n = len(statuses)
     seqs = [s.seq for s in statuses]
@@ -154,17 +180,22 @@ def reconcile(msgs):
     bits = np.array([bool(s.sensor) for s in statuses[:m]], dtype=bool)
     problems['sensor bit != geometry'] = int((bits != seen).sum())
     truth = seen & (edges == sensor.goal_edge) & \
-        (np.arange(1, m + 1) >= sensor.warmup_throws)
+        (np.arange(1, m + 1) >= first_ready_throw(scene))
     verdicts = {}
     dup = 0
-    for v in (parse_edge_verdict(x) for x in msgs.get('/feeder/edge1_verdict', [])):
+    for v in msgs.get('/feeder/edge1_verdict', []):
         dup += v.seq in verdicts
         verdicts[v.seq] = v
     problems['cycles without a verdict'] = sum(1 for s in seqs if s not in verdicts)
     problems['duplicate verdicts'] = dup
+    problems['verdicts not signed'] = sum(not signed(v) for v in verdicts.values())
+    statements = msgs.get('/feeder/edge1_ready', [])
+    problems['edge1_ready statements not signed'] = sum(not signed(v) for v in statements)
+    problems['edge1_ready true without a ready verdict'] = sum(
+        1 for v in statements if v.ready and not (v.seq in verdicts and verdicts[v.seq].ready))
     ready = np.array([verdicts[k + 1].ready if k + 1 in verdicts else False for k in range(m)])
     problems['false ready'] = int((ready & ~truth).sum())
-    problems['missed ready after warm-up'] = int((truth & ~ready).sum())
+    problems['missed ready after warm-up and settling'] = int((truth & ~ready).sum())
     problems['anomalies (false)'] = sum(1 for v in verdicts.values() if v.anomaly)
     return n, int(truth.sum()), problems
 
@@ -251,10 +282,15 @@ def chunk_index_bytes(channels, chunks=2000):
     return grown / chunks
 
 
+def auth_key(out):
+    from feeder_common import auth
+    return auth.load_key(pathlib.Path(out) / 'hmac.key')
+
+
 def judge(out, samples, args, load0):
     """Reconcile the bag, judge the memory, print the table; the exit status."""
     bag = out / 'bag'
-    n, ready_truth, problems = reconcile(read_bag(bag))
+    n, ready_truth, problems = reconcile(read_bag(bag), auth_key(out))
     growth = memory_growth(samples, n)
     chunks, channels = bag_chunks(bag)
     per_chunk = chunk_index_bytes(channels)
@@ -323,7 +359,7 @@ def main():
     drv = Driver(rclpy)
     samples = {}
     try:
-        start(procs, bag)
+        start(procs, bag, key_path(out))
         drv.spin_until(lambda: drv.node.count_subscribers('/feeder/cycle_status') >= 3, 120,
                        'the readers of cycle_status', procs)
         drv.spin_until(lambda: drv.node.count_publishers('/feeder/edge1_verdict') >= 1, 120,

@@ -19,7 +19,10 @@ Demo of the feeder graph on one scene: sim as hardware, predictor, monitor and b
     scripts/demo_graph.py OUT_DIR [--cycles 300] [--period 0.02] [--scene scenes/triangle.yaml]
 
 Starts the nodes as processes (the colcon install in ros2_ws/install) on a fresh ROS domain
-with DDS on loopback, cycles the feeder, prints every edge1_ready as it happens and a summary,
+with DDS on loopback and a fresh HMAC key of its own (the sim and the monitor sign with it),
+cycles the feeder, prints every edge1_ready that a consumer may act on as it happens (the
+monitor's signed statement, checked with feeder_common.messages.check_verdict: its seq, the
+cycle's sample stamp, ready) and a summary,
 stops everything and leaves OUT_DIR/bag (rosbag2 MCAP), OUT_DIR/cycles.csv and
 OUT_DIR/ready.png. Exit status 0 when every verdict agreed with the predicted state, 1 if not,
 2 on a set-up problem. ROS glue only: the physics is throwmap's, the logic the nodes'.
@@ -33,6 +36,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
@@ -129,33 +133,40 @@ def main():
     os.environ['ROS_DOMAIN_ID'] = str(domain)
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     procs = Processes(out / 'logs')
+    # The run's own key (mode 0600, in a private temporary folder): ~/.ros is left alone.
+    from feeder_common import auth
+    key_dir = tempfile.mkdtemp(prefix='feeder-demo-')
+    key_file = os.path.join(key_dir, 'hmac.key')
+    auth.ensure_key(key_file)
     t0 = time.monotonic()
     print(f'demo_graph: {args.scene.name}, {args.cycles} cycles every {args.period} s, '
           f'ROS_DOMAIN_ID={domain} (loopback only), output in {out}', flush=True)
     try:
         scene = str(args.scene.resolve())
+        key = f'key_file:={key_file}'
         procs.start('sim_hw', 'feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder',
                     '-r', '__node:=feeder_driver', '-p', 'hardware_mode:=true',
-                    '-p', f'scene:={scene}', '-p', f'cycle_period:={args.period}')
+                    '-p', f'scene:={scene}', '-p', f'cycle_period:={args.period}', '-p', key)
         procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', '-r',
-                    '__ns:=/feeder', '-p', f'scene:={scene}')
+                    '__ns:=/feeder', '-p', f'scene:={scene}', '-p', key)
         procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', '-r',
-                    '__ns:=/feeder', '-p', f'scene:={scene}')
+                    '__ns:=/feeder', '-p', f'scene:={scene}', '-p', key)
         procs.start('recorder', 'feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
                     '__ns:=/feeder')
-        return run(args, scene, out, procs, t0)
+        return run(args, scene, out, procs, t0, auth.load_key(key_file))
     finally:
         procs.stop_all()
+        shutil.rmtree(key_dir, ignore_errors=True)
         if lock is not None:
             lock.close()
 
 
-def run(args, scene_path, out, procs, t0):
+def run(args, scene_path, out, procs, t0, key):
     import rclpy
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-    from feeder_common.messages import parse_predicted_state
-    from std_msgs.msg import Bool
+    from feeder_common.messages import check_verdict, parse_predicted_state
+    from feeder_interfaces.msg import Verdict
     from std_srvs.srv import SetBool
     from throwmap import analyse, load_scene, sees
 
@@ -180,11 +191,17 @@ def run(args, scene_path, out, procs, t0):
     node.create_subscription(DiagnosticStatus, '/feeder/cycle_status', keep('status'), reliable)
     node.create_subscription(DiagnosticStatus, '/feeder/predicted/state', keep('predicted'),
                              reliable)
-    node.create_subscription(Bool, '/feeder/edge1_ready', keep('ready'), latched)
-    # One verdict per judged cycle, with its seq (edge1_ready is the latched state, which the
-    # monitor also republishes while idle: it cannot be matched to cycles by counting).
-    node.create_subscription(DiagnosticStatus, '/feeder/edge1_verdict', keep('verdict'),
-                             reliable)
+    monitor = '/feeder/feeder_monitor'
+
+    def on_ready(msg):
+        # What a consumer does with each statement: check it when it arrives.
+        got['ready'].append(check_verdict(msg, key, monitor,
+                                          node.get_clock().now().nanoseconds))
+
+    node.create_subscription(Verdict, '/feeder/edge1_ready', on_ready, latched)
+    # One verdict per judged cycle, with its seq (edge1_ready is the current statement, which
+    # the monitor also republishes while idle: it cannot be matched to cycles by counting).
+    node.create_subscription(Verdict, '/feeder/edge1_verdict', keep('verdict'), reliable)
     node.create_subscription(DiagnosticArray, '/diagnostics', on_diag, reliable)
 
     def spin_until(cond, timeout, what):
@@ -200,6 +217,8 @@ def run(args, scene_path, out, procs, t0):
                    for i in node.get_subscriptions_info_by_topic(topic))
 
     spin_until(lambda: got['ready'], STARTUP_TIMEOUT, 'the monitor')
+    spin_until(lambda: 'feeder_monitor: readiness' in diags, STARTUP_TIMEOUT,
+               'the monitor diagnostics')
     spin_until(lambda: node.count_subscribers('/feeder/cycle_status') >= 4 and
                node.count_subscribers('/feeder/proximity') >= 2, STARTUP_TIMEOUT,
                'the predictor, the monitor and the recorder')
@@ -219,30 +238,35 @@ def run(args, scene_path, out, procs, t0):
         if not fut.result().success:
             raise SystemExit(f'demo_graph: enable {on} refused: {fut.result().message}')
 
-    printed = [0]
+    printed = {'next': 0, 'seqs': set()}
 
     def seq_of(msg):
         return int({kv.key: kv.value for kv in msg.values}['seq'])
 
-    def ready_of(msg):
-        return {kv.key: kv.value for kv in msg.values}.get('ready') == 'true'
+    def signed(msg):
+        return check_verdict(msg, key, monitor, 0, max_age_s=float('inf')).authentic
 
     def states():
         """The predicted state of each cycle, by seq (R None: no part on the arm)."""
         return {p.seq: p for p in map(parse_predicted_state, got['predicted'])}
 
     def report():
-        verdicts = got['verdict']
+        """Print each statement that was ready when it came (once per cycle), with its state."""
+        checks = got['ready']
         known = states()
-        while printed[0] < len(verdicts):
-            seq = seq_of(verdicts[printed[0]])
-            if seq not in known:
-                break
-            if ready_of(verdicts[printed[0]]):
-                edge, R = known[seq].edge, known[seq].R
+        while printed['next'] < len(checks):
+            c = checks[printed['next']]
+            if c.ready_now and c.seq not in printed['seqs']:
+                if c.seq not in known:
+                    break               # its prediction is on its way
+                printed['seqs'].add(c.seq)
+                edge, R = known[c.seq].edge, known[c.seq].R
                 where = 'no part on the arm' if R is None else f'R = {100 * R:6.2f} cm'
-                print(f'  cycle {seq:4d}: edge1_ready  {where}, edge {edge}', flush=True)
-            printed[0] += 1
+                sec, nsec = divmod(c.stamp_ns, 10 ** 9)
+                print(f'  cycle {c.seq:4d}: edge1_ready true (signed, sent '
+                      f'{1000 * c.sent_age_s:.1f} ms before it came), stamp {sec}.{nsec:09d}; '
+                      f'{where}, edge {edge}', flush=True)
+            printed['next'] += 1
 
     t_run = time.monotonic()
     enable(True)
@@ -264,9 +288,16 @@ def run(args, scene_path, out, procs, t0):
 
     # Summary: every verdict against the prediction and the sensor geometry. A false ready is
     # one whose part is not seen on the goal edge; a miss, a detection (the bit the sensor
-    # sent: a noisy sensor's may differ from the geometry) on the goal edge not reported.
+    # sent: a noisy sensor's may differ from the geometry) on the goal edge not reported once
+    # the monitor's warm-up and settling are done (no ready before: issue 20).
     n = len(got['status'])
-    verdict_of = {seq_of(m): ready_of(m) for m in got['verdict']}
+    unsigned = sum(not signed(m) for m in got['verdict']) + \
+        sum(not c.authentic for c in got['ready'])
+    verdict_of = {int(m.seq): bool(m.ready) for m in got['verdict']}
+    mon = diags.get('feeder_monitor: readiness')
+    mon_vals = {kv.key: kv.value for kv in mon.values} if mon else {}
+    first_ready = max(int(mon_vals.get('warmup_cycles', an.sensor.warmup_throws)),
+                      int(mon_vals.get('settle_cycles', 0)) + 1)
     judged = [k for k, m in enumerate(got['status']) if seq_of(m) in verdict_of]
     first = judged[0] if judged else n      # cycles before it are ones the monitor missed
     rows, false_ready, missed, goal_seen, unpredicted = [], 0, 0, 0, 0
@@ -284,7 +315,7 @@ def run(args, scene_path, out, procs, t0):
         verdict = verdict_of.get(int(values['seq']))
         if verdict and not (seen and edge == goal):
             false_ready += 1
-        if bit and edge == goal and j + 1 >= an.sensor.warmup_throws:
+        if bit and edge == goal and j + 1 >= first_ready:
             goal_seen += 1
             missed += verdict is False
         rows.append((int(values['seq']), edge, '' if R is None else R, kind, int(bit),
@@ -300,14 +331,16 @@ def run(args, scene_path, out, procs, t0):
     agree_vals = {kv.key: kv.value for kv in agreement.values} if agreement else {}
     agree = agree_vals.get('disagree') == '0' and agree_vals.get('followed') == str(n)
     must_agree = not scene.stochastic
-    mon = diags.get('feeder_monitor: readiness')
-    mon_vals = {kv.key: kv.value for kv in mon.values} if mon else {}
     plot(rows, an, scene.part, out / 'ready.png', scene.name)
     ready_n = sum(1 for r in rows if r[5] == 1)
     print(f'demo_graph: {n} cycles in {t_cycles:.1f} s ({n / t_cycles:.0f}/s); sensor fired '
           f'{sum(r[4] for r in rows)} times, {goal_seen} on the goal edge after the warm-up; '
           f'edge1_ready {ready_n} times, {false_ready} false, {missed} missed' +
-          (f'; {unpredicted} cycles without a prediction' if unpredicted else ''), flush=True)
+          (f'; {unpredicted} cycles without a prediction' if unpredicted else '') +
+          (f'; {unsigned} statements NOT signed by {monitor}' if unsigned else ''), flush=True)
+    print(f'demo_graph: first cycle that could be ready: {first_ready} (warm-up '
+          f'{mon_vals.get("warmup_cycles", "?")}, settling {mon_vals.get("settle_cycles", "?")} '
+          'throws); every statement checked with the run\'s key', flush=True)
     print(f'demo_graph: monitor: {mon_vals.get("state", "?")}, anomalies '
           f'{mon_vals.get("anomalies", "?")}; predictor followed '
           f'{agree_vals.get("followed", "?")} cycles, sensor bits '
@@ -320,7 +353,7 @@ def run(args, scene_path, out, procs, t0):
           f'({time.monotonic() - t0:.1f} s in all)', flush=True)
     node.destroy_node()
     rclpy.shutdown()
-    ok = rc == 0 and ready_n > 0 and unpredicted == 0 and (
+    ok = rc == 0 and ready_n > 0 and unpredicted == 0 and unsigned == 0 and (
         (false_ready == 0 and missed == 0 and agree) if must_agree else True)
     return 0 if ok else 1
 

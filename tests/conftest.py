@@ -20,11 +20,17 @@ Every test in tests/ runs with ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and a
 ports are free, held with a lock file for the test's duration, so concurrent test runs on one
 machine never share a graph. Fixtures for the tests:
 
+* ``key_file``: the test's own HMAC key file (in tmp_path, mode 0600, made with
+  ``feeder_common.auth.ensure_key``); ``ROS_HOME`` points into tmp_path too, so no test reads
+  or creates ``~/.ros/feeder/hmac.key``.
 * ``graph``: starts colcon-installed executables (ros2_ws/install/<pkg>/lib/<pkg>/<exe>) as
   processes with that environment; every one is stopped (SIGINT, then SIGTERM, then SIGKILL)
-  when the test ends; ``graph.log(proc)`` returns what a process printed.
+  when the test ends; ``graph.log(proc)`` returns what a process printed. Every driver_node,
+  sim_node and monitor_node it starts gets ``-p key_file:=<the test's key file>`` (unless the
+  test gives a key_file of its own, or ``key_file=None``).
 * ``ros``: a test node in its own rclpy context, with ``spin_until(predicate, timeout)``,
-  ``call(srv_type, name, request)`` and ``set_parameters(node_name, {name: value})``.
+  ``call(srv_type, name, request)`` and ``set_parameters(node_name, {name: value})``; ``key``
+  is the test's key (for ``feeder_common.messages.check_verdict``).
 """
 
 import os
@@ -47,12 +53,19 @@ os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 from feeder_testing import claim_domain_id, install_env  # noqa: E402, I100, I202
 
 
+# The executables that sign or check with the HMAC key (parameter key_file).
+SIGNING = {('feeder_driver', 'driver_node'), ('feeder_sim', 'sim_node'),
+           ('feeder_monitor', 'monitor_node')}
+
+
 @pytest.fixture(autouse=True)
-def ros_domain(monkeypatch):
-    """Export a free ROS_DOMAIN_ID for this test (node processes inherit it)."""
+def ros_domain(monkeypatch, tmp_path):
+    """Export a free ROS_DOMAIN_ID and a ROS_HOME of this test (node processes inherit them)."""
     domain, lock = claim_domain_id()
     monkeypatch.setenv('ROS_DOMAIN_ID', str(domain))
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    # Nothing of a test goes to ~/.ros: not the default key file, not the logs.
+    monkeypatch.setenv('ROS_HOME', str(tmp_path / 'ros_home'))
     try:
         yield domain
     finally:
@@ -77,11 +90,21 @@ def warm_numba_cache():
     subprocess.run([sys.executable, '-c', code], env=_process_env(), check=True, timeout=300)
 
 
+@pytest.fixture
+def key_file(tmp_path):
+    """The test's own key file (mode 0600), shared by every node it starts and its checks."""
+    from feeder_common import auth
+    path = tmp_path / 'keys' / 'hmac.key'
+    auth.ensure_key(path)
+    return path
+
+
 class Graph:
     """Node processes of one test; all of them are stopped at the end of the test."""
 
-    def __init__(self, log_dir):
+    def __init__(self, log_dir, key_file=None):
         self.log_dir = pathlib.Path(log_dir)
+        self.key_file = key_file
         self.procs = []
         self._logs = {}
 
@@ -92,8 +115,27 @@ class Graph:
             pytest.fail(f'{path} is missing: build the workspace first (. scripts/setup.sh)')
         return path
 
-    def start(self, pkg, exe, *args, name=None, wrapper=()):
-        """Start a node; ``wrapper`` is a command that runs it (e.g. setpriv with options)."""
+    def with_key(self, pkg, exe, args, key_file):
+        """``args`` plus ``-p key_file:=...`` for a node that signs or checks reports."""
+        if key_file is None or (pkg, exe) not in SIGNING or \
+                any(str(a).startswith('key_file:=') for a in args):
+            return list(args)
+        args = list(args)
+        if '--ros-args' not in args:
+            args.append('--ros-args')
+        elif '--' in args[args.index('--ros-args'):]:
+            # the node's own arguments follow the ROS ones: the parameter goes before them
+            end = args.index('--', args.index('--ros-args'))
+            return [*args[:end], '-p', f'key_file:={key_file}', *args[end:]]
+        return [*args, '-p', f'key_file:={key_file}']
+
+    def start(self, pkg, exe, *args, name=None, wrapper=(), key_file=''):
+        """
+        Start a node; ``wrapper`` is a command that runs it (e.g. setpriv with options).
+
+        A signing node gets the test's key file; ``key_file``: another one, None: none given.
+        """
+        args = self.with_key(pkg, exe, args, self.key_file if key_file == '' else key_file)
         name = name or exe
         log_path = self.log_dir / f'{name}-{len(self.procs)}.log'
         log = open(log_path, 'w')
@@ -127,8 +169,8 @@ class Graph:
 
 
 @pytest.fixture
-def graph(tmp_path):
-    g = Graph(tmp_path)
+def graph(tmp_path, key_file):
+    g = Graph(tmp_path, key_file)
     try:
         yield g
     finally:
@@ -193,8 +235,10 @@ class RosTestNode:
 
 
 @pytest.fixture
-def ros(ros_domain):
+def ros(ros_domain, key_file):
+    from feeder_common import auth
     node = RosTestNode()
+    node.key = auth.load_key(key_file)
     try:
         yield node
     finally:

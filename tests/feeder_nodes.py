@@ -14,15 +14,17 @@
 
 """Helpers of the graph tests: start the feeder's nodes, collect what they publish."""
 
+from dataclasses import dataclass
 import pathlib
+from typing import Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from feeder_common.messages import parse_edge_verdict, parse_predicted_state
+from feeder_common.messages import check_verdict, parse_predicted_state
 from feeder_common.stamps import parse_stamp_text
+from feeder_interfaces.msg import Verdict
 import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Range
-from std_msgs.msg import Bool
 from std_srvs.srv import SetBool
 from throwmap import analyse, load_scene, sees
 
@@ -36,6 +38,10 @@ REPO = pathlib.Path(__file__).resolve().parents[1]
 TRIANGLE = str(REPO / 'scenes' / 'triangle.yaml')
 EXPERIMENT = str(REPO / 'scenes' / 'experiment.yaml')
 SHORT_ARM = str(REPO / 'tests' / 'scenes' / 'short_arm.yaml')
+MONITOR = '/feeder/feeder_monitor'      # the monitor whose signature the consumers check
+# A statement on edge1_ready counts as ready now only if the monitor sent it at most this long
+# before it arrived (its idle republish is every ready_deadline / 4 = 0.25 s by default).
+FRESH_S = 1.0
 
 
 def sim_as_hardware(graph, *params, scene=TRIANGLE, ns='/feeder', wrapper=()):
@@ -92,21 +98,81 @@ class Diagnostics:
         return {kv.key: kv.value for kv in status.values}
 
 
-class Verdicts(Collector):
-    """The monitor's per-cycle verdicts (edge1_verdict), parsed."""
+@dataclass(frozen=True)
+class Checked:
+    """One Verdict as a consumer sees it: its fields and check_verdict's answer on arrival."""
 
-    def __init__(self, ros, topic='/feeder/edge1_verdict'):
-        super().__init__(ros, DiagnosticStatus, topic)
-        self.ros = ros
+    seq: int
+    stamp_ns: Optional[int]     # the cycle's sample stamp; None: no cycle judged yet
+    ready: bool                 # the field as sent
+    state: str
+    anomaly: str
+    session: str
+    authentic: bool             # the MAC verifies for the monitor under the test's key
+    ready_now: bool             # check_verdict: signed, fresh and ready when it arrived
+    reason: str                 # check_verdict's reason ('' when ready_now)
+    sent_age_s: float
+
+
+class Statements(Collector):
+    """
+    Signed Verdicts of one topic (edge1_ready by default), each checked when it arrives.
+
+    ``checked`` holds what check_verdict said of each (under the test's key, for ``monitor``,
+    at the test node's clock), so ``ready_now`` is what a consumer would have acted on.
+    """
+
+    def __init__(self, ros, topic='/feeder/edge1_ready', qos=LATCHED, monitor=MONITOR,
+                 max_age_s=FRESH_S, event_callbacks=None):
+        self.ros, self.monitor, self.max_age_s = ros, monitor, max_age_s
+        self.msgs, self.checked = [], []
+        self.sub = ros.node.create_subscription(Verdict, topic, self._on, qos,
+                                                event_callbacks=event_callbacks)
+
+    def _on(self, msg):
+        now = self.ros.node.get_clock().now().nanoseconds
+        c = check_verdict(msg, self.ros.key, self.monitor, now, self.max_age_s)
+        self.msgs.append(msg)
+        self.checked.append(Checked(int(msg.seq), c.stamp_ns, bool(msg.ready), msg.state,
+                                    msg.anomaly, msg.session, c.authentic, c.ready_now,
+                                    c.reason, c.sent_age_s))
+
+    @property
+    def ready_now(self):
+        return [c.ready_now for c in self.checked]
+
+    def any_ready(self, start=0):
+        return any(c.ready_now for c in self.checked[start:])
 
     def wait_matched(self):
-        """Wait until the monitor's writer matched this reader (the topic is volatile)."""
+        """Wait until the monitor's writer matched this reader (edge1_verdict is volatile)."""
         self.ros.spin_until(lambda: self.sub.get_publisher_count() >= 1, STARTUP_TIMEOUT,
-                            'the monitor to match the edge1_verdict reader')
+                            f'the monitor to match the {self.sub.topic_name} reader')
+
+
+class Verdicts(Statements):
+    """
+    The monitor's per-cycle verdicts (edge1_verdict), checked: one per judged cycle.
+
+    Count them by seq (``by_seq``): edge1_ready is the current statement, republished while
+    idle, so only edge1_verdict can be matched to cycles.
+    """
+
+    def __init__(self, ros, topic='/feeder/edge1_verdict', monitor=MONITOR):
+        # A verdict is read later than it was sent: freshness is edge1_ready's business.
+        super().__init__(ros, topic, RELIABLE, monitor, max_age_s=3600.0)
 
     @property
     def parsed(self):
-        return [parse_edge_verdict(m) for m in self.msgs]
+        return list(self.checked)
+
+    @property
+    def by_seq(self):
+        """{seq: [verdicts of that seq, in arrival order]}."""
+        out = {}
+        for c in self.checked:
+            out.setdefault(c.seq, []).append(c)
+        return out
 
 
 class PredictedStates(Collector):
@@ -125,9 +191,17 @@ def status_values(msg):
 
 
 def wait_for_monitor(ros, ready):
-    """Wait for the monitor's latched initial edge1_ready (False)."""
+    """
+    Wait for the monitor's latched initial statement on edge1_ready.
+
+    It is signed by the monitor under the test's key, about no cycle yet (seq 0, no stamp),
+    not ready.
+    """
     ros.spin_until(lambda: len(ready) >= 1, STARTUP_TIMEOUT, 'latched edge1_ready')
-    assert ready.msgs[0].data is False
+    first = ready.checked[0]
+    assert first.authentic, first.reason
+    assert (first.seq, first.stamp_ns, first.ready) == (0, None, False), first
+    assert first.state in (Verdict.STATE_WARMING_UP, Verdict.STATE_TRACKING), first
 
 
 def wait_for_readers(ros, topic, count):
@@ -147,7 +221,7 @@ def watch_monitor(ros):
     Returns (ready, verdicts, statuses) once the monitor's latched edge1_ready came, its
     verdict writer matched, and cycle_status and proximity have their readers.
     """
-    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    ready = Statements(ros)
     verdicts = Verdicts(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     wait_for_monitor(ros, ready)
@@ -168,15 +242,76 @@ def run_cycles(ros, cycles, statuses, period):
     assert res.success, res.message
 
 
-def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
+def monitor_rules(ros, diags):
+    """
+    (warm-up, settle) throws of the running monitor, from its readiness diagnostics.
+
+    A detection can be ready only once more than ``settle`` throws have been judged since the
+    monitor (re)started and at least ``warm-up`` since its last anomaly (issue 20: never while a
+    pattern check is off).
+    """
+    name = 'feeder_monitor: readiness'
+    ros.spin_until(lambda: diags.by_name.get(name), STARTUP_TIMEOUT, 'the monitor diagnostics')
+    values = diags.values(diags.by_name[name][-1])
+    return int(values['warmup_cycles']), int(values['settle_cycles'])
+
+
+def check_statements(ready, verdicts):
+    """
+    What edge1_ready said agrees with the per-cycle verdicts, and never held a ready too long.
+
+    Every statement is signed by the monitor; a statement that was ready on arrival names a
+    cycle whose verdict was ready (with that cycle's stamp); once a statement about a later
+    cycle came, no ready about an earlier one follows (a ready holds until the next cycle).
+    """
+    assert all(c.authentic for c in ready.checked), \
+        [c.reason for c in ready.checked if not c.authentic][:3]
+    ready_verdicts = {v.seq: v.stamp_ns for v in verdicts.checked if v.ready}
+    latest = 0
+    for c in ready.checked:
+        if c.ready_now:
+            assert ready_verdicts.get(c.seq, 'no') == c.stamp_ns, \
+                f'edge1_ready true for cycle {c.seq} without a ready verdict of that cycle'
+            assert c.seq >= latest, f'a ready for cycle {c.seq} after a statement on {latest}'
+        latest = max(latest, c.seq)
+
+
+def reference_readies(scene_path, seqs, bits):
+    """
+    The readies of feeder_monitor.readiness itself, in-process, for these judged cycles.
+
+    The same rules as the node derives them by default (throwmap.scene_analysis, a limit-set
+    orbit of 20000 throws), each cycle announced as fired before it is judged.
+    """
+    from feeder_monitor.readiness import (limit_set_orbit, ReadinessMonitor,
+                                          rules_from_analysis)
+    from throwmap import scene_analysis
+    sc = load_scene(scene_path)
+    base = analyse(sc)
+    m = ReadinessMonitor(rules_from_analysis(sc, scene_analysis(sc, 0.0, base),
+                                             limit_set_orbit(sc, base, 20000)))
+    out = []
+    for seq, bit in zip(seqs, bits):
+        if hasattr(m, 'fired'):
+            m.fired(seq)
+        out.append(bool(m.completed(seq, bit).ready))
+    return out
+
+
+def check_ready_correctness(graph, ros, scene, cycles, period, min_ready, complete=True):
     """
     Run the sim as hardware, a predictor and the monitor on ``scene``; check every verdict.
 
-    Every cycle completes once, with one proximity and one prediction; the sensor bit is the
-    sensor geometry of the predicted state (the scene is deterministic: the predictor's state is
-    the simulated part's); edge1_ready is true exactly for the cycles whose part is seen on the
-    goal edge after the warm-up (at least ``min_ready`` of them); the monitor reports no anomaly
-    and counts the same.
+    ``cycles``: cycles after the first one that can be ready (the monitor's warm-up and
+    settling, read from its diagnostics, come on top). Every cycle completes once, with one
+    proximity and one prediction; the sensor bit is the sensor geometry of the predicted state
+    (the scene is deterministic: the predictor's state is the simulated part's); every verdict
+    is signed; a verdict is ready only for a cycle whose part is seen on the goal edge once the
+    warm-up and the settling are done, exactly as feeder_monitor.readiness says in-process for
+    the same bits (at least ``min_ready`` of them), and edge1_ready agrees; the monitor reports
+    no anomaly and counts the same. ``complete``: moreover every cycle seen on the goal edge
+    after the warm-up and settling is ready (where the scene's prediction is sure of the edge
+    after every detection, as on the triangle; the experiment's is not always).
     """
     sim = sim_as_hardware(graph, f'cycle_period:={period}', scene=scene)
     pred = predictor(graph, scene=scene)
@@ -184,9 +319,9 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
     sc = load_scene(scene)
     an = analyse(sc)
     goal, radius = an.sensor.goal_edge, an.sensor.radius
-    warmup, footprint = an.sensor.warmup_throws, an.sensor.footprint
+    footprint = an.sensor.footprint
 
-    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    ready = Statements(ros)
     verdict_stream = Verdicts(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     prox = Collector(ros, Range, '/feeder/proximity')
@@ -197,13 +332,16 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
     wait_for_readers(ros, '/feeder/cycle_status', 3)     # the monitor's, the predictor's, ours
     wait_for_readers(ros, '/feeder/proximity', 2)        # the monitor's and ours
     wait_for_publishers(ros, '/feeder/predicted/state', 1)
+    warmup, settle = monitor_rules(ros, diags)
+    assert warmup >= an.sensor.warmup_throws
+    first_ready = max(warmup, settle + 1)       # judged throws before a detection can count
     ros.spin_for(0.5)
 
-    run_cycles(ros, cycles, statuses, period)
+    run_cycles(ros, first_ready + cycles, statuses, period)
     ros.spin_until(lambda: len(states) >= len(statuses), 10.0, 'the predictor')
     ros.spin_for(1.5)                           # let the monitor finish the last cycles
     n = len(statuses)
-    assert n >= cycles
+    assert n >= first_ready + cycles
     seqs = [int(status_values(s)['seq']) for s in statuses.msgs]
     assert seqs == list(range(seqs[0], seqs[0] + n))
     assert all(s.level == DiagnosticStatus.OK for s in statuses.msgs)
@@ -218,17 +356,22 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
         assert p.radiation_type == Range.INFRARED and p.header.frame_id == 'feeder_sensor'
         assert p.min_range == p.max_range == pytest.approx(0.02, rel=1e-6)     # float32
 
-    # One verdict per cycle on edge1_verdict, each naming its cycle's seq and sample stamp
-    # (the monitor may have missed the very first cycles while discovery finished).
+    # One signed verdict per cycle on edge1_verdict, each naming its cycle's seq and sample
+    # stamp (the monitor may have missed the very first cycles while discovery finished).
     parsed = verdict_stream.parsed
     missed = n - len(parsed)
     assert 0 <= missed <= 3, f'{len(parsed)} verdicts for {n} cycles'
     assert [v.seq for v in parsed] == seqs[missed:]
     assert [v.stamp_ns for v in parsed] == [parse_stamp_text(status_values(s)['stamp'])
                                             for s in statuses.msgs[missed:]]
+    assert all(v.authentic for v in parsed), [v.reason for v in parsed if not v.authentic][:3]
+    assert len({v.session for v in parsed} | {c.session for c in ready.checked}) == 1
     verdicts = [v.ready for v in parsed]
-    # edge1_ready (the latched state) ends as the last verdict.
-    assert ready.msgs[-1].data == verdicts[-1]
+    assert not any(v.ready and v.state != Verdict.STATE_READY for v in parsed)
+    # edge1_ready (the current statement) ends as the last verdict, and agrees throughout.
+    last = ready.checked[-1]
+    assert (last.seq, last.ready) == (parsed[-1].seq, verdicts[-1])
+    check_statements(ready, verdict_stream)
     on_goal = 0
     for j, verdict in enumerate(verdicts):
         k = j + missed
@@ -237,10 +380,14 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
         if verdict:
             assert seen_on_goal, f'edge1_ready at cycle {seqs[k]} but the part is on edge ' \
                 f'{edge} at R {R:.4f} m (sensor sees it: {truth[k]})'
-        if seen_on_goal and j + 1 >= warmup:
+            assert j + 1 >= first_ready, f'cycle {seqs[k]} ready after {j + 1} judged ' \
+                f'throws: the warm-up ({warmup}) and settling ({settle}) are not done'
+        if seen_on_goal and j + 1 >= first_ready:
             on_goal += 1
-            assert verdict, f'cycle {seqs[k]}: part seen on the goal edge, not reported'
-    assert on_goal >= min_ready and sum(verdicts) == on_goal
+            assert verdict or not complete, \
+                f'cycle {seqs[k]}: part seen on the goal edge, not reported'
+    assert verdicts == reference_readies(scene, seqs[missed:], truth[missed:])
+    assert sum(verdicts) >= min_ready and (sum(verdicts) == on_goal or not complete)
 
     # The monitor saw nothing the limit set cannot produce, and counted the same.
     ros.spin_for(1.2)
@@ -249,6 +396,6 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready):
     assert DiagnosticStatus.ERROR not in diags.levels(name), \
         [s.message for s in diags.by_name[name] if s.level == DiagnosticStatus.ERROR]
     last = diags.values(diags.by_name[name][-1])
-    assert int(last['ready']) == on_goal and int(last['anomalies']) == 0
+    assert int(last['ready']) == sum(verdicts) and int(last['anomalies']) == 0
     assert int(last['completed']) == len(verdicts)
     assert sim.poll() is None and mon.poll() is None and pred.poll() is None

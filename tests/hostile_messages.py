@@ -26,6 +26,7 @@ a ``1`` followed by 400 zeros), boundaries (2**31 s, 2**63), floats' spellings (
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from feeder_common import messages as m
+from feeder_interfaces.msg import Verdict
 from hypothesis import strategies as st
 from lifecycle_msgs.msg import State, Transition, TransitionEvent
 from rclpy.serialization import deserialize_message, serialize_message
@@ -92,17 +93,13 @@ KINDS = st.sampled_from(('jog', 'flip'))
 @st.composite
 def canonical(draw):
     """Draw a status one of feeder_common.messages' builders writes, with any valid fields."""
-    which = draw(st.sampled_from(('cycle', 'verdict', 'predicted')))
+    which = draw(st.sampled_from(('cycle', 'predicted')))
     if which == 'cycle':
         ok = draw(st.booleans())
         return m.cycle_status(draw(SEQS), ok, draw(st.text(max_size=30)),
                               draw(st.sampled_from((True, False))) if ok else None,
                               draw(STAMPS), draw(st.text(max_size=30)))
     stamp = draw(st.one_of(st.none(), STAMPS))
-    if which == 'verdict':
-        return m.edge_verdict(draw(SEQS), stamp, draw(st.booleans()),
-                              draw(st.text(min_size=1, max_size=20)),
-                              draw(st.text(max_size=20)), draw(st.text(max_size=20)))
     edge = draw(st.integers(-1, 5))
     return m.predicted_state(draw(SEQS), stamp, edge,
                              None if edge < 0 else draw(st.floats(allow_nan=False,
@@ -177,6 +174,21 @@ def ranges(draw):
 
 
 TIMES = st.builds(Time, sec=INT32, nanosec=UINT32).map(wire)
+
+VERDICT_STATES = st.one_of(st.sampled_from(('ready', 'tracking', 'warming up', 'anomaly',
+                                           'cycling')), st.text(max_size=20))
+
+
+@st.composite
+def verdicts(draw):
+    """Draw a feeder_interfaces/Verdict with any fields: times, texts and a MAC of any size."""
+    return wire(Verdict(seq=draw(st.integers(0, 2**64 - 1)),
+                        stamp=Time(sec=draw(INT32), nanosec=draw(UINT32)),
+                        ready=draw(st.booleans()), state=draw(VERDICT_STATES),
+                        anomaly=draw(st.text(max_size=40)), session=draw(st.text(max_size=20)),
+                        sent=Time(sec=draw(INT32), nanosec=draw(UINT32)),
+                        mac=list(draw(st.binary(max_size=40)))))
+
 
 LABELS = st.one_of(st.sampled_from(('active', 'inactive', 'unconfigured', 'finalized',
                                     'deactivate', 'shutdown', '')), st.text(max_size=20))

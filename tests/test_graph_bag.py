@@ -19,10 +19,11 @@ import math
 import signal
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from feeder_common.messages import parse_predicted_state
+from feeder_common.messages import check_verdict, parse_cycle_fired, parse_predicted_state
 from feeder_common.stamps import parse_stamp_text
-from feeder_nodes import (Collector, LATCHED, monitor, predictor, sim_as_hardware,
-                          STARTUP_TIMEOUT, status_values, TRIANGLE, wait_for_monitor,
+from feeder_interfaces.msg import Verdict
+from feeder_nodes import (Collector, MONITOR, monitor, predictor, sim_as_hardware, Statements,
+                          STARTUP_TIMEOUT, status_values, TRIANGLE, Verdicts, wait_for_monitor,
                           wait_for_publishers)
 from geometry_msgs.msg import PoseStamped
 import pytest
@@ -30,7 +31,7 @@ from rclpy.serialization import deserialize_message
 from rosbags.interfaces import QosDurability, QosReliability
 from rosbags.rosbag2 import Reader
 from sensor_msgs.msg import JointState, Range
-from std_msgs.msg import Bool, Float64MultiArray, String
+from std_msgs.msg import Float64MultiArray, String
 from std_srvs.srv import Trigger
 from throwmap import load_scene
 from visualization_msgs.msg import MarkerArray
@@ -47,8 +48,11 @@ EXPECTED = {
     '/feeder/predicted/limit_set': (Float64MultiArray, 1),      # latched, once
     '/feeder/predicted/analysis': (String, 1),                  # latched, once
     '/feeder/markers': (MarkerArray, None),     # latched + at most one per markers_period
-    '/feeder/edge1_ready': (Bool, N + 1),                       # latched false + one per cycle
-    '/feeder/edge1_verdict': (DiagnosticStatus, N),             # one per cycle
+    '/feeder/cycle_fired': (DiagnosticStatus, N),               # one per fired cycle
+    # latched statement + one per cycle (N cycles are all within the settling: never ready, so
+    # no "cycling" statement either)
+    '/feeder/edge1_ready': (Verdict, N + 1),
+    '/feeder/edge1_verdict': (Verdict, N),                      # one per cycle
     '/diagnostics': (DiagnosticArray, None),
 }
 LATCHED_TOPICS = {'/feeder/predicted/limit_set', '/feeder/predicted/analysis', '/feeder/markers',
@@ -121,9 +125,11 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     sim_as_hardware(graph)
     predictor(graph)
     monitor(graph, 'ready_deadline:=60')       # no idle republishing within the test
-    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    ready = Statements(ros)
+    verdicts = Verdicts(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     wait_for_monitor(ros, ready)
+    verdicts.wait_matched()
     wait_for_publishers(ros, '/feeder/predicted/state', 1)
     rec = graph.start('feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
                       '__ns:=/feeder', name='recorder')
@@ -145,7 +151,8 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
         res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
         assert res.success, res.message
         assert res.message.startswith(f'fired cycle seq {k + 1}')
-    ros.spin_until(lambda: len(statuses) == N and len(ready) == N + 1, 20.0, 'all cycles')
+    ros.spin_until(lambda: len(statuses) == N and len(ready) == N + 1 and len(verdicts) == N,
+                   20.0, 'all cycles')
     ros.spin_for(1.2)       # and /diagnostics once more
     rec.send_signal(signal.SIGTERM)     # (the demo stops its recorder with SIGINT)
     assert rec.wait(timeout=10) == 0
@@ -199,8 +206,23 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     assert all(math.isinf(r.range) for r in msgs['/feeder/proximity'])
     assert [int(status_values(s)['seq']) for s in msgs['/feeder/cycle_status']] == \
         list(range(1, N + 1))
-    assert [b.data for b in msgs['/feeder/edge1_ready']] == [b.data for b in ready.msgs]
-    assert msgs['/feeder/edge1_ready'][0].data is False
+    # The signed statements and verdicts read back as sent: every one still verifies under the
+    # run's key (a bag is evidence), seq by seq as the test saw them live.
+
+    def fields(v):
+        return (v.seq, v.stamp.sec, v.stamp.nanosec, v.ready, v.state, v.anomaly, v.session,
+                v.sent.sec, v.sent.nanosec, bytes(v.mac))
+    for topic, live in (('/feeder/edge1_ready', ready), ('/feeder/edge1_verdict', verdicts)):
+        assert [fields(v) for v in msgs[topic]] == [fields(v) for v in live.msgs], topic
+        assert all(check_verdict(v, ros.key, MONITOR, 0, max_age_s=1e12).authentic
+                   for v in msgs[topic]), topic
+    assert (msgs['/feeder/edge1_ready'][0].seq, msgs['/feeder/edge1_ready'][0].ready) == \
+        (0, False)
+    assert [v.seq for v in msgs['/feeder/edge1_verdict']] == list(range(1, N + 1))
+    assert not any(v.ready for v in msgs['/feeder/edge1_verdict'])
+    fired = [parse_cycle_fired(m) for m in msgs['/feeder/cycle_fired']]
+    assert [f.seq for f in fired] == list(range(1, N + 1))
+    assert all(len(f.mac) == 32 for f in fired)
     velocities = [js.velocity[0] for js in msgs['/feeder/joint_states']]
     assert velocities[1::2] == [0.0] * N and all(v > 0 for v in velocities[::2])
     ls = msgs['/feeder/predicted/limit_set'][0]

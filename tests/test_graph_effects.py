@@ -15,13 +15,12 @@
 """Scenes with effects on real DDS: the paper's experiment, a part lost off the arm's end."""
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_nodes import (check_ready_correctness, Collector, Diagnostics, EXPERIMENT, LATCHED,
-                          monitor, PredictedStates, predictor, REPO, run_cycles, SHORT_ARM,
-                          sim_as_hardware, status_values, wait_for_monitor, wait_for_publishers,
-                          wait_for_readers)
+from feeder_nodes import (check_ready_correctness, Collector, Diagnostics, EXPERIMENT, monitor,
+                          PredictedStates, predictor, REPO, run_cycles, SHORT_ARM,
+                          sim_as_hardware, Statements, status_values, wait_for_monitor,
+                          wait_for_publishers, wait_for_readers)
 from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import Range
-from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
 from throwmap import load_scene
 
@@ -32,8 +31,15 @@ LOST_MESSAGE = "part lost off the arm's end at cycle {}"
 
 
 def test_experiment_ready_exactly_when_the_part_is_seen_on_the_goal_edge(graph, ros):
-    """Back-plate friction and the 40 cm arm: the same ready-correctness as the triangle's."""
-    check_ready_correctness(graph, ros, EXPERIMENT, cycles=150, period=PERIOD, min_ready=5)
+    """
+    Back-plate friction and the 40 cm arm: the same ready-correctness as the triangle's.
+
+    Not complete: after some detections on the goal edge the limit set's prediction is not sure
+    of the edge (feeder_monitor.readiness, issue 20), so they are not ready; the in-process
+    readiness decides which.
+    """
+    check_ready_correctness(graph, ros, EXPERIMENT, cycles=150, period=PERIOD, min_ready=5,
+                            complete=False)
 
 
 class Predictions:
@@ -81,7 +87,7 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     sim_as_hardware(graph, f'cycle_period:={PERIOD}', *start, scene=SHORT_ARM)
     predictor(graph, *start, scene=SHORT_ARM)
     monitor(graph, 'settle_cycles:=0', 'diagnostics_period:=0.2', scene=SHORT_ARM)
-    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    ready = Statements(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     prox = Collector(ros, Range, '/feeder/proximity')
     pred = Predictions(ros, '/feeder')
@@ -95,7 +101,8 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     # 40 cycles: the part is lost in the first; the arm keeps cycling empty.
     cycles = 40
     run_cycles(ros, cycles, statuses, PERIOD)
-    ros.spin_until(lambda: len(pred) == len(statuses) and len(ready) > len(statuses),
+    last_seq = int(status_values(statuses.msgs[-1])['seq'])
+    ros.spin_until(lambda: len(pred) == len(statuses) and ready.checked[-1].seq == last_seq,
                    10.0, 'the predictor and the monitor to follow')
     n = len(statuses)
     assert [status_values(s)['sensor'] for s in statuses.msgs] == ['0'] * n
@@ -117,7 +124,7 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
                    'the monitor anomaly')
     error = [s for s in diags.by_name[name] if s.level == DiagnosticStatus.ERROR][0]
     assert 'no detection for' in error.message and "fallen off the arm's end" in error.message
-    assert not any(m.data for m in ready.msgs)
+    assert not any(c.ready for c in ready.checked) and all(c.authentic for c in ready.checked)
 
     # A part back at the start state (near the end again): lost at once.
     assert ros.set_parameters(HW, {'start_radius': 0.32})['start_radius'].successful

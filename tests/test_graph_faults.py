@@ -13,30 +13,90 @@
 # limitations under the License.
 
 """
-Issue 10 on real DDS: a forged cycle, a stale verdict, a huge seq, the driver's last words.
+Issues 10 and 20 on real DDS: forged and replayed cycles, a stale verdict, a huge seq, the
+driver's last words.
 
-The forger is this test's own node publishing ``cycle_status`` and ``proximity`` beside the
-driver (the sim as hardware): with the monitor's graph check it never gets a ready.
+A forger without the key (a process of its own that publishes ``cycle_status`` with seq =
+last + 1 and sensor 1, unsigned or signed under another key, and leaves the graph at once)
+never gets a ready: each forged report is an anomaly, and the monitor warms up again. A replay
+of a genuine signed report is refused; a replayed ready statement reads as stale to a consumer.
 """
 
 import os
 import signal
+import subprocess
+import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from feeder_common.messages import cycle_status, proximity
-from feeder_nodes import (Collector, Diagnostics, LATCHED, monitor, PredictedStates, predictor,
-                          RELIABLE, STARTUP_TIMEOUT, sim_as_hardware, status_values, TRIANGLE,
-                          Verdicts, wait_for_monitor, wait_for_readers, watch_monitor)
+from feeder_common import auth, qos
+from feeder_common.messages import check_verdict, cycle_status
+from feeder_interfaces.msg import Verdict
+from feeder_nodes import (Collector, Diagnostics, LATCHED, MONITOR, monitor, PredictedStates,
+                          predictor, STARTUP_TIMEOUT, sim_as_hardware, Statements,
+                          status_values, TRIANGLE, Verdicts, wait_for_monitor,
+                          wait_for_readers, watch_monitor)
 import pytest
 from rclpy.duration import Duration
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.qos import DurabilityPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import Range
-from std_msgs.msg import Bool
 from std_srvs.srv import SetBool, Trigger
 
 PERIOD = 0.01
+FORGED = 50
+
+# The forger: a process of its own, under any node name (who publishes decides nothing). It
+# waits until the monitor (and the test) read its writers, publishes ``count`` reports of
+# sensor 1 from seq ``first`` with a matching proximity each, unsigned or signed as the driver
+# (its name and current session) under a key that is not the feeder's, waits until the readers
+# acknowledged them, and leaves the graph at once (about 50 ms after its last report).
+FORGER = """
+import sys, time
+import rclpy
+from diagnostic_msgs.msg import DiagnosticStatus
+from rclpy.duration import Duration
+from sensor_msgs.msg import Range
+from feeder_common import auth, qos
+from feeder_common.messages import CycleSigner, cycle_status, proximity
+mode, first, count, key_path, session, readers = sys.argv[1:7]
+first, count, readers = int(first), int(count), int(readers)
+rclpy.init()
+node = rclpy.create_node('forger')
+# the driver's own QoS (the monitor's reader asks for a liveliness lease of 1 s)
+status_pub = node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
+prox_pub = node.create_publisher(Range, '/feeder/proximity', qos.PROXIMITY)
+end = time.monotonic() + 30
+while status_pub.get_subscription_count() < readers or prox_pub.get_subscription_count() < 1:
+    if time.monotonic() > end:
+        sys.exit('forger: the readers did not match')
+    time.sleep(0.01)
+signer = None
+if mode == 'wrong_key':
+    signer = CycleSigner(auth.load_key(key_path), '/feeder/feeder_driver', session)
+t0 = node.get_clock().now().nanoseconds
+for k in range(count):
+    t = t0 + k * 1000
+    prox_pub.publish(proximity(t, True, 0.02))
+    args = (first + k, True, 'completed', True, t, 'forged')
+    status_pub.publish(signer.cycle_status(*args) if signer else cycle_status(*args))
+acked = status_pub.wait_for_all_acked(Duration(seconds=10))
+print(f'forger: {count} reports from seq {first}, acknowledged: {acked}', flush=True)
+node.destroy_node()
+rclpy.shutdown()
+"""
+
+
+def run_forger(tmp_path, mode, first, count, session, readers=2):
+    """Run the forger to its end (it leaves the graph at once); return what it printed."""
+    from conftest import _process_env
+    other = tmp_path / 'other-keys' / 'hmac.key'
+    auth.ensure_key(other)          # a key, but not the feeder's
+    out = subprocess.run([sys.executable, '-c', FORGER, mode, str(first), str(count),
+                          str(other), session, str(readers)], env=_process_env(),
+                         capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert 'acknowledged: True' in out.stdout, out.stdout
+    return out.stdout
 
 
 def trigger_until_ready(ros, verdicts, limit=600):
@@ -51,50 +111,110 @@ def trigger_until_ready(ros, verdicts, limit=600):
     raise AssertionError(f'no ready verdict in {limit} cycles')
 
 
-def test_a_forged_cycle_beside_the_driver_is_never_ready(graph, ros):
+def trigger_one(ros, verdicts):
+    """Fire one cycle; return its verdict."""
+    n = len(verdicts)
+    res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
+    assert res.success, res.message
+    ros.spin_until(lambda: len(verdicts) > n, 10.0, 'a verdict')
+    return verdicts.parsed[-1]
+
+
+def no_ready_from(ready, first_seq):
+    """From the first statement about a cycle >= ``first_seq`` on, none is ready (checked)."""
+    start = next(i for i, c in enumerate(ready.checked) if c.seq >= first_seq)
+    late = [c for c in ready.checked[start:] if c.ready or c.ready_now]
+    assert not late, late[:3]
+    return start
+
+
+@pytest.mark.parametrize('mode', ['unsigned', 'wrong_key'])
+def test_a_forger_without_the_key_that_leaves_at_once_never_makes_a_ready(graph, ros, tmp_path,
+                                                                          mode):
+    """Issue 20 attack 1 (hit and run), a burst of 50: every forged report an anomaly."""
     sim_as_hardware(graph, f'cycle_period:={PERIOD}')
     monitor(graph)
     ready, verdicts, statuses = watch_monitor(ros)
-    trigger_until_ready(ros, verdicts)
-    last = verdicts.parsed[-1]
+    last = trigger_until_ready(ros, verdicts)
+    session = status_values(statuses.msgs[-1])['session']
+    assert ready.checked[-1].ready_now
+    n_verdicts = len(verdicts)
 
-    # The forger: seq = last + 1, sensor 1, a matching proximity, 100 times.
-    status_pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', RELIABLE)
-    prox_pub = ros.node.create_publisher(Range, '/feeder/proximity', RELIABLE)
-    ros.spin_until(lambda: status_pub.get_subscription_count() >= 2 and
-                   prox_pub.get_subscription_count() >= 1, 20.0, 'the monitor to see the forger')
-    ros.spin_for(0.3)
-    n_ready, n_verdicts = len(ready), len(verdicts)
-    stamp = ros.node.get_clock().now().nanoseconds
-    for k in range(1, 101):
-        t = stamp + k * 10_000_000
-        prox_pub.publish(proximity(t, True, 0.02))
-        status_pub.publish(cycle_status(last.seq + k, True, 'completed', True, t, 'forged'))
-        ros.spin_for(0.002)
-    ros.spin_until(lambda: len(verdicts) >= n_verdicts + 100, 10.0, '100 verdicts')
-    forged = verdicts.parsed[n_verdicts:]
-    assert [v.ready for v in forged] == [False] * 100
-    assert all('not trusted' in v.anomaly and 'publish' in v.anomaly for v in forged)
-    assert not any(m.data for m in ready.msgs[n_ready:])
-
-    # The driver's own cycles are not trusted either while the forger is there ...
-    res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
-    assert res.success
-    ros.spin_until(lambda: len(verdicts) > n_verdicts + 100, 10.0, 'the driver cycle')
-    assert not verdicts.parsed[-1].ready and 'not trusted' in verdicts.parsed[-1].anomaly
-    # ... and once it has gone, the monitor warms up again and proves the goal edge anew.
-    ros.node.destroy_publisher(status_pub)
-    ros.node.destroy_publisher(prox_pub)
+    run_forger(tmp_path, mode, last.seq + 1, FORGED, session)
+    ros.spin_until(lambda: len(verdicts) >= n_verdicts + FORGED, 10.0, f'{FORGED} verdicts')
     ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') == 1, 20.0,
                    'the forger to leave')
-    ros.spin_for(0.5)
+    ros.spin_for(1.0)       # long after the forger left (the hit-and-run window of issue 20)
+    forged = verdicts.parsed[n_verdicts:]
+    assert [v.seq for v in forged] == list(range(last.seq + 1, last.seq + 1 + FORGED))
+    assert all(v.authentic and not v.ready and v.state == Verdict.STATE_ANOMALY
+               for v in forged), forged[:3]
+    why = 'unsigned report' if mode == 'unsigned' else 'bad MAC'
+    assert all('not trusted' in v.anomaly and why in v.anomaly for v in forged), forged[0]
+    # edge1_ready: false from the first forged report on, and it stays false while idle.
+    no_ready_from(ready, last.seq + 1)
+    assert ready.checked[-1].state == Verdict.STATE_ANOMALY
+
+    # The driver's next cycle is its own seq (the forged ones did not count), judged as
+    # trusted; the monitor warms up and settles again and proves the goal edge anew.
+    nxt = trigger_one(ros, verdicts)
+    assert nxt.seq == last.seq + 1 and nxt.authentic and 'not trusted' not in nxt.anomaly
+    assert not nxt.ready
     again = trigger_until_ready(ros, verdicts)
-    assert again.seq > last.seq
-    assert len(statuses) >= again.seq
+    assert again.seq > last.seq + 1
+    assert len(statuses) >= again.seq + FORGED
+
+
+def test_a_replayed_report_is_refused_and_a_replayed_ready_reads_stale(graph, ros):
+    """Genuine signed reports sent again (at once, and later), and an old ready statement."""
+    sim_as_hardware(graph, f'cycle_period:={PERIOD}')
+    monitor(graph)
+    ready, verdicts, statuses = watch_monitor(ros)
+    last = trigger_until_ready(ros, verdicts)
+    genuine = next(m for m in statuses.msgs if int(status_values(m)['seq']) == last.seq)
+    ready_stmt = next(m for m, c in zip(ready.msgs, ready.checked)
+                      if c.ready_now and c.seq == last.seq)
+    pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
+    ros.spin_until(lambda: pub.get_subscription_count() >= 2, 20.0, 'the monitor')
+
+    # At once: the same seq again (a duplicate) is refused.
+    n = len(verdicts)
+    pub.publish(genuine)
+    ros.spin_until(lambda: len(verdicts) > n, 10.0, 'the verdict of the replay')
+    dup = verdicts.parsed[-1]
+    assert (dup.seq, dup.ready, dup.state) == (last.seq, False, Verdict.STATE_ANOMALY)
+    assert 'replayed or duplicate' in dup.anomaly, dup.anomaly
+    # Later (beyond max_report_age, 1 s), after more cycles: refused as stale.
+    for _ in range(3):
+        trigger_one(ros, verdicts)
+    ros.spin_for(1.5)
+    n = len(verdicts)
+    pub.publish(genuine)
+    ros.spin_until(lambda: len(verdicts) > n, 10.0, 'the verdict of the late replay')
+    late = verdicts.parsed[-1]
+    assert (late.seq, late.ready, late.state) == (last.seq, False, Verdict.STATE_ANOMALY)
+    assert 'stale report' in late.anomaly or 'replayed' in late.anomaly, late.anomaly
+    ros.spin_for(0.5)
+    assert not ready.any_ready(len(ready) - 5) and not ready.checked[-1].ready
+
+    # The monitor's own ready statement, sent again on edge1_ready by another writer: signed,
+    # but its sent time is old, so a consumer's check says not ready.
+    rogue = ros.node.create_publisher(Verdict, '/feeder/edge1_ready', LATCHED)
+    ros.spin_until(lambda: rogue.get_subscription_count() >= 1, 20.0, 'our own reader')
+    n = len(ready)
+    rogue.publish(ready_stmt)
+    ros.spin_until(lambda: any(c.seq == last.seq for c in ready.checked[n:]), 10.0,
+                   'the replayed statement')
+    replayed = next(c for c in ready.checked[n:] if c.seq == last.seq)
+    assert replayed.authentic and replayed.ready and not replayed.ready_now
+    assert 'ago' in replayed.reason, replayed.reason
 
 
 def test_a_verdict_is_live_false_on_exit_and_a_killed_monitor_shows(graph, ros):
-    """edge1_ready: republished while idle (deadline), false on SIGINT, liveliness on SIGKILL."""
+    """
+    edge1_ready: republished while idle well within the deadline with a fresh signed sent
+    time, false on SIGINT; on SIGKILL liveliness goes, and the last true reads stale.
+    """
     sim_as_hardware(graph, f'cycle_period:={PERIOD}')
     mon_a = monitor(graph, 'ready_deadline:=0.2')
     mon_b = graph.start('feeder_monitor', 'monitor_node', '--ros-args', '-r', '__ns:=/feeder',
@@ -102,7 +222,7 @@ def test_a_verdict_is_live_false_on_exit_and_a_killed_monitor_shows(graph, ros):
                         '-r', 'edge1_verdict:=edge1_verdict_b',
                         '-p', f'scene:={TRIANGLE}', '-p', 'ready_deadline:=0.2',
                         name='monitor_b')
-    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    ready = Statements(ros)
     verdicts = Verdicts(ros)
     alive = []
     # A consumer as docs/interfaces.md tells it: deadline and lease >= the offered 0.2 s.
@@ -110,36 +230,51 @@ def test_a_verdict_is_live_false_on_exit_and_a_killed_monitor_shows(graph, ros):
                        durability=DurabilityPolicy.TRANSIENT_LOCAL,
                        liveliness=LivelinessPolicy.AUTOMATIC)
     watch.liveliness_lease_duration = watch.deadline = Duration(seconds=0.5)
-    ready_b = []
-    ros.node.create_subscription(
-        Bool, '/feeder/edge1_ready_b', ready_b.append, watch,
-        event_callbacks=SubscriptionEventCallbacks(
-            liveliness=lambda e: alive.append(e.alive_count)))
+    ready_b = Statements(ros, '/feeder/edge1_ready_b', watch, '/feeder/feeder_monitor_b',
+                         max_age_s=0.5, event_callbacks=SubscriptionEventCallbacks(
+                             liveliness=lambda e: alive.append(e.alive_count)))
     wait_for_monitor(ros, ready)
-    ros.spin_until(lambda: ready_b, 60.0, "monitor b's edge1_ready")
+    ros.spin_until(lambda: ready_b.msgs, 60.0, "monitor b's edge1_ready")
+    assert ready_b.checked[0].authentic     # signed as /feeder/feeder_monitor_b
+    # Monitor b's statements do not pass as monitor a's (the signature names the monitor).
+    assert not check_verdict(ready_b.msgs[0], ros.key, MONITOR,
+                             ros.node.get_clock().now().nanoseconds).authentic
     verdicts.wait_matched()
     wait_for_readers(ros, '/feeder/cycle_status', 2)
     ros.spin_for(0.5)
     trigger_until_ready(ros, verdicts)
 
-    # Idle: the true verdict is republished within the deadline.
+    # Idle: the true statement is republished every ready_deadline / 4, each fresh.
     n = len(ready)
-    ros.spin_for(1.0)
-    assert len(ready) - n >= 3 and all(m.data for m in ready.msgs[n:])
-    ros.spin_until(lambda: ready_b[-1].data, 5.0, 'monitor b ready')
+    t0 = time.monotonic()
+    arrivals = []
+    while time.monotonic() - t0 < 1.0:
+        k = len(ready)
+        ros.spin_for(0.01)
+        arrivals += [time.monotonic()] * (len(ready) - k)
+    assert len(ready) - n >= 10 and all(c.ready_now for c in ready.checked[n:])
+    gaps = [b - a for a, b in zip(arrivals, arrivals[1:])]
+    assert max(gaps) < 0.2, f'a gap of {max(gaps):.3f} s: the 0.2 s deadline missed'
+    ros.spin_until(lambda: ready_b.checked[-1].ready_now, 5.0, 'monitor b ready')
 
     # A clean exit says false.
     mon_a.send_signal(signal.SIGINT)
     assert mon_a.wait(10) == 0
     ros.spin_for(0.3)
-    assert ready.msgs[-1].data is False
+    assert ready.checked[-1].ready is False and ready.checked[-1].authentic
 
-    # A killed monitor's true stays in the reader's cache, but its liveliness goes.
+    # A killed monitor's true stays in the reader's cache, but its liveliness goes, and its
+    # signed sent time tells a consumer it is stale.
     assert alive and alive[-1] == 1
     mon_b.send_signal(signal.SIGKILL)
     mon_b.wait(10)
     ros.spin_until(lambda: alive[-1] == 0, 5.0, 'liveliness lost')
-    assert ready_b[-1].data is True     # what a consumer must not trust without liveliness
+    cached = ready_b.msgs[-1]
+    assert cached.ready is True     # what a consumer must not trust without a check
+    ros.spin_for(0.6)
+    later = check_verdict(cached, ros.key, '/feeder/feeder_monitor_b',
+                          ros.node.get_clock().now().nanoseconds, max_age_s=0.5)
+    assert later.authentic and not later.ready_now and 'ago' in later.reason
 
 
 def test_a_huge_seq_does_not_hang_the_predictor(graph, ros):
@@ -151,7 +286,7 @@ def test_a_huge_seq_does_not_hang_the_predictor(graph, ros):
     pred = predictor(graph)
     states = PredictedStates(ros)
     diags = Diagnostics(ros)
-    pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', RELIABLE)
+    pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
     ros.spin_until(lambda: pub.get_subscription_count() >= 1, 60.0, 'the predictor')
     ros.spin_for(0.5)
     stamp = ros.node.get_clock().now().nanoseconds

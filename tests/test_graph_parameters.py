@@ -15,10 +15,9 @@
 """(d) Bad parameters are rejected with a reason, through the parameter services."""
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_nodes import (Collector, LATCHED, monitor, PredictedStates, predictor,
-                          sim_as_hardware, status_values, TRIANGLE, wait_for_monitor,
+from feeder_nodes import (Collector, monitor, PredictedStates, predictor, sim_as_hardware,
+                          Statements, status_values, TRIANGLE, wait_for_monitor,
                           wait_for_publishers)
-from std_msgs.msg import Bool
 from std_srvs.srv import Trigger
 from throwmap import analyse, load_scene, sees
 
@@ -38,7 +37,7 @@ def test_bad_values_are_rejected_and_good_ones_applied(graph, ros):
     sim_as_hardware(graph)
     predictor(graph)
     monitor(graph)
-    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    ready = Statements(ros)
     states = PredictedStates(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     wait_for_monitor(ros, ready)
@@ -74,16 +73,24 @@ def test_bad_values_are_rejected_and_good_ones_applied(graph, ros):
     assert (status_values(statuses.msgs[0])['sensor'] == '1') == \
         bool(sees(scene.part, edge, R, sensor.radius, sensor.footprint))
 
-    # monitor: the proven warm-up, ranges, read-only
+    # monitor: the proven warm-up, ranges, read-only (the key file too: a node never changes
+    # the key it checks with while it runs)
     r = ros.set_parameters(MON, {'warmup_cycles': 0, 'silence_margin': 0.5,
-                                 'orbit_throws': 5000, 'stamp_tolerance': 0.5})
+                                 'orbit_throws': 5000, 'max_report_age': 0.001,
+                                 'key_file': '/tmp/other.key'})
     rejected(r['warmup_cycles'], 'below the proven warm-up of 1')
     rejected(r['silence_margin'])
     rejected(r['orbit_throws'], 'read-only')
-    rejected(r['stamp_tolerance'])
-    assert ros.set_parameters(MON, {'warmup_cycles': 4})['warmup_cycles'].successful
-    assert ros.get_parameters(MON, ['warmup_cycles', 'silence_margin']) == \
-        {'warmup_cycles': 4, 'silence_margin': 1.5}
+    rejected(r['max_report_age'])
+    rejected(r['key_file'], 'read-only')
+    # stamp_tolerance and pair_timeout are gone (the monitor judges the signed cycle_status
+    # alone): not parameters of the monitor any more.
+    for gone in ('stamp_tolerance', 'pair_timeout'):
+        rejected(ros.set_parameters(MON, {gone: 0.5})[gone])
+    assert ros.set_parameters(MON, {'warmup_cycles': 4, 'max_report_age': 2})[
+        'warmup_cycles'].successful
+    assert ros.get_parameters(MON, ['warmup_cycles', 'silence_margin', 'max_report_age']) == \
+        {'warmup_cycles': 4, 'silence_margin': 1.5, 'max_report_age': 2.0}
 
 
 def test_a_scene_that_does_not_load_stops_the_node_with_throwmaps_message(graph, tmp_path):

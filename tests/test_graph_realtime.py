@@ -63,6 +63,7 @@ def test_every_thread_of_the_sim_and_the_monitor_runs_fifo_and_the_graph_works(g
         assert set(seen.values()) == {(os.SCHED_FIFO, PRIORITY)}, seen
     run_cycles(ros, 30, statuses, 0.01)
     ros.spin_until(lambda: len(verdicts) >= 30, 20, '30 verdicts')
+    assert all(v.authentic for v in verdicts.parsed)
     for proc in (sim, mon):
         assert graph.stop(proc) == 0, graph.log(proc)
 

@@ -24,11 +24,10 @@ import signal
 import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_nodes import (Collector, LATCHED, monitor, predictor, REPO, sim_as_hardware,
+from feeder_nodes import (Collector, monitor, predictor, REPO, sim_as_hardware, Statements,
                           STARTUP_TIMEOUT, status_values, TRIANGLE, Verdicts)
 import pytest
 import ros_cli
-from std_msgs.msg import Bool
 from std_srvs.srv import SetBool, Trigger
 
 SHARE = REPO / 'ros2_ws' / 'install'
@@ -53,8 +52,12 @@ def wait_nodes(ros, fqns, timeout=STARTUP_TIMEOUT):
 
 
 class Launch:
+    """``ros2 launch feeder_bringup ...`` with the test's key file (conftest ``key_file``)."""
+
     def __init__(self, env, tmp_path, *argv):
         self.log_path = tmp_path / 'launch.log'
+        if not any(a.startswith('key_file:=') for a in argv):
+            argv = (*argv, f'key_file:={tmp_path / "keys" / "hmac.key"}')
         self.proc = ros_cli.start(['launch', 'feeder_bringup', *argv], env, self.log_path)
 
     @property
@@ -100,9 +103,10 @@ def test_sim_launch_param_load_lifecycle_and_ctrl_c(cli, ros, tmp_path, launches
     names = ['/feeder/feeder_driver', '/feeder/feeder_sim', '/feeder/feeder_monitor',
              '/feeder/feeder_bag_recorder']
     wait_nodes(ros, names)
-    ready = Collector(ros, Bool, '/feeder/edge1_ready', LATCHED)
+    ready = Statements(ros)
     assert ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True)).success
-    ros.spin_until(lambda: any(m.data for m in ready.msgs), 30.0, 'an edge1_ready true')
+    # (after the monitor's settling: 87 throws of the triangle, under 2 s at 0.02 s)
+    ros.spin_until(lambda: ready.any_ready(), 30.0, 'an edge1_ready true, signed and fresh')
 
     share = {pkg: SHARE / pkg / 'share' / pkg / 'config' for pkg in
              ('feeder_sim', 'feeder_monitor', 'feeder_driver')}
@@ -197,16 +201,23 @@ def check_feeders_apart(ros, spaces, cycles=40):
     Cycle every feeder but the middle one; each monitor follows its own feeder only.
 
     Per namespace: cycle_status seqs 1..n of its own; one edge1_verdict per cycle of its own,
-    naming that cycle (none for the idle one); its predictor followed exactly those.
+    naming that cycle (none for the idle one), signed by its own monitor; its predictor
+    followed exactly those.
     """
     statuses = {ns: Collector(ros, DiagnosticStatus, f'{ns}/cycle_status') for ns in spaces}
-    ready = {ns: Collector(ros, Bool, f'{ns}/edge1_ready', LATCHED) for ns in spaces}
-    verdicts = {ns: Verdicts(ros, f'{ns}/edge1_verdict') for ns in spaces}
+    ready = {ns: Statements(ros, f'{ns}/edge1_ready', monitor=f'{ns}/feeder_monitor')
+             for ns in spaces}
+    verdicts = {ns: Verdicts(ros, f'{ns}/edge1_verdict', monitor=f'{ns}/feeder_monitor')
+                for ns in spaces}
+    # The same key everywhere, but a verdict names its monitor: one feeder's cannot pass as
+    # another's.
+    crossed = Verdicts(ros, f'{spaces[0]}/edge1_verdict', monitor=f'{spaces[2]}/feeder_monitor')
     for ns in spaces:
         ros.spin_until(lambda ns=ns: len(ready[ns]) >= 1, STARTUP_TIMEOUT, f'{ns} monitor')
         verdicts[ns].wait_matched()
         ros.spin_until(lambda ns=ns: ros.node.count_subscribers(f'{ns}/cycle_status') >= 3,
                        STARTUP_TIMEOUT, f'{ns} readers')
+    crossed.wait_matched()
     ros.spin_for(0.5)
     busy = [ns for k, ns in enumerate(spaces) if k != 1]
     for ns in busy:
@@ -221,8 +232,12 @@ def check_feeders_apart(ros, spaces, cycles=40):
         seqs = [int(status_values(s)['seq']) for s in statuses[ns].msgs]
         assert seqs == list(range(1, len(seqs) + 1)), ns
         assert [v.seq for v in verdicts[ns].parsed] == seqs, ns
+        assert all(v.authentic for v in verdicts[ns].parsed), ns
+        assert all(c.authentic for c in ready[ns].checked), ns
         assert all(s.hardware_id == 'sim' for s in statuses[ns].msgs)
     assert not statuses[spaces[1]].msgs
+    assert len(crossed) == len(verdicts[spaces[0]]) and \
+        not any(v.authentic for v in crossed.parsed)
 
 
 def test_three_feeders_side_by_side_as_processes(graph, ros):

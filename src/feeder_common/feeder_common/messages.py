@@ -21,9 +21,10 @@ level OK (completed) or ERROR (failed, the reason in ``message``), ``hardware_id
 it, values ``seq``, ``sensor`` (``1``/``0``/``none``), ``stamp`` (the sample time,
 :mod:`feeder_common.stamps`). ``proximity`` (sensor_msgs/Range, REP 117 fixed-distance ranger):
 ``-inf`` part detected, ``+inf`` not. ``joint_states``: the arm joint ``feeder_arm_joint``.
-``edge1_verdict`` (DiagnosticStatus, the monitor's verdict of each judged cycle): ``name =
-'edge1_verdict'``, level OK (ERROR: the cycle revealed an anomaly, its reason in ``message``),
-values ``seq`` and ``stamp`` of the cycle, ``ready`` (``true``/``false``), ``state``.
+A driver signs each ``cycle_status`` (values ``session``, ``mac``) and announces each cycle on
+``cycle_fired`` before it fires (:class:`CycleSigner`, feeder_common.auth). The monitor's
+``edge1_ready`` / ``edge1_verdict`` are ``feeder_interfaces/Verdict``, signed
+(:func:`signed_verdict`); a consumer checks one in one call (:func:`check_verdict`).
 ``predicted/state`` (DiagnosticStatus, the predictor's state after each followed cycle): ``name =
 'predicted_state'``, level OK, values ``seq`` and ``stamp`` of the cycle, ``edge`` (-1: no part
 on the arm), ``R`` (m, ``none`` without a part), ``throw_kind`` (``jog``/``flip``/``lost``).
@@ -52,7 +53,6 @@ from .stamps import is_decimal, NS, parse_stamp_text, stamp_text
 
 CYCLE_STATUS_NAME = 'cycle'
 CYCLE_FIRED_NAME = 'cycle_fired'
-VERDICT_NAME = 'edge1_verdict'
 PREDICTED_STATE_NAME = 'predicted_state'
 # A follower of cycle_status replays at most this many missed cycles; a longer jump of seq is
 # implausible (a forged or corrupt seq, or a driver that ran unseen for minutes): an anomaly.
@@ -68,8 +68,6 @@ _MAX_FLOAT_TEXT = 32
 _SENSOR_TEXT = {True: '1', False: '0', None: 'none'}
 _HEX = frozenset('0123456789abcdef')
 _SENSOR_BIT = {'1': True, '0': False, 'none': None}
-_READY_TEXT = {True: 'true', False: 'false'}
-_READY_BIT = {'true': True, 'false': False}
 THROW_KINDS = ('jog', 'flip', 'lost')
 _LEVELS = {DiagnosticStatus.OK: True, DiagnosticStatus.ERROR: False}
 
@@ -230,53 +228,6 @@ def parse_cycle_status(msg):
     session, tag = _signature(msg.values)
     return CycleStatus(seq, _LEVELS[msg.level], _SENSOR_BIT[values['sensor']], stamp,
                        msg.message, msg.hardware_id, session, tag)
-
-
-@dataclass(frozen=True)
-class EdgeVerdict:
-    """A parsed ``edge1_verdict``: the monitor's answer for cycle ``seq``."""
-
-    seq: int
-    stamp_ns: Optional[int]
-    ready: bool
-    state: str
-    anomaly: str            # '' unless the cycle revealed an anomaly
-
-
-def edge_verdict(seq, stamp_ns, ready, state, anomaly=None, hardware_id=''):
-    """
-    Build an ``edge1_verdict``; ``stamp_ns`` None: the cycle had no usable stamp.
-
-    Its texts are cut to MAX_TEXT characters (an anomaly can quote a failed cycle's reason).
-    """
-    return DiagnosticStatus(
-        level=DiagnosticStatus.ERROR if anomaly else DiagnosticStatus.OK, name=VERDICT_NAME,
-        message=_clip(anomaly or state), hardware_id=_clip(hardware_id),
-        values=[KeyValue(key='seq', value=str(int(seq))),
-                KeyValue(key='stamp', value='none' if stamp_ns is None
-                         else stamp_text(stamp_ns)),
-                KeyValue(key='ready', value=_READY_TEXT[bool(ready)]),
-                KeyValue(key='state', value=_clip(state))])
-
-
-def parse_edge_verdict(msg):
-    """Parse an ``edge1_verdict`` as :func:`edge_verdict` writes it; ValueError naming a fault."""
-    what = 'edge1_verdict'
-    values = _values(msg, what, VERDICT_NAME, ('seq', 'stamp', 'ready', 'state'))
-    seq = parse_seq(values['seq'], f'{what} seq')
-    stamp = _optional_stamp(values['stamp'], what)
-    if values['ready'] not in _READY_BIT:
-        raise ValueError(f'{what} ready {values["ready"][:40]!r} is not true or false')
-    state = _text(f'{what} state', values['state'])
-    ok = _LEVELS[msg.level]
-    if not state:
-        raise ValueError(f'{what} with an empty state')
-    if ok and msg.message != state:
-        raise ValueError(f'{what} of level OK whose message is not its state')
-    if not ok and not msg.message:
-        raise ValueError(f'{what} of level ERROR without the anomaly in its message')
-    return EdgeVerdict(seq, stamp, _READY_BIT[values['ready']], state,
-                       '' if ok else msg.message)
 
 
 @dataclass(frozen=True)

@@ -189,17 +189,38 @@ def test_joint_state_names_the_arm_joint():
     assert js.name == [frames.ARM_JOINT] and list(js.velocity) == [5.58] and not js.effort
 
 
-def test_edge_verdict_round_trip():
-    msg = messages.edge_verdict(7, 1795362335_204302396, True, 'ready', None, 'triangle')
-    assert msg.name == 'edge1_verdict' and msg.level == DiagnosticStatus.OK
-    v = messages.parse_edge_verdict(msg)
-    assert (v.seq, v.stamp_ns, v.ready, v.state, v.anomaly) == \
-        (7, 1795362335_204302396, True, 'ready', '')
-    bad = messages.parse_edge_verdict(messages.edge_verdict(8, None, False, 'anomaly', 'why'))
-    assert (bad.stamp_ns, bad.ready, bad.anomaly) == (None, False, 'why')
-    with pytest.raises(ValueError, match='without a stamp, ready, state value'):
-        messages.parse_edge_verdict(DiagnosticStatus(name='edge1_verdict',
-                                                     values=[KeyValue(key='seq', value='1')]))
+def test_a_consumer_reads_a_signed_verdict_and_checks_it():
+    """edge1_ready / edge1_verdict: a Verdict read field by field, and the one-call check."""
+    from feeder_interfaces.msg import Verdict
+    key, other = b'k' * 32, b'o' * 32
+    mon = '/feeder/feeder_monitor'
+    sent = 1795362335_300000000
+    msg = messages.signed_verdict(key, mon, 'ab12', 7, 1795362335_204302396, True,
+                                  Verdict.STATE_READY, '', sent)
+    assert (msg.seq, messages.time_ns(msg.stamp), msg.ready, msg.state, msg.anomaly,
+            msg.session) == (7, 1795362335_204302396, True, 'ready', '', 'ab12')
+    assert messages.time_ns(msg.sent) == sent and len(msg.mac) == 32
+    ok = messages.check_verdict(msg, key, mon, sent + 100_000_000)
+    assert (ok.ready_now, ok.authentic, ok.seq, ok.stamp_ns, ok.reason) == \
+        (True, True, 7, 1795362335_204302396, '')
+    assert ok.sent_age_s == pytest.approx(0.1)
+    # Another key, another monitor, a stale or a changed message: never ready now.
+    assert not messages.check_verdict(msg, other, mon, sent).authentic
+    assert not messages.check_verdict(msg, key, '/feeder_2/feeder_monitor', sent).ready_now
+    stale = messages.check_verdict(msg, key, mon, sent + 2_000_000_000, max_age_s=1.0)
+    assert stale.authentic and not stale.ready_now and 'more than 1 s' in stale.reason
+    msg.seq = 8
+    assert not messages.check_verdict(msg, key, mon, sent).authentic
+    unsigned = Verdict(seq=7, ready=True, state='ready')
+    assert messages.check_verdict(unsigned, key, mon, 0).reason == 'unsigned verdict'
+    # No cycle judged yet: seq 0, no stamp; an anomaly says why.
+    none = messages.signed_verdict(key, mon, 'ab12', 0, None, False, Verdict.STATE_ANOMALY,
+                                   'why', sent)
+    c = messages.check_verdict(none, key, mon, sent)
+    assert (c.authentic, c.ready_now, c.stamp_ns) == (True, False, None)
+    assert c.reason == 'not ready: anomaly (why)'
+    for gone in ('edge_verdict', 'parse_edge_verdict', 'EdgeVerdict'):
+        assert not hasattr(messages, gone)
 
 
 def test_predicted_state_round_trip_keeps_R_to_the_bit():
@@ -232,31 +253,3 @@ def test_edge1_ready_promises_deadline_and_liveliness():
     assert p.deadline.nanoseconds == p.liveliness_lease_duration.nanoseconds == 250_000_000
     assert p.liveliness == LivelinessPolicy.AUTOMATIC
     assert qos.EDGE1_VERDICT.depth >= 1000 and qos.DIAGNOSTICS.depth >= 10
-
-
-def test_the_publisher_guard_trusts_one_node_and_its_writer(domain_id):
-    import rclpy
-    from rclpy.context import Context
-    from feeder_common.graph import PublisherGuard
-    ctx = Context()
-    rclpy.init(context=ctx, domain_id=domain_id)
-    try:
-        me = rclpy.create_node('feeder_monitor', namespace='/feeder', context=ctx)
-        driver = rclpy.create_node('feeder_driver', namespace='/feeder', context=ctx)
-        guard = PublisherGuard(me, ('/feeder/cycle_status',), '/feeder/feeder_driver')
-        assert 'no publisher on /feeder/cycle_status' in guard.check()
-        pub = driver.create_publisher(DiagnosticStatus, 'cycle_status', 10)
-        assert guard.check() is None and guard.crowded() is None
-        forger = rclpy.create_node('forger', context=ctx)
-        forged = forger.create_publisher(DiagnosticStatus, '/feeder/cycle_status', 10)
-        assert '2 publishers on /feeder/cycle_status' in guard.crowded()
-        assert '/forger besides or instead of /feeder/feeder_driver' in guard.check()
-        forger.destroy_publisher(forged)
-        assert guard.check() is None
-        # The driver's writer replaced (a restart, or a node that took its name): said once.
-        driver.destroy_publisher(pub)
-        driver.create_publisher(DiagnosticStatus, 'cycle_status', 10)
-        assert 'changed (GID' in guard.check()
-        assert guard.check() is None
-    finally:
-        rclpy.shutdown(context=ctx)

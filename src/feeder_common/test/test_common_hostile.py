@@ -24,11 +24,13 @@ import math
 
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from feeder_common import messages, stamps
-from hostile_messages import KILLER_STAMP, ranges, statuses, TEXT, TIMES
+from hostile_messages import KILLER_STAMP, ranges, statuses, TEXT, TIMES, verdicts, wire
 from hypothesis import example, given, settings, strategies as st
 import pytest
 
 SETTINGS = settings(max_examples=400, deadline=None)
+KEY = bytes(range(32))
+MONITOR = '/feeder/feeder_monitor'
 GOOD_STAMP = '1795362335.204302396'
 
 
@@ -126,15 +128,19 @@ def test_a_predicted_state_that_contradicts_itself_is_refused(edge, R, kind):
         messages.parse_predicted_state(messages.predicted_state(5, None, edge, R, kind))
 
 
-def test_a_verdict_unlike_the_builders_is_refused():
-    good = messages.edge_verdict(7, None, True, 'ready')
-    assert messages.parse_edge_verdict(good).ready is True
-    for key, value in (('ready', 'True'), ('ready', '1'), ('seq', '+7'), ('stamp', '12.5'),
-                       ('state', '')):
-        msg = messages.edge_verdict(7, None, True, 'ready')
-        next(kv for kv in msg.values if kv.key == key).value = value
-        with pytest.raises(ValueError, match='edge1_verdict'):
-            messages.parse_edge_verdict(msg)
+def test_a_verdict_changed_in_any_field_is_not_authentic():
+    good = messages.signed_verdict(KEY, MONITOR, 'ab12', 7, 5, True, 'ready', '', 10**18)
+    assert messages.check_verdict(good, KEY, MONITOR, 10**18).ready_now
+    for field, value in (('seq', 8), ('ready', False), ('state', 'tracking'), ('anomaly', 'x'),
+                         ('session', 'ab13')):
+        msg = messages.signed_verdict(KEY, MONITOR, 'ab12', 7, 5, True, 'ready', '', 10**18)
+        setattr(msg, field, value)
+        c = messages.check_verdict(msg, KEY, MONITOR, 10**18)
+        assert not c.authentic and not c.ready_now, field
+    for stamp in ('stamp', 'sent'):
+        msg = messages.signed_verdict(KEY, MONITOR, 'ab12', 7, 5, True, 'ready', '', 10**18)
+        getattr(msg, stamp).nanosec += 1
+        assert not messages.check_verdict(msg, KEY, MONITOR, 10**18).authentic, stamp
 
 
 @pytest.mark.parametrize('sec, nanosec', [(-1, 0), (0, 10**9), (5, 2**32 - 1), (-2**31, 0)])
@@ -179,16 +185,12 @@ def test_any_cycle_status_parses_to_the_builders_form_or_is_a_value_error(msg):
 
 
 @SETTINGS
-@given(statuses())
-def test_any_verdict_parses_to_the_builders_form_or_is_a_value_error(msg):
-    try:
-        v = messages.parse_edge_verdict(msg)
-    except ValueError:
-        return
-    again = messages.edge_verdict(v.seq, v.stamp_ns, v.ready, v.state, v.anomaly)
-    keys = ('seq', 'stamp', 'ready', 'state')
-    assert _texts(again, *keys) == _texts(msg, *keys)
-    assert (again.level, again.message) == (msg.level, msg.message)
+@given(verdicts())
+def test_any_verdict_is_checked_without_an_exception_and_never_ready_unsigned(msg):
+    # A consumer's one call: whatever arrives, an answer; ready only when our monitor signed.
+    c = messages.check_verdict(msg, KEY, MONITOR, 10**18)
+    assert isinstance(c.ready_now, bool) and isinstance(c.reason, str)
+    assert not c.authentic and not c.ready_now
 
 
 @SETTINGS
@@ -256,9 +258,10 @@ def test_a_builder_cuts_a_text_too_long_for_the_parser():
     st = messages.parse_cycle_status(messages.cycle_status(3, False, reason, None, 0, 'x' * 10**5))
     assert len(st.message) == len(st.hardware_id) == messages.MAX_TEXT
     assert st.message.startswith('r' * 100) and st.message.endswith('\u2026')
-    v = messages.parse_edge_verdict(messages.edge_verdict(3, 0, False, 'anomaly',
-                                                          f'cycle 3 failed: {st.message}'))
+    v = messages.signed_verdict(KEY, MONITOR, 'ab12', 3, 0, False, 'anomaly',
+                                f'cycle 3 failed: {st.message}', 10**18)
     assert len(v.anomaly) == messages.MAX_TEXT and v.anomaly.startswith('cycle 3 failed: r')
+    assert messages.check_verdict(wire(v), KEY, MONITOR, 10**18).authentic
 
 
 @SETTINGS
@@ -286,6 +289,8 @@ def test_every_prediction_and_verdict_the_builders_write_reads_back(
                                  'lost' if lost else kind)
     assert messages.parse_predicted_state(p) == messages.PredictedState(
         seq, stamp, state, None if lost else R, 'lost' if lost else kind)
-    v = messages.parse_edge_verdict(messages.edge_verdict(seq, stamp, ready, verdict_state,
-                                                          anomaly))
-    assert v == messages.EdgeVerdict(seq, stamp, ready, verdict_state, anomaly)
+    v = wire(messages.signed_verdict(KEY, MONITOR, 'ab12', seq, stamp, ready, verdict_state,
+                                     anomaly, stamps.MAX_STAMP_NS))
+    c = messages.check_verdict(v, KEY, MONITOR, stamps.MAX_STAMP_NS)
+    assert c.authentic and (c.seq, c.stamp_ns) == (seq, stamp)
+    assert (v.ready, v.state, v.anomaly) == (ready, verdict_state, anomaly)

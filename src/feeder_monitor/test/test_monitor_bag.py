@@ -13,6 +13,7 @@
 # limitations under the License.
 
 from feeder_monitor.bag import BagWriter, qos, qos_time
+import numpy as np
 import pytest
 from rosbags.interfaces import QosDurability, QosReliability
 from rosbags.rosbag2 import Reader
@@ -23,19 +24,32 @@ LATCHED = qos(1, 1, 1, 1)              # keep last 1, reliable, transient local
 VOLATILE = qos(1, 10, 1, 2)
 
 
+VERDICT = 'feeder_interfaces/msg/Verdict'
+
+
 def test_round_trip(tmp_path):
+    """A latched signed Verdict (edge1_ready) and a volatile Int32 topic, read back."""
     path = tmp_path / 'bag'
     w = BagWriter(path)
     ts = w.typestore
-    Bool = ts.types['std_msgs/msg/Bool']
+    # The recorder's own question: the writer finds the project's message definition
+    # (installed with feeder_interfaces), it is in no store of the ROS distribution.
+    assert w.knows(VERDICT)
+    Verdict = ts.types[VERDICT]
+    Time = ts.types['builtin_interfaces/msg/Time']
     Int32 = ts.types['std_msgs/msg/Int32']
-    w.add_topic('/feeder/edge1_ready', 'std_msgs/msg/Bool', [LATCHED])
+    w.add_topic('/feeder/edge1_ready', VERDICT, [LATCHED])
     w.add_topic('/feeder/predicted/edge', 'std_msgs/msg/Int32', [VOLATILE])
     for k in range(5):
         w.write('/feeder/predicted/edge', 1000 + k,
                 ts.serialize_cdr(Int32(data=k), Int32.__msgtype__), publish_time_ns=900 + k,
                 sequence=k + 1)
-    w.write('/feeder/edge1_ready', 2000, ts.serialize_cdr(Bool(data=True), Bool.__msgtype__))
+    stamp, sent = Time(sec=1795362335, nanosec=204302396), Time(sec=1795362335, nanosec=3)
+    mac = bytes(range(32))
+    verdict = Verdict(seq=7, stamp=stamp, ready=True, state='ready', anomaly='',
+                      session='ab12', sent=sent,
+                      mac=np.frombuffer(mac, dtype=np.uint8))
+    w.write('/feeder/edge1_ready', 2000, ts.serialize_cdr(verdict, VERDICT))
     assert w.counts == {'/feeder/edge1_ready': 1, '/feeder/predicted/edge': 5} and w.total == 6
     w.close()
     w.close()                          # idempotent
@@ -46,7 +60,7 @@ def test_round_trip(tmp_path):
     assert meta['duration']['nanoseconds'] == 1000
     topics = {t['topic_metadata']['name']: t for t in meta['topics_with_message_count']}
     assert topics['/feeder/edge1_ready']['topic_metadata']['type_description_hash'] == \
-        ts.hash_rihs01('std_msgs/msg/Bool')
+        ts.hash_rihs01(VERDICT)
     with Reader(path) as r:
         conns = {c.topic: c for c in r.connections}
         assert conns['/feeder/predicted/edge'].msgcount == 5
@@ -55,10 +69,23 @@ def test_round_trip(tmp_path):
         assert latched.reliability == QosReliability.RELIABLE
         plain = conns['/feeder/predicted/edge'].ext.offered_qos_profiles[0]
         assert plain.durability == QosDurability.VOLATILE
-        got = [(c.topic, t, ts.deserialize_cdr(raw, c.msgtype).data)
+        got = [(c.topic, t, ts.deserialize_cdr(raw, c.msgtype))
                for c, t, raw in r.messages()]
-    assert got[:5] == [('/feeder/predicted/edge', 1000 + k, k) for k in range(5)]
-    assert got[5] == ('/feeder/edge1_ready', 2000, True)
+    assert [(topic, t, m.data) for topic, t, m in got[:5]] == \
+        [('/feeder/predicted/edge', 1000 + k, k) for k in range(5)]
+    topic, t, v = got[5]
+    assert (topic, t, v.seq, v.ready, v.state, v.session) == \
+        ('/feeder/edge1_ready', 2000, 7, True, 'ready', 'ab12')
+    assert (v.stamp.sec, v.stamp.nanosec, v.sent.nanosec) == (1795362335, 204302396, 3)
+    assert bytes(v.mac) == mac
+    # rclpy reads the same bytes as the generated feeder_interfaces class (what a consumer of
+    # a bag does before feeder_common.messages.check_verdict).
+    from feeder_interfaces.msg import Verdict as RosVerdict
+    from rclpy.serialization import deserialize_message
+    with Reader(path) as r:
+        raw = next(raw for c, _, raw in r.messages() if c.topic == '/feeder/edge1_ready')
+    back = deserialize_message(bytes(raw), RosVerdict)
+    assert (back.seq, back.ready, bytes(back.mac)) == (7, True, mac)
     # The MCAP layout rosbag2_storage_mcap writes, read with the mcap library.
     from mcap.reader import make_reader
     with open(path / 'bag.mcap', 'rb') as fh:

@@ -12,6 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
+from feeder_interfaces.msg import Verdict
 from feeder_monitor.bag_recorder import (message_class, offered_qos, parse_args,
                                          subscription_qos)
 import pytest
@@ -45,6 +46,8 @@ def test_offered_qos_keeps_durability_and_reliability():
 
 def test_message_class():
     assert message_class('std_msgs/msg/Bool') is Bool
+    # edge1_ready and edge1_verdict: the project's own interface package
+    assert message_class('feeder_interfaces/msg/Verdict') is Verdict
     with pytest.raises(ImportError):
         message_class('no_such_pkg/msg/X')
 
