@@ -325,8 +325,10 @@ def signed_verdict(key, monitor, session, seq, stamp_ns, ready, state, anomaly, 
     """
     Build a signed ``Verdict`` of monitor ``monitor`` (its fully qualified node name).
 
-    ``seq`` 0 and ``stamp_ns`` None: no cycle judged yet.
+    ``seq`` 0 and ``stamp_ns`` None: no cycle judged yet. A zero stamp is "none" on the wire
+    (Verdict's stamp field), so it is signed as none.
     """
+    stamp_ns = stamp_ns or None
     msg = Verdict(seq=int(seq), ready=bool(ready), state=_clip(str(state)),
                   anomaly=_clip(str(anomaly or '')), session=str(session))
     if stamp_ns is not None:
