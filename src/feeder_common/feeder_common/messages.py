@@ -99,6 +99,14 @@ def _text(what, text, limit=MAX_TEXT):
     return text
 
 
+def _wire_text(text):
+    """
+    Return ``text`` as a DDS string carries it: a NUL ends a string on the wire, so it is sent
+    (and signed) as U+FFFD instead; cut to MAX_TEXT characters.
+    """
+    return _clip(str(text).replace('\x00', '\ufffd'))
+
+
 def _clip(text):
     """Return ``str(text)`` cut to MAX_TEXT characters (its end an ellipsis when cut)."""
     text = str(text)
@@ -329,8 +337,8 @@ def signed_verdict(key, monitor, session, seq, stamp_ns, ready, state, anomaly, 
     (Verdict's stamp field), so it is signed as none.
     """
     stamp_ns = stamp_ns or None
-    msg = Verdict(seq=int(seq), ready=bool(ready), state=_clip(str(state)),
-                  anomaly=_clip(str(anomaly or '')), session=str(session))
+    msg = Verdict(seq=int(seq), ready=bool(ready), state=_wire_text(state),
+                  anomaly=_wire_text(anomaly or ''), session=_wire_text(session))
     if stamp_ns is not None:
         msg.stamp = time_msg(stamp_ns)
     msg.sent = time_msg(sent_ns)
