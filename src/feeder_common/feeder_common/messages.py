@@ -101,8 +101,9 @@ def _text(what, text, limit=MAX_TEXT):
 
 def _wire_text(text):
     """
-    Return ``text`` as a DDS string carries it: a NUL ends a string on the wire, so it is sent
-    (and signed) as U+FFFD instead; cut to MAX_TEXT characters.
+    Return ``text`` as a DDS string carries it, cut to MAX_TEXT characters.
+
+    A NUL ends a string on the wire, so it is sent (and signed) as U+FFFD instead.
     """
     return _clip(str(text).replace('\x00', '\ufffd'))
 
