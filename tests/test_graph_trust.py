@@ -83,7 +83,7 @@ def test_attack_6_ready_drops_when_a_cycle_fires_though_the_driver_stops_at_once
     monitor(graph)
     ready = Statements(ros)
     wait_for_monitor(ros, ready)
-    wait_for_readers(ros, '/feeder/cycle_fired', 2)
+    wait_for_readers(ros, '/feeder/cycle_fired', 1)      # the monitor's
     wait_enabled(ros)
     ros.spin_until(lambda: ready.any_ready(), 240.0, 'a ready statement')
     enable(ros, False)
@@ -118,7 +118,7 @@ def test_attack_8_a_killed_driver_is_known_within_2_s_and_a_restart_trusted_at_o
     verdicts = Verdicts(ros)
     wait_for_monitor(ros, ready)
     verdicts.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 2)
+    wait_for_readers(ros, '/feeder/cycle_status', 1)     # the monitor's
     cycle_until_ready(ros, ready)
     ros.spin_until(lambda: ready.checked[-1].ready_now, 10.0, 'a ready that holds')
     n = len(ready)
@@ -131,14 +131,17 @@ def test_attack_8_a_killed_driver_is_known_within_2_s_and_a_restart_trusted_at_o
     # A new driver run: its reports are judged from the first one (no distrust period).
     m = len(verdicts)
     sim_as_hardware(graph, f'cycle_period:={PERIOD}')
-    ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') == 1,
-                   STARTUP_TIMEOUT, 'the new driver')
-    t1 = time.monotonic()
-    enable_end = t1 + STARTUP_TIMEOUT
-    while not ros.call(SetBool, '/feeder/feeder_driver/enable',
-                       SetBool.Request(data=True)).success:
-        assert time.monotonic() < enable_end
-        ros.spin_for(0.2)
+    # The killed process stays in the DDS graph cache for its participant lease (20 s): a
+    # request may go to its service and never be answered, so ask again until one is.
+    end = time.monotonic() + STARTUP_TIMEOUT
+    while True:
+        try:
+            if ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True),
+                        timeout=2.0).success:
+                break
+        except AssertionError:
+            pass
+        assert time.monotonic() < end, 'the restarted driver did not answer'
     ros.spin_until(lambda: len(verdicts) >= m + 20, 10.0, '20 verdicts of the new run')
     enable(ros, False)
     new = verdicts.checked[m:]
@@ -156,7 +159,7 @@ def test_attack_7_a_stalled_monitor_states_no_ready_about_a_stale_cycle(graph, r
     verdicts = Verdicts(ros)
     wait_for_monitor(ros, ready)
     verdicts.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 2)
+    wait_for_readers(ros, '/feeder/cycle_status', 1)     # the monitor's
     cycle_until_ready(ros, ready)
     enable(ros, True)
     ros.spin_for(0.5)
