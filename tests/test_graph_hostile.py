@@ -25,6 +25,7 @@ installed monitor_node and sim_node processes: both stay up, count the bad input
 import math
 
 from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_common import qos
 from feeder_common.messages import cycle_status, proximity
 from feeder_nodes import (Diagnostics, monitor, PredictedStates, predictor, RELIABLE,
                           sim_as_hardware, watch_monitor)
@@ -66,7 +67,9 @@ def test_the_killer_status_and_garbage_leave_monitor_and_predictor_judging(graph
     ready, verdicts, statuses = watch_monitor(ros)
     states = PredictedStates(ros)
     diags = Diagnostics(ros)
-    status_pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', RELIABLE)
+    # The driver's QoS (a 1 s liveliness lease): the monitor's reader matches no other writer.
+    status_pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status',
+                                           qos.CYCLE_STATUS)
     prox_pub = ros.node.create_publisher(Range, '/feeder/proximity', RELIABLE)
     # the monitor's, the predictor's and this test's readers; the monitor's proximity reader
     ros.spin_until(lambda: status_pub.get_subscription_count() >= 3 and
