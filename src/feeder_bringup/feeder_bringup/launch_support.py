@@ -23,6 +23,11 @@ into launch_ros actions (:mod:`feeder_bringup.launch_actions`). So the plan can 
 where ``launch`` is not installed: every package, executable, config file and scene it names
 exists in the install space, and it reads only declared arguments (:class:`Arguments`).
 
+Every check is made while planning, before the plan is returned: a launch whose arguments
+cannot work (an optional part asked for and not installed, a record directory that exists)
+raises :class:`LaunchArgumentError` and starts nothing. :data:`CHOICES` lists the arguments
+that take one of a few words (the launch files declare them with ``choices``).
+
 The URDF needs the scene's numbers (the sensor radius and the arm's offset h): they come from
 the throwmap CLI installed with the workspace (``throwmap design/grasp --json``), so the launch
 process needs no numpy; a given ``sensor_radius`` skips the design.
@@ -34,6 +39,7 @@ import math
 import os
 import pathlib
 import shutil
+import stat
 import subprocess
 import tempfile
 import xml.etree.ElementTree as ET
@@ -62,13 +68,22 @@ SIM_ARGUMENTS = dict(COMMON_ARGUMENTS)
 HARDWARE_ARGUMENTS = dict(COMMON_ARGUMENTS, **{
     'port': ('/dev/ttyACM0', 'serial port of the controller (device or pyserial URL)'),
     'emulator': ('false', 'true: start controller_emulator on a pty and drive that'),
-    'emulator_link': ('', 'path of the emulator pty (default: <tmp>/feeder-<namespace>-tty)'),
+    'emulator_link': ('', 'path of the emulator pty (default: feeder-<namespace>-tty in the '
+                      "user's runtime folder: $XDG_RUNTIME_DIR/feeder, else <tmp>/feeder-<uid>, "
+                      'mode 0700)'),
 })
 FEEDERS_ARGUMENTS = dict(COMMON_ARGUMENTS, **{
     'namespaces': ('feeder_1,feeder_2,feeder_3', 'comma-separated namespaces: one simulated '
                    'feeder in each'),
 })
 del FEEDERS_ARGUMENTS['namespace']
+# Arguments that take one of a few words: declared with these ``choices`` (ros2 launch refuses
+# anything else before the launch starts, and -s lists them).
+CHOICES = {
+    'robot_state_publisher': ('auto', 'true', 'false'),
+    'rviz': ('true', 'false'),
+    'emulator': ('true', 'false'),
+}
 
 ARM_THICKNESS = 0.004   # m, as feeder_sim.markers draws it
 
@@ -177,7 +192,8 @@ def _realtime_parameter(args):
     return {'realtime_priority': priority} if priority else {}
 
 
-def flag(args, name, choices=('true', 'false')):
+def flag(args, name, choices=None):
+    choices = choices or CHOICES.get(name, ('true', 'false'))
     value = args[name].strip().lower()
     if value not in choices:
         raise LaunchArgumentError(f'{name}:={args[name]}: use one of {", ".join(choices)}')
@@ -233,6 +249,49 @@ def robot_description(sensor_radius, arm_offset, arm_length=0.4, urdf=None):
     return ET.tostring(root, encoding='unicode')
 
 
+def runtime_dir():
+    """
+    Return this user's folder for the emulator's pty link (made mode 0700 when absent).
+
+    ``$XDG_RUNTIME_DIR/feeder`` where the session has one, else ``<tmp>/feeder-<uid>``: the
+    default link (``feeder-<namespace>-tty`` in it) is never shared by two users, and another
+    user cannot put a link there.
+    """
+    xdg = os.environ.get('XDG_RUNTIME_DIR', '')
+    if xdg and os.path.isabs(xdg) and os.path.isdir(xdg):
+        path = os.path.join(xdg, 'feeder')
+    else:
+        path = os.path.join(tempfile.gettempdir(), f'feeder-{os.getuid()}')
+    try:
+        os.makedirs(path, mode=0o700, exist_ok=True)
+        info = os.lstat(path)
+    except OSError as exc:
+        raise LaunchArgumentError(f'emulator_link: cannot make {path}: {exc.strerror}; give '
+                                  'emulator_link:=PATH') from None
+    if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.getuid() or info.st_mode & 0o077:
+        raise LaunchArgumentError(f'emulator_link: {path} is not a folder of yours with mode '
+                                  '0700 (another user made it?); give emulator_link:=PATH')
+    return path
+
+
+def diagnostic_analyzers(namespaces):
+    """
+    diagnostic_aggregator's parameters for feeders in ``namespaces``: one group per feeder.
+
+    Status names carry the namespace (``feeder_1/feeder_driver: cycles``,
+    feeder_common.diagnostics), so each feeder's statuses go under ``Feeders/<namespace>``
+    (the name's prefix removed). The shipped config/diagnostic_analyzers.yaml is this for
+    feeders.launch.py's default namespaces.
+    """
+    analyzers = {'path': 'Feeders'}
+    for text in namespaces:
+        ns = namespace(text)[1:]
+        analyzers[ns.replace('/', '_')] = {
+            'type': 'diagnostic_aggregator/GenericAnalyzer', 'path': ns,
+            'startswith': [f'{ns}/'], 'remove_prefix': [f'{ns}/'], 'timeout': 5.0}
+    return {'analyzers': {'ros__parameters': analyzers}}
+
+
 def _key_parameter(args):
     """{'key_file': path} for the signing nodes; the file is made (mode 0600) when absent."""
     path = os.path.abspath(os.path.expanduser(args['key_file'] or auth.default_key_path()))
@@ -250,10 +309,42 @@ def _sensor_parameter(args):
     return {'sensor_radius': number(args, 'sensor_radius', minimum=0.0)}
 
 
+def _record_directory(args):
+    """Return the bag directory of ``record:=`` (absolute; '' for none), or refuse it."""
+    if not args['record']:
+        return ''
+    path = os.path.abspath(os.path.expanduser(args['record']))
+    if os.path.lexists(path):
+        raise LaunchArgumentError(f'record:={args["record"]}: {path} exists; the recorder '
+                                  'makes a new directory: give one that does not exist')
+    parent = os.path.dirname(path)
+    while not os.path.exists(parent):       # made by the recorder (BagWriter makes parents)
+        parent = os.path.dirname(parent)
+    if not os.path.isdir(parent) or not os.access(parent, os.W_OK | os.X_OK):
+        raise LaunchArgumentError(f'record:={args["record"]}: cannot make {path} ({parent} is '
+                                  'not a directory you can write to)')
+    return path
+
+
+def _optional(args, name, package):
+    """Whether to start ``package`` for ``name:=`` (auto: where installed; true: insist)."""
+    value = flag(args, name)
+    if value == 'true' and not installed(package):
+        raise LaunchArgumentError(
+            f'{name}:=true but {package} is not installed (not in the ament index: '
+            f'AMENT_PREFIX_PATH); install ros-kilted-{package.replace("_", "-")} or give '
+            f'{name}:={"auto" if "auto" in CHOICES[name] else "false"}')
+    return value == 'true' or (value == 'auto' and installed(package))
+
+
 def _common_nodes(args, ns, scene):
     """Predictor, monitor, recorder, robot_state_publisher, rviz2 of one feeder."""
     sensor = _sensor_parameter(args)
     rt = _realtime_parameter(args)
+    record = _record_directory(args)
+    want_rsp = _optional(args, 'robot_state_publisher', 'robot_state_publisher')
+    want_rviz = _optional(args, 'rviz', 'rviz2')
+    arm_length = number(args, 'arm_length', minimum=0.01)
     nodes = [
         NodeSpec('feeder_sim', 'sim_node', 'feeder_sim', ns,
                  [str(share('feeder_sim') / 'config' / 'sim.yaml'),
@@ -262,20 +353,19 @@ def _common_nodes(args, ns, scene):
                  [str(share('feeder_monitor') / 'config' / 'monitor.yaml'),
                   {'scene': scene, **sensor, **rt, **_key_parameter(args)}]),
     ]
-    if args['record']:
+    if record:
+        # It records the feeder's namespace (+ /diagnostics, /tf, /tf_static): its own bag.
         nodes.append(NodeSpec('feeder_monitor', 'bag_recorder', 'feeder_bag_recorder', ns,
-                              arguments=[os.path.abspath(os.path.expanduser(args['record']))]))
+                              arguments=[record]))
     # Transforms stay in the feeder's namespace (<ns>/tf), so feeders side by side, each with
     # frames feeder_base, feeder_arm, feeder_sensor, never mix.
     tf = [('/tf', 'tf'), ('/tf_static', 'tf_static')]
-    rsp = flag(args, 'robot_state_publisher', ('auto', 'true', 'false'))
-    if rsp == 'true' or (rsp == 'auto' and installed('robot_state_publisher')):
+    if want_rsp:
         radius = sensor.get('sensor_radius') or scene_geometry(scene)[0]
-        urdf = robot_description(radius, scene_geometry(scene)[1],
-                                 number(args, 'arm_length', minimum=0.01))
+        urdf = robot_description(radius, scene_geometry(scene)[1], arm_length)
         nodes.append(NodeSpec('robot_state_publisher', 'robot_state_publisher',
                               'robot_state_publisher', ns, [{'robot_description': urdf}], tf))
-    if flag(args, 'rviz') == 'true':
+    if want_rviz:
         nodes.append(NodeSpec('rviz2', 'rviz2', 'rviz2', ns, [], tf,
                               ['-d', str(share('feeder_bringup') / 'rviz' / 'feeder.rviz')]))
     return nodes
@@ -304,7 +394,7 @@ def plan_hardware(given):
     port = args['port']
     if flag(args, 'emulator') == 'true':
         port = args['emulator_link'] or os.path.join(
-            tempfile.gettempdir(), f'feeder-{ns[1:].replace("/", "-")}-tty')
+            runtime_dir(), f'feeder-{ns[1:].replace("/", "-")}-tty')
         emulator = ['--scene', scene, '--link', port]
         sensor = _sensor_parameter(args)
         if sensor:
@@ -327,9 +417,9 @@ def plan_feeders(given):
     spaces = [namespace(n) for n in names]
     if len(set(spaces)) != len(spaces):
         raise LaunchArgumentError(f'namespaces:={args["namespaces"]} names one twice')
+    record = args['record']
     nodes = []
     for ns in spaces:
-        record = args['record']
         one = Arguments(SIM_ARGUMENTS, {
             name: args[name] for name in SIM_ARGUMENTS if name != 'namespace'})
         one = one.with_values(namespace=ns,

@@ -233,8 +233,8 @@ def test_continuous_cycling_and_diagnostics(harness, emulator, link_path):
 
     assert h.spin_until(diag_caught_up, 3)
     names = {s.name: s for s in h.diags[-1].status}
-    link = names['feeder_driver: serial link']
-    cyc = names['feeder_driver: cycles']
+    link = names['feeder/feeder_driver: serial link']
+    cyc = names['feeder/feeder_driver: cycles']
     assert link.level == DiagnosticStatus.OK and link.hardware_id == link_path
     assert values(link)['firmware'] == 'feeder-emu-1.0'
     assert int(values(cyc)['fired']) == fired >= 30
