@@ -40,7 +40,7 @@ def test_the_shipped_analyzers_are_the_default_feeders_ones(support):  # noqa: F
 
 
 def matching(analyzers, name):
-    """The analyzers (GenericAnalyzer startswith) that take a status name."""
+    """Return the analyzers (GenericAnalyzer startswith) that take a status name."""
     return [key for key, a in analyzers.items() if isinstance(a, dict) and
             any(name.startswith(prefix) for prefix in a['startswith'])]
 
@@ -115,3 +115,32 @@ def test_word_arguments_have_choices_their_defaults_among_them(support):  # noqa
         declared = [t[name] for t in tables if name in t]
         assert declared, name
         assert all(default in choices for default, _ in declared), name
+
+
+@pytest.mark.parametrize('planner, given', [
+    ('plan_sim', {}),
+    ('plan_sim', {'record': '{tmp}/bag', 'sensor_radius': '0.2'}),
+    ('plan_hardware', {'emulator': 'true', 'record': '{tmp}/bag'}),
+    ('plan_hardware', {'emulator': 'true', 'sensor_radius': '0.25'}),
+    ('plan_hardware', {'port': '/dev/ttyUSB0'}),
+])
+def test_each_planned_process_fits_its_declared_slot(support, planner, given,  # noqa: F811
+                                                     tmp_path):
+    """The launch files declare one action per slot up front; the plan fills them in order."""
+    plan = getattr(support, planner)({k: v.format(tmp=tmp_path) for k, v in given.items()})
+    slots = [spec.slot for spec in plan]
+    order = support.PLAN_SLOTS[planner]
+    assert slots == sorted(slots, key=order.index) and len(set(slots)) == len(slots)
+    for spec in plan:
+        place = support.SLOTS[spec.slot]
+        assert (spec.package, spec.executable, spec.name, spec.ros) == \
+            (place.package, place.executable, place.name, bool(place.name))
+        assert len(spec.parameters) == place.parameters
+        assert len(spec.arguments) == place.arguments
+        assert spec.remappings == list(place.remappings)
+    if 'emulator' in slots:
+        emulator = plan[slots.index('emulator')].arguments
+        radius = float(emulator[emulator.index('--sensor-radius') + 1])
+        assert radius == pytest.approx(float(given.get('sensor_radius', 0)) or
+                                       support.scene_geometry(
+                                           support.resolve_scene('triangle'))[0])

@@ -92,6 +92,50 @@ class LaunchArgumentError(ValueError):
     """A launch argument is unusable; the text names it and the fix."""
 
 
+# Transforms stay in the feeder's namespace (<ns>/tf), so feeders side by side, each with
+# frames feeder_base, feeder_arm, feeder_sensor, never mix.
+TF_REMAPPINGS = (('/tf', 'tf'), ('/tf_static', 'tf_static'))
+
+
+@dataclass(frozen=True)
+class Slot:
+    """
+    A place for one process in a launch file, fixed when the launch description is made.
+
+    What the plan fills in at launch time has a fixed shape: ``parameters`` items (files and
+    dicts), ``arguments`` items; so the launch file can declare the Node action up front (and
+    ``ros2 launch -p`` shows it) and take the values from the plan.
+    """
+
+    package: str
+    executable: str
+    name: str = ''              # '' for a plain process (not a ROS node)
+    parameters: int = 0
+    arguments: int = 0
+    remappings: tuple = ()
+
+
+SLOTS = {
+    'emulator': Slot('feeder_driver', 'controller_emulator', arguments=6),
+    'driver': Slot('feeder_driver', 'driver_node', 'feeder_driver', parameters=2),
+    'hardware': Slot('feeder_sim', 'sim_node', 'feeder_driver', parameters=2),
+    'predictor': Slot('feeder_sim', 'sim_node', 'feeder_sim', parameters=2),
+    'monitor': Slot('feeder_monitor', 'monitor_node', 'feeder_monitor', parameters=2),
+    'recorder': Slot('feeder_monitor', 'bag_recorder', 'feeder_bag_recorder', arguments=1),
+    'robot_state_publisher': Slot('robot_state_publisher', 'robot_state_publisher',
+                                  'robot_state_publisher', parameters=1,
+                                  remappings=TF_REMAPPINGS),
+    'rviz': Slot('rviz2', 'rviz2', 'rviz2', arguments=2, remappings=TF_REMAPPINGS),
+}
+# The slots of each launch file, in start order (a plan holds a subset, in this order).
+PLAN_SLOTS = {
+    'plan_sim': ('hardware', 'predictor', 'monitor', 'recorder', 'robot_state_publisher',
+                 'rviz'),
+    'plan_hardware': ('emulator', 'driver', 'predictor', 'monitor', 'recorder',
+                      'robot_state_publisher', 'rviz'),
+}
+
+
 @dataclass
 class NodeSpec:
     """One process: a ROS node (``ros``) or a plain executable of a package."""
@@ -104,6 +148,18 @@ class NodeSpec:
     remappings: list = field(default_factory=list)
     arguments: list = field(default_factory=list)
     ros: bool = True
+    slot: str = ''      # its place in the launch file (SLOTS)
+
+
+def _spec(slot, ns='', parameters=(), arguments=()):
+    """Return the NodeSpec of ``slot`` (SLOTS) with these parameters and arguments."""
+    place = SLOTS[slot]
+    if len(parameters) != place.parameters or len(arguments) != place.arguments:
+        raise AssertionError(f'slot {slot}: {len(parameters)} parameter items and '
+                             f'{len(arguments)} arguments, not {place}')
+    return NodeSpec(place.package, place.executable, place.name, ns if place.name else '',
+                    list(parameters), list(place.remappings), list(arguments),
+                    ros=bool(place.name), slot=slot)
 
 
 class Arguments:
@@ -346,28 +402,21 @@ def _common_nodes(args, ns, scene):
     want_rviz = _optional(args, 'rviz', 'rviz2')
     arm_length = number(args, 'arm_length', minimum=0.01)
     nodes = [
-        NodeSpec('feeder_sim', 'sim_node', 'feeder_sim', ns,
-                 [str(share('feeder_sim') / 'config' / 'sim.yaml'),
-                  {'scene': scene, **sensor, **rt}]),
-        NodeSpec('feeder_monitor', 'monitor_node', 'feeder_monitor', ns,
-                 [str(share('feeder_monitor') / 'config' / 'monitor.yaml'),
-                  {'scene': scene, **sensor, **rt, **_key_parameter(args)}]),
+        _spec('predictor', ns, [str(share('feeder_sim') / 'config' / 'sim.yaml'),
+                                {'scene': scene, **sensor, **rt}]),
+        _spec('monitor', ns, [str(share('feeder_monitor') / 'config' / 'monitor.yaml'),
+                              {'scene': scene, **sensor, **rt, **_key_parameter(args)}]),
     ]
     if record:
         # It records the feeder's namespace (+ /diagnostics, /tf, /tf_static): its own bag.
-        nodes.append(NodeSpec('feeder_monitor', 'bag_recorder', 'feeder_bag_recorder', ns,
-                              arguments=[record]))
-    # Transforms stay in the feeder's namespace (<ns>/tf), so feeders side by side, each with
-    # frames feeder_base, feeder_arm, feeder_sensor, never mix.
-    tf = [('/tf', 'tf'), ('/tf_static', 'tf_static')]
+        nodes.append(_spec('recorder', ns, arguments=[record]))
     if want_rsp:
         radius = sensor.get('sensor_radius') or scene_geometry(scene)[0]
         urdf = robot_description(radius, scene_geometry(scene)[1], arm_length)
-        nodes.append(NodeSpec('robot_state_publisher', 'robot_state_publisher',
-                              'robot_state_publisher', ns, [{'robot_description': urdf}], tf))
+        nodes.append(_spec('robot_state_publisher', ns, [{'robot_description': urdf}]))
     if want_rviz:
-        nodes.append(NodeSpec('rviz2', 'rviz2', 'rviz2', ns, [], tf,
-                              ['-d', str(share('feeder_bringup') / 'rviz' / 'feeder.rviz')]))
+        nodes.append(_spec('rviz', ns, arguments=[
+            '-d', str(share('feeder_bringup') / 'rviz' / 'feeder.rviz')]))
     return nodes
 
 
@@ -376,12 +425,11 @@ def plan_sim(given):
     args = given if isinstance(given, Arguments) else Arguments(SIM_ARGUMENTS, given)
     ns = namespace(args['namespace'])
     scene = resolve_scene(args['scene'])
-    hardware = NodeSpec('feeder_sim', 'sim_node', 'feeder_driver', ns,
-                        [str(share('feeder_sim') / 'config' / 'sim.yaml'),
-                         {'scene': scene, 'hardware_mode': True,
-                          'cycle_period': number(args, 'cycle_period', 0.005),
-                          **_sensor_parameter(args), **_realtime_parameter(args),
-                          **_key_parameter(args)}])
+    hardware = _spec('hardware', ns, [str(share('feeder_sim') / 'config' / 'sim.yaml'),
+                                      {'scene': scene, 'hardware_mode': True,
+                                       'cycle_period': number(args, 'cycle_period', 0.005),
+                                       **_sensor_parameter(args), **_realtime_parameter(args),
+                                       **_key_parameter(args)}])
     return [hardware] + _common_nodes(args, ns, scene)
 
 
@@ -390,22 +438,22 @@ def plan_hardware(given):
     args = Arguments(HARDWARE_ARGUMENTS, given)
     ns = namespace(args['namespace'])
     scene = resolve_scene(args['scene'])
+    common = _common_nodes(args, ns, scene)     # its checks first: they cost no design
     nodes = []
     port = args['port']
     if flag(args, 'emulator') == 'true':
         port = args['emulator_link'] or os.path.join(
             runtime_dir(), f'feeder-{ns[1:].replace("/", "-")}-tty')
-        emulator = ['--scene', scene, '--link', port]
-        sensor = _sensor_parameter(args)
-        if sensor:
-            emulator += ['--sensor-radius', str(sensor['sensor_radius'])]
-        nodes.append(NodeSpec('feeder_driver', 'controller_emulator', arguments=emulator,
-                              ros=False))
-    nodes.append(NodeSpec('feeder_driver', 'driver_node', 'feeder_driver', ns,
-                          [str(share('feeder_driver') / 'config' / 'driver.yaml'),
-                           {'port': port, 'cycle_period': number(args, 'cycle_period', 0.01),
-                            **_realtime_parameter(args), **_key_parameter(args)}]))
-    return nodes + _common_nodes(args, ns, scene)
+        # The sensor radius always given (the design's for auto, as the emulator would make it
+        # itself): the emulator's command line has one shape, which the launch file declares.
+        radius = _sensor_parameter(args).get('sensor_radius') or scene_geometry(scene)[0]
+        nodes.append(_spec('emulator', arguments=[
+            '--scene', scene, '--link', port, '--sensor-radius', f'{radius:.9g}']))
+    nodes.append(_spec('driver', ns, [
+        str(share('feeder_driver') / 'config' / 'driver.yaml'),
+        {'port': port, 'cycle_period': number(args, 'cycle_period', 0.01),
+         **_realtime_parameter(args), **_key_parameter(args)}]))
+    return nodes + common
 
 
 def plan_feeders(given):
