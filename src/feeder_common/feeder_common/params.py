@@ -140,6 +140,14 @@ KEY_FILE = ParamSpec(
     max_length=4096)
 
 
+# The driver and its stand-in publish joint_states at this rate between cycle events: the arm's
+# swing (feeder_common.arm), so robot_state_publisher and RViz animate it.
+JOINT_STATES_RATE = ParamSpec(
+    'joint_states_rate', 30.0, 'Hz of joint_states between cycle events (the arm along '
+    "feeder_common.arm's swing, at rest between cycles), besides the release and rest "
+    'messages; 0: only those', minimum=0.0, maximum=1000.0)
+
+
 def by_name(specs):
     """Map names to specs; a name given twice is an error in the table."""
     out = {}

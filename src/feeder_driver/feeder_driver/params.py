@@ -22,7 +22,8 @@ ranges (a test checks both).
 """
 
 from feeder_common.frames import FRAME_ID_MAX_LENGTH
-from feeder_common.params import by_name, KEY_FILE, ParamSpec, REALTIME_PRIORITY
+from feeder_common.params import (by_name, JOINT_STATES_RATE, KEY_FILE, ParamSpec,
+                                  REALTIME_PRIORITY)
 
 BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 500000,
               921600, 1000000, 2000000)
@@ -59,6 +60,7 @@ SPECS = (
               constraints='not empty', max_length=FRAME_ID_MAX_LENGTH),
     ParamSpec('diagnostic_updater.period', 1.0, 'seconds between /diagnostics messages',
               0.1, 60.0),
+    JOINT_STATES_RATE,
     KEY_FILE,
 )
 BY_NAME = by_name(SPECS)

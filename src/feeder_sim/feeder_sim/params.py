@@ -22,7 +22,8 @@ the domain of f. Each check returns the reason of a rejection, or None.
 
 import math
 
-from feeder_common.params import check_scene, KEY_FILE, ParamSpec, REALTIME_PRIORITY
+from feeder_common.params import (check_scene, JOINT_STATES_RATE, KEY_FILE, ParamSpec,
+                                  REALTIME_PRIORITY)
 
 
 SIM_PARAMS = (
@@ -61,6 +62,7 @@ SIM_PARAMS = (
     ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages', minimum=0.1,
               maximum=60.0),
     KEY_FILE,       # hardware mode: signs the cycle reports as the driver does
+    JOINT_STATES_RATE,      # hardware mode: the arm's swing after each (instantaneous) cycle
 )
 
 
