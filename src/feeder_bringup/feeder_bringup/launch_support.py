@@ -451,7 +451,7 @@ def plan_hardware(given):
             '--scene', scene, '--link', port, '--sensor-radius', f'{radius:.9g}']))
     nodes.append(_spec('driver', ns, [
         str(share('feeder_driver') / 'config' / 'driver.yaml'),
-        {'port': port, 'cycle_period': number(args, 'cycle_period', 0.01),
+        {'port': port, 'cycle_period': number(args, 'cycle_period', 0.005),
          **_realtime_parameter(args), **_key_parameter(args)}]))
     return nodes + common
 

@@ -33,7 +33,8 @@ from feeder_common import auth, qos
 from feeder_common.arm import ArmMotion
 from feeder_common.diagnostics import Updater
 from feeder_common.messages import CycleSigner, joint_state, proximity
-from feeder_common.node import FeederLifecycleNode, flush, run_node, StartupError
+from feeder_common.node import (clock_note, FeederLifecycleNode, flush, run_node,
+                                StartupError)
 from feeder_common.parameters import ParameterGate
 from rclpy.lifecycle import TransitionCallbackReturn
 from sensor_msgs.msg import JointState, Range
@@ -216,6 +217,8 @@ class DriverNode(FeederLifecycleNode):
         ok, message, effects = self.core.enable(bool(request.data), time.monotonic())
         self._apply(effects)
         response.success, response.message = ok, message
+        if ok and request.data:
+            response.message += clock_note(self)
         return response
 
     # ---- serial events -------------------------------------------------------------------

@@ -39,7 +39,7 @@ from feeder_common.diagnostics import Updater
 from feeder_common.frames import BASE_FRAME, plane_point, plane_quaternion
 from feeder_common.messages import (CycleSigner, joint_state, MAX_SEQ_JUMP, parse_cycle_status,
                                     predicted_state, proximity, time_msg)
-from feeder_common.node import FeederLifecycleNode, run_node, StartupError
+from feeder_common.node import clock_note, FeederLifecycleNode, run_node, StartupError
 from feeder_common.parameters import ParameterGate
 from geometry_msgs.msg import PoseStamped
 from rclpy.lifecycle import TransitionCallbackReturn
@@ -106,7 +106,7 @@ class SimNode(FeederLifecycleNode):
             except auth.KeyFileError as exc:
                 raise StartupError(f'key_file: {exc}') from None
 
-        self._diagnostics = Updater(self, p.values['diagnostics_period'], HARDWARE_ID)
+        self._diagnostics = Updater(self, p.values['diagnostic_updater.period'], HARDWARE_ID)
         self._diagnostics.add('lifecycle', self._diag_lifecycle)
         self._diagnostics.add('prediction', self._diag_prediction)
         if self._hardware:
@@ -121,7 +121,7 @@ class SimNode(FeederLifecycleNode):
     # ------------------------------------------------------------------ parameters
     def _validate(self, changes, current):
         """On-set: the reason to reject ``changes``; never changes the node's state."""
-        reason = check_changes(changes, self._load_scene)
+        reason = check_changes(changes, self._load_scene, current)
         if reason:
             return reason
         if ('start_edge' in changes or 'start_radius' in changes) and self._scene is not None:
@@ -133,8 +133,8 @@ class SimNode(FeederLifecycleNode):
 
     def _apply(self, changes):
         """Post-set: apply accepted changes."""
-        if 'diagnostics_period' in changes:
-            self._diagnostics.set_period(changes['diagnostics_period'])
+        if 'diagnostic_updater.period' in changes:
+            self._diagnostics.set_period(changes['diagnostic_updater.period'])
         if 'joint_states_rate' in changes and 'joint_states' in self._pubs:
             self._start_joint_timer()
         if self._predictor is None:
@@ -310,7 +310,8 @@ class SimNode(FeederLifecycleNode):
             if self._cycle_timer is None:
                 self._start_cycling()
             response.success = True
-            response.message = f'enabled: one cycle every {self._param("cycle_period")} s'
+            response.message = (f'enabled: one cycle every {self._param("cycle_period")} s'
+                                + clock_note(self))
         else:
             self._stop_cycling()
             response.success = True
@@ -354,7 +355,8 @@ class SimNode(FeederLifecycleNode):
             self._truth.cycle(self._seq, stamp, throw, self._predictor.sees())
         # proximity and cycle_status back to back: the monitor decides on both.
         pubs['proximity'].publish(proximity(stamp, throw.detected,
-                                            self._param('sensor_range_m')))
+                                            self._param('sensor_range_m'),
+                                            self._param('frame_id')))
         pubs['cycle_status'].publish(self._signer.cycle_status(
             self._seq, True, 'completed', throw.detected, stamp, HARDWARE_ID))
         pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
