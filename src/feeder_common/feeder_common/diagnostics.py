@@ -63,6 +63,12 @@ def namespace_of(status_name):
     return '/' + node.rpartition('/')[0]
 
 
+def local_name(status_name):
+    """Return a status name without its namespace: ``feeder_driver: cycles``."""
+    node, sep, task = status_name.partition(': ')
+    return node.rpartition('/')[2] + sep + task
+
+
 class Status:
     """What a task fills in: ``summary(level, message)``, ``add(key, value)``, ``update()``."""
 
