@@ -82,18 +82,23 @@ def test_show_args_lists_the_choices_and_launch_refuses_other_words(cli, tmp_pat
     assert status != 0 and 'rviz' in out and "['true', 'false']" in out, out
 
 
-@pytest.mark.parametrize('argument, words', [
-    ('rviz:=true', 'rviz:=true but rviz2 is not installed'),
-    ('robot_state_publisher:=true', 'robot_state_publisher:=true but robot_state_publisher is '
-     'not installed'),
-    ('record:={existing}', 'exists; the recorder makes a new directory'),
+@pytest.mark.parametrize('launch_file, argument, words', [
+    ('sim.launch.py', 'rviz:=true', 'rviz:=true but rviz2 is not installed'),
+    ('sim.launch.py', 'robot_state_publisher:=true', 'robot_state_publisher:=true but '
+     'robot_state_publisher is not installed'),
+    ('sim.launch.py', 'record:={existing}', 'exists; the recorder makes a new directory'),
+    ('hardware.launch.py', 'rviz:=true', 'rviz:=true but rviz2 is not installed'),
+    ('feeders.launch.py', 'rviz:=true', 'rviz:=true but rviz2 is not installed'),
 ])
-def test_a_launch_that_cannot_work_starts_nothing(cli, ros, tmp_path, argument, words):
+def test_a_launch_that_cannot_work_starts_nothing(cli, ros, tmp_path, launch_file, argument,
+                                                  words):
     for package in ('rviz2', 'robot_state_publisher'):
         if package in argument and ros_cli.run(['pkg', 'prefix', package], cli)[0] == 0:
             pytest.skip(f'{package} is installed here')
     (tmp_path / 'existing').mkdir()
-    launch = ros_cli.start([*LAUNCH, 'sim.launch.py', 'namespace:=doomed', 'cycle_period:=0.05',
+    space = 'namespaces:=doomed' if launch_file == 'feeders.launch.py' else 'namespace:=doomed'
+    extra = ['emulator:=true'] if launch_file == 'hardware.launch.py' else []
+    launch = ros_cli.start([*LAUNCH, launch_file, space, 'cycle_period:=0.05', *extra,
                             argument.format(existing=tmp_path / 'existing')], cli,
                            tmp_path / 'launch.log')
     seen = set()
