@@ -88,7 +88,8 @@ def test_a_record_directory_that_exists_is_refused(support, planner, tmp_path): 
 
 def test_the_emulator_link_is_per_user_and_namespace(support, monkeypatch, tmp_path):  # noqa
     monkeypatch.delenv('XDG_RUNTIME_DIR', raising=False)
-    monkeypatch.setattr(support.tempfile, 'gettempdir', lambda: str(tmp_path))
+    from feeder_common import paths
+    monkeypatch.setattr(paths.tempfile, 'gettempdir', lambda: str(tmp_path))
 
     def link(ns):
         plan = support.plan_hardware({'emulator': 'true', 'namespace': ns})

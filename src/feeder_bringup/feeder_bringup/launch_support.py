@@ -39,14 +39,12 @@ import math
 import os
 import pathlib
 import shutil
-import stat
 import subprocess
-import tempfile
 import xml.etree.ElementTree as ET
 
 from ament_index_python.packages import (get_package_prefix, get_package_share_directory,
                                          PackageNotFoundError)
-from feeder_common import auth
+from feeder_common import auth, paths
 
 # name: (default, description)
 COMMON_ARGUMENTS = {
@@ -305,29 +303,12 @@ def robot_description(sensor_radius, arm_offset, arm_length=0.4, urdf=None):
     return ET.tostring(root, encoding='unicode')
 
 
-def runtime_dir():
-    """
-    Return this user's folder for the emulator's pty link (made mode 0700 when absent).
-
-    ``$XDG_RUNTIME_DIR/feeder`` where the session has one, else ``<tmp>/feeder-<uid>``: the
-    default link (``feeder-<namespace>-tty`` in it) is never shared by two users, and another
-    user cannot put a link there.
-    """
-    xdg = os.environ.get('XDG_RUNTIME_DIR', '')
-    if xdg and os.path.isabs(xdg) and os.path.isdir(xdg):
-        path = os.path.join(xdg, 'feeder')
-    else:
-        path = os.path.join(tempfile.gettempdir(), f'feeder-{os.getuid()}')
+def emulator_link(ns):
+    """Return the default pty link of ``ns``'s emulator, this user's (feeder_common.paths)."""
     try:
-        os.makedirs(path, mode=0o700, exist_ok=True)
-        info = os.lstat(path)
-    except OSError as exc:
-        raise LaunchArgumentError(f'emulator_link: cannot make {path}: {exc.strerror}; give '
-                                  'emulator_link:=PATH') from None
-    if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.getuid() or info.st_mode & 0o077:
-        raise LaunchArgumentError(f'emulator_link: {path} is not a folder of yours with mode '
-                                  '0700 (another user made it?); give emulator_link:=PATH')
-    return path
+        return paths.emulator_link(ns)
+    except paths.RuntimeDirError as exc:
+        raise LaunchArgumentError(f'emulator_link: {exc}; give emulator_link:=PATH') from None
 
 
 def diagnostic_analyzers(namespaces):
@@ -442,8 +423,7 @@ def plan_hardware(given):
     nodes = []
     port = args['port']
     if flag(args, 'emulator') == 'true':
-        port = args['emulator_link'] or os.path.join(
-            runtime_dir(), f'feeder-{ns[1:].replace("/", "-")}-tty')
+        port = args['emulator_link'] or emulator_link(ns)
         # The sensor radius always given (the design's for auto, as the emulator would make it
         # itself): the emulator's command line has one shape, which the launch file declares.
         radius = _sensor_parameter(args).get('sensor_radius') or scene_geometry(scene)[0]
