@@ -21,7 +21,9 @@ the topics name) and the RViz config.
 
 import ast
 import math
+import os
 import pathlib
+import tempfile
 import xml.etree.ElementTree as ET
 
 from feeder_common import frames, qos
@@ -34,6 +36,8 @@ LAUNCH_FILES = {'sim.launch.py': ('SIM_ARGUMENTS', 'plan_sim'),
                 'hardware.launch.py': ('HARDWARE_ARGUMENTS', 'plan_hardware'),
                 'feeders.launch.py': ('FEEDERS_ARGUMENTS', 'plan_feeders')}
 OPTIONAL = {'robot_state_publisher', 'rviz2'}       # no wheels: left out where absent
+# A record directory that does not exist (a plan refuses one that does).
+NEW = os.path.join(tempfile.gettempdir(), f'feeder-test-bringup-{os.getpid()}')
 
 
 @pytest.fixture(scope='module')
@@ -86,8 +90,8 @@ def test_each_launch_file_declares_the_table_it_plans_with(launch_file):
 
 @pytest.mark.parametrize('planner, given', [
     ('plan_sim', {}),
-    ('plan_sim', {'scene': 'experiment', 'namespace': 'line_2/feeder', 'record': '/tmp/x',
-                  'sensor_radius': '0.27', 'cycle_period': '1', 'robot_state_publisher': 'true'}),
+    ('plan_sim', {'scene': 'experiment', 'namespace': 'line_2/feeder', 'record': f'{NEW}/x',
+                  'sensor_radius': '0.27', 'cycle_period': '1', 'robot_state_publisher': 'auto'}),
     ('plan_sim', {'scene': 'hard/slow_release'}),
     ('plan_hardware', {}),
     ('plan_hardware', {'emulator': 'true', 'namespace': 'bench'}),
@@ -107,8 +111,8 @@ def test_the_plans_start_what_the_issue_asks(support):
                      ('monitor_node', 'feeder_monitor', '/feeder')]
     assert sim[0].parameters[1]['hardware_mode'] is True
     assert sim[0].parameters[1]['cycle_period'] == 1.0
-    recorded = support.plan_sim({'record': '/tmp/bag1'})
-    assert any(s.executable == 'bag_recorder' and s.arguments == ['/tmp/bag1']
+    recorded = support.plan_sim({'record': f'{NEW}/bag1'})
+    assert any(s.executable == 'bag_recorder' and s.arguments == [f'{NEW}/bag1']
                for s in recorded)
     hw = support.plan_hardware({'emulator': 'true'})
     emulator = next(s for s in hw if s.executable == 'controller_emulator')
@@ -118,10 +122,10 @@ def test_the_plans_start_what_the_issue_asks(support):
     assert driver.parameters[1]['port'] == link
     assert support.plan_hardware({'port': '/dev/ttyUSB3'})[0].parameters[1]['port'] == \
         '/dev/ttyUSB3'
-    three = support.plan_feeders({'namespaces': 'a,b,c', 'record': '/tmp/bags'})
+    three = support.plan_feeders({'namespaces': 'a,b,c', 'record': f'{NEW}/bags'})
     assert sorted({s.namespace for s in three}) == ['/a', '/b', '/c']
     assert sorted(s.arguments[0] for s in three if s.executable == 'bag_recorder') == \
-        ['/tmp/bags/a', '/tmp/bags/b', '/tmp/bags/c']
+        [f'{NEW}/bags/a', f'{NEW}/bags/b', f'{NEW}/bags/c']
 
 
 @pytest.mark.parametrize('planner, given, words', [

@@ -28,6 +28,7 @@ setup(
         ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
         ('share/' + package_name + '/urdf', glob('urdf/*.urdf')),
         ('share/' + package_name + '/rviz', glob('rviz/*.rviz')),
+        ('share/' + package_name + '/config', glob('config/*.yaml')),
         # scenes -> ../../scenes: the repository's scene files, installed for launch files
         ('share/' + package_name + '/scenes', glob('scenes/*.yaml')),
         ('share/' + package_name + '/scenes/hard', glob('scenes/hard/*.yaml')),

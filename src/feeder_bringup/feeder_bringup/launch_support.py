@@ -23,6 +23,11 @@ into launch_ros actions (:mod:`feeder_bringup.launch_actions`). So the plan can 
 where ``launch`` is not installed: every package, executable, config file and scene it names
 exists in the install space, and it reads only declared arguments (:class:`Arguments`).
 
+Every check is made while planning, before the plan is returned: a launch whose arguments
+cannot work (an optional part asked for and not installed, a record directory that exists)
+raises :class:`LaunchArgumentError` and starts nothing. :data:`CHOICES` lists the arguments
+that take one of a few words (the launch files declare them with ``choices``).
+
 The URDF needs the scene's numbers (the sensor radius and the arm's offset h): they come from
 the throwmap CLI installed with the workspace (``throwmap design/grasp --json``), so the launch
 process needs no numpy; a given ``sensor_radius`` skips the design.
@@ -35,12 +40,11 @@ import os
 import pathlib
 import shutil
 import subprocess
-import tempfile
 import xml.etree.ElementTree as ET
 
 from ament_index_python.packages import (get_package_prefix, get_package_share_directory,
                                          PackageNotFoundError)
-from feeder_common import auth
+from feeder_common import auth, paths
 
 # name: (default, description)
 COMMON_ARGUMENTS = {
@@ -62,19 +66,72 @@ SIM_ARGUMENTS = dict(COMMON_ARGUMENTS)
 HARDWARE_ARGUMENTS = dict(COMMON_ARGUMENTS, **{
     'port': ('/dev/ttyACM0', 'serial port of the controller (device or pyserial URL)'),
     'emulator': ('false', 'true: start controller_emulator on a pty and drive that'),
-    'emulator_link': ('', 'path of the emulator pty (default: <tmp>/feeder-<namespace>-tty)'),
+    'emulator_link': ('', 'path of the emulator pty (default: feeder-<namespace>-tty in the '
+                      "user's runtime folder: $XDG_RUNTIME_DIR/feeder, else <tmp>/feeder-<uid>, "
+                      'mode 0700)'),
 })
 FEEDERS_ARGUMENTS = dict(COMMON_ARGUMENTS, **{
     'namespaces': ('feeder_1,feeder_2,feeder_3', 'comma-separated namespaces: one simulated '
                    'feeder in each'),
 })
 del FEEDERS_ARGUMENTS['namespace']
+# Arguments that take one of a few words: declared with these ``choices`` (ros2 launch refuses
+# anything else before the launch starts, and -s lists them).
+CHOICES = {
+    'robot_state_publisher': ('auto', 'true', 'false'),
+    'rviz': ('true', 'false'),
+    'emulator': ('true', 'false'),
+}
 
 ARM_THICKNESS = 0.004   # m, as feeder_sim.markers draws it
 
 
 class LaunchArgumentError(ValueError):
     """A launch argument is unusable; the text names it and the fix."""
+
+
+# Transforms stay in the feeder's namespace (<ns>/tf), so feeders side by side, each with
+# frames feeder_base, feeder_arm, feeder_sensor, never mix.
+TF_REMAPPINGS = (('/tf', 'tf'), ('/tf_static', 'tf_static'))
+
+
+@dataclass(frozen=True)
+class Slot:
+    """
+    A place for one process in a launch file, fixed when the launch description is made.
+
+    What the plan fills in at launch time has a fixed shape: ``parameters`` items (files and
+    dicts), ``arguments`` items; so the launch file can declare the Node action up front (and
+    ``ros2 launch -p`` shows it) and take the values from the plan.
+    """
+
+    package: str
+    executable: str
+    name: str = ''              # '' for a plain process (not a ROS node)
+    parameters: int = 0
+    arguments: int = 0
+    remappings: tuple = ()
+
+
+SLOTS = {
+    'emulator': Slot('feeder_driver', 'controller_emulator', arguments=6),
+    'driver': Slot('feeder_driver', 'driver_node', 'feeder_driver', parameters=2),
+    'hardware': Slot('feeder_sim', 'sim_node', 'feeder_driver', parameters=2),
+    'predictor': Slot('feeder_sim', 'sim_node', 'feeder_sim', parameters=2),
+    'monitor': Slot('feeder_monitor', 'monitor_node', 'feeder_monitor', parameters=2),
+    'recorder': Slot('feeder_monitor', 'bag_recorder', 'feeder_bag_recorder', arguments=1),
+    'robot_state_publisher': Slot('robot_state_publisher', 'robot_state_publisher',
+                                  'robot_state_publisher', parameters=1,
+                                  remappings=TF_REMAPPINGS),
+    'rviz': Slot('rviz2', 'rviz2', 'rviz2', arguments=2, remappings=TF_REMAPPINGS),
+}
+# The slots of each launch file, in start order (a plan holds a subset, in this order).
+PLAN_SLOTS = {
+    'plan_sim': ('hardware', 'predictor', 'monitor', 'recorder', 'robot_state_publisher',
+                 'rviz'),
+    'plan_hardware': ('emulator', 'driver', 'predictor', 'monitor', 'recorder',
+                      'robot_state_publisher', 'rviz'),
+}
 
 
 @dataclass
@@ -89,6 +146,18 @@ class NodeSpec:
     remappings: list = field(default_factory=list)
     arguments: list = field(default_factory=list)
     ros: bool = True
+    slot: str = ''      # its place in the launch file (SLOTS)
+
+
+def _spec(slot, ns='', parameters=(), arguments=()):
+    """Return the NodeSpec of ``slot`` (SLOTS) with these parameters and arguments."""
+    place = SLOTS[slot]
+    if len(parameters) != place.parameters or len(arguments) != place.arguments:
+        raise AssertionError(f'slot {slot}: {len(parameters)} parameter items and '
+                             f'{len(arguments)} arguments, not {place}')
+    return NodeSpec(place.package, place.executable, place.name, ns if place.name else '',
+                    list(parameters), list(place.remappings), list(arguments),
+                    ros=bool(place.name), slot=slot)
 
 
 class Arguments:
@@ -177,7 +246,8 @@ def _realtime_parameter(args):
     return {'realtime_priority': priority} if priority else {}
 
 
-def flag(args, name, choices=('true', 'false')):
+def flag(args, name, choices=None):
+    choices = choices or CHOICES.get(name, ('true', 'false'))
     value = args[name].strip().lower()
     if value not in choices:
         raise LaunchArgumentError(f'{name}:={args[name]}: use one of {", ".join(choices)}')
@@ -233,6 +303,32 @@ def robot_description(sensor_radius, arm_offset, arm_length=0.4, urdf=None):
     return ET.tostring(root, encoding='unicode')
 
 
+def emulator_link(ns):
+    """Return the default pty link of ``ns``'s emulator, this user's (feeder_common.paths)."""
+    try:
+        return paths.emulator_link(ns)
+    except paths.RuntimeDirError as exc:
+        raise LaunchArgumentError(f'emulator_link: {exc}; give emulator_link:=PATH') from None
+
+
+def diagnostic_analyzers(namespaces):
+    """
+    diagnostic_aggregator's parameters for feeders in ``namespaces``: one group per feeder.
+
+    Status names carry the namespace (``feeder_1/feeder_driver: cycles``,
+    feeder_common.diagnostics), so each feeder's statuses go under ``Feeders/<namespace>``
+    (the name's prefix removed). The shipped config/diagnostic_analyzers.yaml is this for
+    feeders.launch.py's default namespaces.
+    """
+    analyzers = {'path': 'Feeders'}
+    for text in namespaces:
+        ns = namespace(text)[1:]
+        analyzers[ns.replace('/', '_')] = {
+            'type': 'diagnostic_aggregator/GenericAnalyzer', 'path': ns,
+            'startswith': [f'{ns}/'], 'remove_prefix': [f'{ns}/'], 'timeout': 5.0}
+    return {'analyzers': {'ros__parameters': analyzers}}
+
+
 def _key_parameter(args):
     """{'key_file': path} for the signing nodes; the file is made (mode 0600) when absent."""
     path = os.path.abspath(os.path.expanduser(args['key_file'] or auth.default_key_path()))
@@ -250,34 +346,58 @@ def _sensor_parameter(args):
     return {'sensor_radius': number(args, 'sensor_radius', minimum=0.0)}
 
 
+def _record_directory(args):
+    """Return the bag directory of ``record:=`` (absolute; '' for none), or refuse it."""
+    if not args['record']:
+        return ''
+    path = os.path.abspath(os.path.expanduser(args['record']))
+    if os.path.lexists(path):
+        raise LaunchArgumentError(f'record:={args["record"]}: {path} exists; the recorder '
+                                  'makes a new directory: give one that does not exist')
+    parent = os.path.dirname(path)
+    while not os.path.exists(parent):       # made by the recorder (BagWriter makes parents)
+        parent = os.path.dirname(parent)
+    if not os.path.isdir(parent) or not os.access(parent, os.W_OK | os.X_OK):
+        raise LaunchArgumentError(f'record:={args["record"]}: cannot make {path} ({parent} is '
+                                  'not a directory you can write to)')
+    return path
+
+
+def _optional(args, name, package):
+    """Whether to start ``package`` for ``name:=`` (auto: where installed; true: insist)."""
+    value = flag(args, name)
+    if value == 'true' and not installed(package):
+        raise LaunchArgumentError(
+            f'{name}:=true but {package} is not installed (not in the ament index: '
+            f'AMENT_PREFIX_PATH); install ros-kilted-{package.replace("_", "-")} or give '
+            f'{name}:={"auto" if "auto" in CHOICES[name] else "false"}')
+    return value == 'true' or (value == 'auto' and installed(package))
+
+
 def _common_nodes(args, ns, scene):
     """Predictor, monitor, recorder, robot_state_publisher, rviz2 of one feeder."""
     sensor = _sensor_parameter(args)
     rt = _realtime_parameter(args)
+    record = _record_directory(args)
+    want_rsp = _optional(args, 'robot_state_publisher', 'robot_state_publisher')
+    want_rviz = _optional(args, 'rviz', 'rviz2')
+    arm_length = number(args, 'arm_length', minimum=0.01)
     nodes = [
-        NodeSpec('feeder_sim', 'sim_node', 'feeder_sim', ns,
-                 [str(share('feeder_sim') / 'config' / 'sim.yaml'),
-                  {'scene': scene, **sensor, **rt}]),
-        NodeSpec('feeder_monitor', 'monitor_node', 'feeder_monitor', ns,
-                 [str(share('feeder_monitor') / 'config' / 'monitor.yaml'),
-                  {'scene': scene, **sensor, **rt, **_key_parameter(args)}]),
+        _spec('predictor', ns, [str(share('feeder_sim') / 'config' / 'sim.yaml'),
+                                {'scene': scene, **sensor, **rt}]),
+        _spec('monitor', ns, [str(share('feeder_monitor') / 'config' / 'monitor.yaml'),
+                              {'scene': scene, **sensor, **rt, **_key_parameter(args)}]),
     ]
-    if args['record']:
-        nodes.append(NodeSpec('feeder_monitor', 'bag_recorder', 'feeder_bag_recorder', ns,
-                              arguments=[os.path.abspath(os.path.expanduser(args['record']))]))
-    # Transforms stay in the feeder's namespace (<ns>/tf), so feeders side by side, each with
-    # frames feeder_base, feeder_arm, feeder_sensor, never mix.
-    tf = [('/tf', 'tf'), ('/tf_static', 'tf_static')]
-    rsp = flag(args, 'robot_state_publisher', ('auto', 'true', 'false'))
-    if rsp == 'true' or (rsp == 'auto' and installed('robot_state_publisher')):
+    if record:
+        # It records the feeder's namespace (+ /diagnostics, /tf, /tf_static): its own bag.
+        nodes.append(_spec('recorder', ns, arguments=[record]))
+    if want_rsp:
         radius = sensor.get('sensor_radius') or scene_geometry(scene)[0]
-        urdf = robot_description(radius, scene_geometry(scene)[1],
-                                 number(args, 'arm_length', minimum=0.01))
-        nodes.append(NodeSpec('robot_state_publisher', 'robot_state_publisher',
-                              'robot_state_publisher', ns, [{'robot_description': urdf}], tf))
-    if flag(args, 'rviz') == 'true':
-        nodes.append(NodeSpec('rviz2', 'rviz2', 'rviz2', ns, [], tf,
-                              ['-d', str(share('feeder_bringup') / 'rviz' / 'feeder.rviz')]))
+        urdf = robot_description(radius, scene_geometry(scene)[1], arm_length)
+        nodes.append(_spec('robot_state_publisher', ns, [{'robot_description': urdf}]))
+    if want_rviz:
+        nodes.append(_spec('rviz', ns, arguments=[
+            '-d', str(share('feeder_bringup') / 'rviz' / 'feeder.rviz')]))
     return nodes
 
 
@@ -286,12 +406,11 @@ def plan_sim(given):
     args = given if isinstance(given, Arguments) else Arguments(SIM_ARGUMENTS, given)
     ns = namespace(args['namespace'])
     scene = resolve_scene(args['scene'])
-    hardware = NodeSpec('feeder_sim', 'sim_node', 'feeder_driver', ns,
-                        [str(share('feeder_sim') / 'config' / 'sim.yaml'),
-                         {'scene': scene, 'hardware_mode': True,
-                          'cycle_period': number(args, 'cycle_period', 0.005),
-                          **_sensor_parameter(args), **_realtime_parameter(args),
-                          **_key_parameter(args)}])
+    hardware = _spec('hardware', ns, [str(share('feeder_sim') / 'config' / 'sim.yaml'),
+                                      {'scene': scene, 'hardware_mode': True,
+                                       'cycle_period': number(args, 'cycle_period', 0.005),
+                                       **_sensor_parameter(args), **_realtime_parameter(args),
+                                       **_key_parameter(args)}])
     return [hardware] + _common_nodes(args, ns, scene)
 
 
@@ -300,22 +419,21 @@ def plan_hardware(given):
     args = Arguments(HARDWARE_ARGUMENTS, given)
     ns = namespace(args['namespace'])
     scene = resolve_scene(args['scene'])
+    common = _common_nodes(args, ns, scene)     # its checks first: they cost no design
     nodes = []
     port = args['port']
     if flag(args, 'emulator') == 'true':
-        port = args['emulator_link'] or os.path.join(
-            tempfile.gettempdir(), f'feeder-{ns[1:].replace("/", "-")}-tty')
-        emulator = ['--scene', scene, '--link', port]
-        sensor = _sensor_parameter(args)
-        if sensor:
-            emulator += ['--sensor-radius', str(sensor['sensor_radius'])]
-        nodes.append(NodeSpec('feeder_driver', 'controller_emulator', arguments=emulator,
-                              ros=False))
-    nodes.append(NodeSpec('feeder_driver', 'driver_node', 'feeder_driver', ns,
-                          [str(share('feeder_driver') / 'config' / 'driver.yaml'),
-                           {'port': port, 'cycle_period': number(args, 'cycle_period', 0.01),
-                            **_realtime_parameter(args), **_key_parameter(args)}]))
-    return nodes + _common_nodes(args, ns, scene)
+        port = args['emulator_link'] or emulator_link(ns)
+        # The sensor radius always given (the design's for auto, as the emulator would make it
+        # itself): the emulator's command line has one shape, which the launch file declares.
+        radius = _sensor_parameter(args).get('sensor_radius') or scene_geometry(scene)[0]
+        nodes.append(_spec('emulator', arguments=[
+            '--scene', scene, '--link', port, '--sensor-radius', f'{radius:.9g}']))
+    nodes.append(_spec('driver', ns, [
+        str(share('feeder_driver') / 'config' / 'driver.yaml'),
+        {'port': port, 'cycle_period': number(args, 'cycle_period', 0.005),
+         **_realtime_parameter(args), **_key_parameter(args)}]))
+    return nodes + common
 
 
 def plan_feeders(given):
@@ -327,9 +445,9 @@ def plan_feeders(given):
     spaces = [namespace(n) for n in names]
     if len(set(spaces)) != len(spaces):
         raise LaunchArgumentError(f'namespaces:={args["namespaces"]} names one twice')
+    record = args['record']
     nodes = []
     for ns in spaces:
-        record = args['record']
         one = Arguments(SIM_ARGUMENTS, {
             name: args[name] for name in SIM_ARGUMENTS if name != 'namespace'})
         one = one.with_values(namespace=ns,

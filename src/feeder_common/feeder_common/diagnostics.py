@@ -18,7 +18,12 @@ A small stand-in for diagnostic_updater (which has no wheel): periodic ``/diagno
 
 Same conventions as ros/diagnostics' ``Updater``: absolute topic ``/diagnostics``, reliable
 depth 1, status names ``<node name>: <task name>``, ``hardware_id`` on every status, values as
-strings. ``DiagnosticStatus.level`` is a byte field: levels are the message's own constants
+strings; except that the node name carries its namespace (:func:`status_prefix`,
+``feeder_1/feeder_driver: cycles``), so that feeders side by side in one domain, which share
+``/diagnostics``, are told apart by rqt_robot_monitor and diagnostic_aggregator (the analyzers
+for N feeders: feeder_bringup's ``config/diagnostic_analyzers.yaml``).
+
+``DiagnosticStatus.level`` is a byte field: levels are the message's own constants
 (``DiagnosticStatus.OK`` is a one-byte bytes value) or the names ``ok``, ``warn``, ``error``,
 ``stale``.
 """
@@ -40,6 +45,28 @@ def level_of(level):
         return level
     raise ValueError(f'level {level!r}: use ok/warn/error/stale or DiagnosticStatus.OK/WARN/'
                      'ERROR/STALE (bytes, not int)')
+
+
+def status_prefix(namespace, node_name):
+    """
+    Return the name part before ``: <task>``: ``<namespace>/<node>`` without the leading ``/``.
+
+    ``('/feeder_1', 'feeder_driver')`` gives ``feeder_1/feeder_driver``; in the root namespace
+    the bare node name, as diagnostic_updater's.
+    """
+    return f'{namespace.strip("/")}/{node_name}'.lstrip('/')
+
+
+def namespace_of(status_name):
+    """Return the namespace (``/feeder_1``, ``/`` for none) a status name was made in."""
+    node = status_name.split(': ', 1)[0]
+    return '/' + node.rpartition('/')[0]
+
+
+def local_name(status_name):
+    """Return a status name without its namespace: ``feeder_driver: cycles``."""
+    node, sep, task = status_name.partition(': ')
+    return node.rpartition('/')[2] + sep + task
 
 
 class Status:
@@ -68,6 +95,7 @@ class Updater:
         self.node = node
         self.hardware_id = hardware_id
         self.tasks = []
+        self.prefix = status_prefix(node.get_namespace(), node.get_name())
         self.pub = node.create_publisher(DiagnosticArray, '/diagnostics', qos.DIAGNOSTICS)
         self.timer = node.create_timer(period, self.update)
 
@@ -82,7 +110,7 @@ class Updater:
     def statuses(self):
         out = []
         for name, task in self.tasks:
-            stat = Status(f'{self.node.get_name()}: {name}', self.hardware_id)
+            stat = Status(f'{self.prefix}: {name}', self.hardware_id)
             try:
                 task(stat)
             except Exception as exc:    # noqa: B902 - a broken task must not stop the rest

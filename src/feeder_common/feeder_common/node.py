@@ -33,6 +33,7 @@ import sys
 import threading
 
 import rclpy
+from rclpy.clock import Clock, ClockType
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
@@ -54,6 +55,35 @@ class StartupError(Exception):
     """The node cannot run (e.g. the scene's analysis fails); the text says why and the fix."""
 
 
+NO_CLOCK = ("use_sim_time is true and no /clock has arrived: the node's time stands at 0 and "
+            'its timers (cycling, diagnostics, joint_states) do not fire; publish /clock (a '
+            'simulator, ros2 bag play --clock) or set use_sim_time:=false')
+CLOCK_GRACE_S = 2.0     # wall-clock s after start-up before a missing /clock is reported
+
+
+def waiting_for_clock(node):
+    """Whether ``node`` runs on simulated time that has not started (no /clock yet)."""
+    return bool(node.get_parameter('use_sim_time').value) and \
+        node.get_clock().now().nanoseconds == 0
+
+
+def watch_clock(node, grace_s=CLOCK_GRACE_S):
+    """Warn once if ``use_sim_time`` is on and no /clock came within ``grace_s`` s (wall)."""
+    timer = []
+
+    def check():
+        node.destroy_timer(timer[0])
+        if waiting_for_clock(node):
+            node.get_logger().warning(NO_CLOCK)
+
+    timer.append(node.create_timer(grace_s, check, clock=Clock(clock_type=ClockType.STEADY_TIME)))
+
+
+def clock_note(node):
+    """Return a note for a reply that starts timed work: '' or why nothing will happen."""
+    return f' (warning: {NO_CLOCK})' if waiting_for_clock(node) else ''
+
+
 class FeederLifecycleNode(LifecycleNode):
     """
     A lifecycle node that tells its state and when its process should end.
@@ -67,6 +97,7 @@ class FeederLifecycleNode(LifecycleNode):
         self.configure_error = None
         self.exit_reason = None
         super().__init__(node_name, **kwargs)
+        watch_clock(self)
 
     @property
     def lifecycle_state(self):

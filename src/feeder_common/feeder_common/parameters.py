@@ -37,7 +37,7 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescr
 from rclpy.exceptions import InvalidParameterValueException
 from rclpy.parameter import Parameter
 
-from .params import by_name
+from .params import by_name, RENAMED
 
 _TYPES = {'bool': ParameterType.PARAMETER_BOOL, 'integer': ParameterType.PARAMETER_INTEGER,
           'double': ParameterType.PARAMETER_DOUBLE, 'string': ParameterType.PARAMETER_STRING}
@@ -98,7 +98,16 @@ class ParameterGate:
         """Return the value given at start-up for ``name`` (command line, file, launch) or None."""
         # rclpy keeps the node's start-up values here and declare_parameter reads them from it;
         # they are read before declaring so that an integer for a double can be coerced.
-        override = getattr(self._node, '_parameter_overrides', {}).get(name)
+        overrides = getattr(self._node, '_parameter_overrides', {})
+        override = overrides.get(name)
+        if override is None:
+            # An old name (feeder_common.params.RENAMED) still sets its one name, with a word.
+            old = next((o for o, n in RENAMED.items() if n == name and o in overrides), None)
+            if old is not None:
+                override = overrides[old]
+                self._node.get_logger().warning(
+                    f'parameter {old} is now called {name} (one name in every node); '
+                    f'took {old}:={override.value}, give {name} instead')
         return None if override is None else override.value
 
     def declare(self, name, default=None):
@@ -144,7 +153,8 @@ class ParameterGate:
         """Names given at start-up that this node does not declare (typos, other nodes')."""
         given = getattr(self._node, '_parameter_overrides', {})
         return sorted(n for n in given if n not in self.specs and n not in _RCLPY_PARAMETERS
-                      and not n.startswith('qos_overrides.'))
+                      and not n.startswith('qos_overrides.')
+                      and RENAMED.get(n) not in self.specs)
 
     # ---- callbacks -----------------------------------------------------------------------
 

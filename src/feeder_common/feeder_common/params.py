@@ -27,6 +27,8 @@ from dataclasses import dataclass
 import math
 from typing import Optional
 
+from .frames import FRAME_ID_MAX_LENGTH, SENSOR_FRAME
+
 _KINDS = ((bool, 'bool'), (int, 'integer'), (float, 'double'), (str, 'string'))
 
 
@@ -138,6 +140,86 @@ KEY_FILE = ParamSpec(
     'key in hex, mode 0600; empty: $ROS_HOME/feeder/hmac.key (~/.ros/feeder/hmac.key), created '
     'when absent; a given file must exist (the launch creates it)', read_only=True,
     max_length=4096)
+
+
+# The driver and its stand-in publish joint_states at this rate between cycle events: the arm's
+# swing (feeder_common.arm), so robot_state_publisher and RViz animate it.
+JOINT_STATES_RATE = ParamSpec(
+    'joint_states_rate', 30.0, 'Hz of joint_states between cycle events (the arm along '
+    "feeder_common.arm's swing, at rest between cycles), besides the release and rest "
+    'messages; 0: only those', minimum=0.0, maximum=1000.0)
+
+
+# ---- one name and one range per parameter the nodes share (issue 23) ----------------------
+# The driver and its stand-in take the same cycle parameters (the stand-in accepts the
+# driver's config/driver.yaml); every node names its /diagnostics period as diagnostic_updater
+# does.
+
+CYCLE_PERIOD = ParamSpec(
+    'cycle_period', 1.0, 'seconds between cycles while ~/enable is true (the next cycle never '
+    'starts before the previous one ended)', 0.005, 3600.0)
+
+DIAGNOSTIC_PERIOD = ParamSpec(
+    'diagnostic_updater.period', 1.0, 'seconds between /diagnostics messages', 0.1, 60.0)
+
+# Old names still taken at start-up (with a warning) for their one name.
+RENAMED = {'diagnostics_period': 'diagnostic_updater.period'}
+
+SENSOR_RANGE = ParamSpec(
+    'sensor_range_m', 0.02, 'fixed distance of the proximity ranger, m '
+    '(Range.min_range = max_range)', 0.001, 10.0)
+
+FRAME_ID = ParamSpec('frame_id', SENSOR_FRAME, 'frame_id of the proximity messages',
+                     constraints='not empty', max_length=FRAME_ID_MAX_LENGTH)
+
+# The serial link's timing: the driver's; the stand-in (no serial link) takes them, checked
+# the same way, so that one parameter file serves both, and they change nothing there.
+LINK_SPECS = (
+    ParamSpec('ack_timeout_s', 0.5, 'a cycle fails if no ACK (or REL/SENS) arrives within this '
+              'time after FIRE; also the PING repeat interval of the handshake', 0.01, 10.0,
+              constraints='below cycle_timeout_s and watchdog_timeout_s'),
+    ParamSpec('cycle_timeout_s', 5.0, 'a cycle fails if no SENS arrives within this time after '
+              'FIRE; must exceed ack_timeout_s', 0.05, 120.0,
+              constraints='must exceed ack_timeout_s'),
+    ParamSpec('watchdog_timeout_s', 3.0, 'the link is declared lost (port closed and reopened) '
+              'after this long without a valid frame (the controller sends HB at 1 Hz)',
+              0.2, 60.0),
+    ParamSpec('reconnect_initial_s', 0.5, 'first reopen delay after a failure; doubles per '
+              'failed attempt', 0.01, 60.0),
+    ParamSpec('reconnect_max_s', 10.0, 'cap of the reopen delay; must be >= '
+              'reconnect_initial_s', 0.01, 600.0,
+              constraints='must be >= reconnect_initial_s'),
+)
+
+
+def check_link(new, current):
+    """
+    Reason why setting ``new`` on top of ``current`` breaks a rule of LINK_SPECS, or None.
+
+    Rules whose parameters are not all declared yet (during start-up) wait for the check of
+    the complete set.
+    """
+    merged = dict(current)
+    merged.update(new)
+
+    def have(*names):
+        return all(n in merged for n in names)
+
+    if have('reconnect_initial_s', 'reconnect_max_s') and \
+            merged['reconnect_initial_s'] > merged['reconnect_max_s']:
+        return (f'reconnect_initial_s ({merged["reconnect_initial_s"]}) must not exceed '
+                f'reconnect_max_s ({merged["reconnect_max_s"]}); raise reconnect_max_s or '
+                'lower reconnect_initial_s')
+    if have('ack_timeout_s', 'cycle_timeout_s') and \
+            merged['ack_timeout_s'] >= merged['cycle_timeout_s']:
+        return (f'ack_timeout_s ({merged["ack_timeout_s"]}) must be smaller than '
+                f'cycle_timeout_s ({merged["cycle_timeout_s"]})')
+    if have('ack_timeout_s', 'watchdog_timeout_s') and \
+            merged['ack_timeout_s'] >= merged['watchdog_timeout_s']:
+        return (f'ack_timeout_s ({merged["ack_timeout_s"]}) must be smaller than '
+                f'watchdog_timeout_s ({merged["watchdog_timeout_s"]}), or the handshake '
+                'cannot repeat its PING')
+    return None
 
 
 def by_name(specs):

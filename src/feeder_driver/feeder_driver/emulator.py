@@ -682,6 +682,11 @@ def main(argv=None):
         ctl.run(args.max_time)
     finally:
         ctl.close()
+        # Stopped: a further SIGINT/SIGTERM (a terminal's Ctrl-C reaches the whole group and
+        # ros2 launch forwards one more) must not end the exit by the signal once the
+        # interpreter resets its handlers to the default; as feeder_common.node.run_node.
+        for s in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(s, signal.SIG_IGN)
     log(f'stopped after {ctl.cycles} cycles')
     return 0
 

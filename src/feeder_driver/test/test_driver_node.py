@@ -34,8 +34,10 @@ from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, QoSProfile, Rel
 from sensor_msgs.msg import JointState, Range
 from std_srvs.srv import SetBool, Trigger
 
+# joint_states only at the cycle events unless a test asks for the steady rate.
 FAST = {'ack_timeout_s': 0.15, 'cycle_timeout_s': 1.0, 'watchdog_timeout_s': 0.8,
-        'reconnect_initial_s': 0.05, 'reconnect_max_s': 0.2, 'cycle_period': 0.03}
+        'reconnect_initial_s': 0.05, 'reconnect_max_s': 0.2, 'cycle_period': 0.03,
+        'joint_states_rate': 0.0}
 
 
 class Harness:
@@ -214,6 +216,38 @@ def test_normal_cycles(harness, emulator, link_path):
     assert all(j.name == ['feeder_arm_joint'] and list(j.effort) == [] for j in h.joints)
 
 
+def test_joint_states_swing_between_cycle_events(harness, emulator, link_path):
+    """At joint_states_rate the arm winds up, passes REL at its speed and is back at rest."""
+    emulator(cycle_time=0.2)        # REL 0.1 s after FIRE, SENS 0.1 s after REL
+    h = harness(link_path, joint_states_rate=200.0, cycle_period=0.5).start()
+    h.wait_connected()
+    h.spin_for(0.2)
+    idle = list(h.joints)
+    assert len(idle) >= 10 and all(j.position[0] == 0.0 for j in idle)
+    for k in range(3):
+        assert h.trigger().success
+        assert h.spin_until(h.idle, 2)
+        h.spin_for(0.05)
+    joints = h.joints[len(idle):]
+    stamps = [j.header.stamp.sec + j.header.stamp.nanosec * 1e-9 for j in joints]
+    positions = [j.position[0] for j in joints]
+    w = max(j.velocity[0] for j in joints)
+    assert w == pytest.approx(5.585, rel=1e-3)     # REL's speed, on the release message
+    # The first cycle assumes 0.05 s phases, the next ones measured 0.1 s each.
+    assert min(positions) < -0.5 * 4 / 27 * w * 0.1
+    assert max(positions) > 0.5 * 4 / 27 * w * 0.1
+    # Within the profile's extremes for phases of 0.1 s (+ 20 % for the pty's latency).
+    assert all(abs(p) <= 4 / 27 * w * 0.12 for p in positions)
+    assert positions[-1] == 0.0
+    gaps = [b - a for a, b in zip(stamps, stamps[1:])]
+    assert max(gaps) < 0.05, 'joint_states stopped between events'
+    h.node.set_parameters([Parameter('joint_states_rate', value=0.0)])
+    h.spin_for(0.05)
+    before = len(h.joints)
+    h.spin_for(0.3)
+    assert len(h.joints) == before       # 0: only at the cycle events
+
+
 def test_continuous_cycling_and_diagnostics(harness, emulator, link_path):
     emu = emulator()
     h = harness(link_path).start()
@@ -233,8 +267,8 @@ def test_continuous_cycling_and_diagnostics(harness, emulator, link_path):
 
     assert h.spin_until(diag_caught_up, 3)
     names = {s.name: s for s in h.diags[-1].status}
-    link = names['feeder_driver: serial link']
-    cyc = names['feeder_driver: cycles']
+    link = names['feeder/feeder_driver: serial link']
+    cyc = names['feeder/feeder_driver: cycles']
     assert link.level == DiagnosticStatus.OK and link.hardware_id == link_path
     assert values(link)['firmware'] == 'feeder-emu-1.0'
     assert int(values(cyc)['fired']) == fired >= 30

@@ -47,7 +47,7 @@ def env_for(domain_id):
 
 
 @pytest.mark.parametrize('arg, text', [
-    ('cycle_period:=-1.0', 'cycle_period = -1.0 is outside [0.01, 3600.0]'),
+    ('cycle_period:=-1.0', 'cycle_period = -1.0 is outside [0.005, 3600.0]'),
     ('cycle_period:=abc', "cycle_period must be a double, got string 'abc'"),
     ('reconnect_initial_s:=20.0', 'must not exceed reconnect_max_s'),
     ('baud_rate:=1234', 'baud_rate = 1234 is not one of the allowed values'),

@@ -15,21 +15,27 @@
 """
 bag_recorder: records the feeder graph's topics to a rosbag2 MCAP directory.
 
-    bag_recorder OUTPUT_DIR [--topics T ...] [--exclude REGEX] [--duration S]
-                 [--max-messages N] [--discovery-period S] [--flush-period S] [--ros-args ...]
+    bag_recorder OUTPUT_DIR [--topics T ... | --all] [--exclude REGEX] [--duration S]
+                 [--max-messages N] [--discovery-period S] [--flush-period S]
+                 [--ros-args ...]
 
-It subscribes to every topic it discovers (or those given, resolved in its namespace) with
-``raw=True``, so the bytes it stores are the CDR the publishers sent, with the QoS the
-publishers offer (a latched topic is subscribed transient local and recorded so) and the type
-hash they announce. Each message is stored with its receive time (log time) and its send time
+It records its own feeder: every topic it discovers in its namespace (``__ns``), plus the
+absolute ``/diagnostics``, ``/tf`` and ``/tf_static`` where present (:data:`SHARED_TOPICS`),
+so two feeders in one domain, each with its recorder, each get a bag of their own; ``--all``
+takes every topic of the domain (the only choice in the root namespace), ``--topics`` exactly
+those given (resolved in its namespace).
+
+It subscribes with ``raw=True``, so the bytes it stores are the CDR the publishers sent, with the
+QoS the publishers offer (a latched topic is subscribed transient local and recorded so) and the
+type hash they announce. Each message is stored with its receive time (log time) and its send time
 (publish time, the DDS source timestamp), as rosbag2 does. It stops on SIGINT or SIGTERM, after
 ``--duration`` seconds or ``--max-messages`` messages, always closing the bag (metadata.yaml
 written) and printing a summary. Killed (SIGKILL, a crash), it loses at most the messages of the
-last ``--flush-period`` (0.5 s) + DRAIN_PERIOD (0.1 s): every flush puts them on disk and
-rewrites metadata.yaml, and the bag stays readable as it is (``bag_reindex`` gives its .mcap
-the summary a clean stop writes; see feeder_monitor.bag). A write the disk refuses (full,
-quota, file size limit, I/O error) ends it with exit status 3 and one line naming the cause,
-what the bag holds and the fix; the bag keeps every message flushed before (feeder_monitor.bag).
+last ``--flush-period`` (0.5 s) + DRAIN_PERIOD (0.1 s): every flush puts them on disk and rewrites
+metadata.yaml, and the bag stays readable as it is (``bag_reindex`` gives its .mcap the summary a
+clean stop writes; see feeder_monitor.bag). A write the disk refuses (full, quota, file size limit,
+I/O error) ends it with exit status 3 and one line naming the cause, what the bag holds and the
+fix; the bag keeps every message flushed before (feeder_monitor.bag).
 """
 
 import argparse
@@ -50,6 +56,10 @@ from .bag import BagWriter, qos, write_cause, WRITE_FAULT_CAUSES, WRITE_FAULT_ST
 
 NODE_NAME = 'feeder_bag_recorder'
 ALWAYS_EXCLUDED = ('/rosout', '/parameter_events')
+# Absolute topics a feeder's recorder takes beside its namespace's: they carry every feeder
+# (diagnostic status names carry the namespace, feeder_common.diagnostics), or the transforms
+# of a robot model published outside the namespace.
+SHARED_TOPICS = ('/diagnostics', '/tf', '/tf_static')
 # Seconds between takes of the waiting messages. Their log time is the DDS receive time, so
 # the period costs no timing; the subscriptions' depth (1000) holds 5 s of a 200 Hz topic, and a
 # kill loses at most this plus the flush period. Each take costs an executor round even when
@@ -64,7 +74,11 @@ def parse_args(argv):
     p.add_argument('output', help='bag directory to create (must not exist)')
     p.add_argument('--topics', nargs='+', default=None, metavar='TOPIC',
                    help="topics to record (relative names resolve in the node's namespace); "
-                   'default: every topic discovered except /rosout and /parameter_events')
+                   "default: every topic discovered in the recorder's namespace, plus "
+                   f'{", ".join(SHARED_TOPICS)}')
+    p.add_argument('--all', action='store_true', dest='all_topics',
+                   help='record every topic of the domain (every namespace), except /rosout '
+                   'and /parameter_events')
     p.add_argument('--exclude', default=None, metavar='REGEX',
                    help='do not record topics whose full name matches this regular expression')
     p.add_argument('--duration', type=float, default=None, metavar='S',
@@ -85,6 +99,8 @@ def parse_args(argv):
                   f'({exc}); give a Python regex, e.g. --exclude "^/diagnostics$"',
                   file=sys.stderr, flush=True)
             raise SystemExit(2) from None
+    if args.all_topics and args.topics is not None:
+        p.error('give --topics or --all, not both')
     if args.duration is not None and args.duration <= 0:
         p.error('--duration must be > 0')
     if args.max_messages is not None and args.max_messages <= 0:
@@ -178,10 +194,13 @@ class BagRecorder(Node):
 
     def __init__(self, writer, topics=None, exclude=None, discovery_period=0.5,
                  max_messages=None, duration=None, flush_period=0.5, drain_period=DRAIN_PERIOD,
-                 **kwargs):
+                 all_topics=False, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         self.writer = writer
         self.wanted = None if topics is None else {self.resolve_topic_name(t) for t in topics}
+        ns = self.get_namespace().rstrip('/')
+        # None: every namespace (--all, or a recorder in the root namespace).
+        self.prefix = None if all_topics or not ns else ns + '/'
         self.exclude = re.compile(exclude) if exclude else None
         self.max_messages = max_messages
         self.done = None            # why recording ended by itself
@@ -213,7 +232,9 @@ class BagRecorder(Node):
             return False
         if self.exclude is not None and self.exclude.search(topic):
             return False
-        return self.wanted is None or topic in self.wanted
+        if self.wanted is not None:
+            return topic in self.wanted
+        return self.prefix is None or topic.startswith(self.prefix) or topic in SHARED_TOPICS
 
     def _discover(self):
         self._check_publishers()
@@ -323,7 +344,7 @@ def main(argv=None):
     def make_node(**kwargs):
         made.append(BagRecorder(writer, args.topics, args.exclude, args.discovery_period,
                                 args.max_messages, args.duration, args.flush_period,
-                                **kwargs))
+                                all_topics=args.all_topics, **kwargs))
         return made[-1]
 
     try:

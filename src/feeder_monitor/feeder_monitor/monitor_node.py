@@ -31,7 +31,7 @@ from feeder_common import auth, qos
 from feeder_common.diagnostics import Updater
 from feeder_common.messages import (parse_cycle_fired, parse_cycle_status, proximity_detected,
                                     signed_verdict, time_ns)
-from feeder_common.node import flush, run_node, StartupError
+from feeder_common.node import flush, run_node, StartupError, watch_clock
 from feeder_common.parameters import ParameterGate
 from feeder_common.params import check_scene
 from feeder_interfaces.msg import Verdict
@@ -68,6 +68,7 @@ class MonitorNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('feeder_monitor', **kwargs)
+        watch_clock(self)       # a warning if use_sim_time is on and no /clock comes
         # Scenes by path, loaded once (the parameter checks load them too).
         self._load_scene = functools.lru_cache(maxsize=None)(load_scene)
         self._scene = None
@@ -124,7 +125,8 @@ class MonitorNode(Node):
             event_callbacks=SubscriptionEventCallbacks(liveliness=self._on_driver_liveliness))
         self.create_subscription(DiagnosticStatus, 'cycle_fired', self._on_cycle_fired,
                                  qos.CYCLE_FIRED)
-        self._diagnostics = Updater(self, self._param('diagnostics_period'), self._scene.name)
+        self._diagnostics = Updater(self, self._param('diagnostic_updater.period'),
+                                    self._scene.name)
         self._diagnostics.add('readiness', self._diag_readiness)
         self._diagnostics.add('inputs', self._diag_inputs)
         self._publish_statement()
@@ -162,8 +164,8 @@ class MonitorNode(Node):
     def _apply(self, changes):
         if self._monitor is None:
             return
-        if 'diagnostics_period' in changes:
-            self._diagnostics.set_period(changes['diagnostics_period'])
+        if 'diagnostic_updater.period' in changes:
+            self._diagnostics.set_period(changes['diagnostic_updater.period'])
         if 'max_report_age' in changes:
             self._gate.max_age_ns = int(round(changes['max_report_age'] * 1e9))
         if any(n in changes for n in RULE_PARAMS):

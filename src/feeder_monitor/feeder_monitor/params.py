@@ -14,7 +14,7 @@
 
 """Parameter table of monitor_node (ROS-free; the spec type is feeder_common's)."""
 
-from feeder_common.params import KEY_FILE, ParamSpec, REALTIME_PRIORITY
+from feeder_common.params import DIAGNOSTIC_PERIOD, KEY_FILE, ParamSpec, REALTIME_PRIORITY
 
 MONITOR_PARAMS = (
     ParamSpec('scene', '', "scene YAML the feeder runs (the same file as the sim's); must load",
@@ -50,6 +50,5 @@ MONITOR_PARAMS = (
               'time): its offered deadline and liveliness lease; a reader that sees either '
               'lapse, or a sent time older than this, must take the statement as false',
               minimum=0.02, maximum=60.0, read_only=True),
-    ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages', minimum=0.1,
-              maximum=60.0),
+    DIAGNOSTIC_PERIOD,
 )

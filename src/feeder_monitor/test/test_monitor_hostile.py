@@ -68,7 +68,7 @@ class Harness:
         rclpy.init(context=self.ctx, domain_id=reserve_domain_id())
         self.node = MonitorNode(context=self.ctx, namespace=NS, parameter_overrides=[
             Parameter('scene', value=TRIANGLE), Parameter('orbit_throws', value=1000),
-            Parameter('diagnostics_period', value=0.1),
+            Parameter('diagnostic_updater.period', value=0.1),
             Parameter('key_file', value=str(key_file))])
         self.signer = messages.CycleSigner(auth.load_key(key_file), f'{NS}/feeder_driver')
         self.seq = 0

@@ -22,7 +22,9 @@ the domain of f. Each check returns the reason of a rejection, or None.
 
 import math
 
-from feeder_common.params import check_scene, KEY_FILE, ParamSpec, REALTIME_PRIORITY
+from feeder_common.params import (check_link, check_scene, CYCLE_PERIOD, DIAGNOSTIC_PERIOD,
+                                  FRAME_ID, JOINT_STATES_RATE, KEY_FILE, LINK_SPECS,
+                                  ParamSpec, REALTIME_PRIORITY, SENSOR_RANGE)
 
 
 SIM_PARAMS = (
@@ -50,29 +52,35 @@ SIM_PARAMS = (
     ParamSpec('truth_log', '', 'hardware mode: file for one JSON line per cycle with the '
               "part's true state (feeder_sim/truth.py), to count false readies against; '': "
               'none', read_only=True, constraints='a writable path; hardware mode only'),
-    ParamSpec('sensor_range_m', 0.02, 'hardware mode: fixed distance of the proximity ranger, '
-              "m (Range.min_range = max_range), as the driver's parameter", minimum=0.001,
-              maximum=10.0),
-    ParamSpec('cycle_period', 1.0, 'hardware mode: seconds between cycles while enabled',
-              minimum=0.005, maximum=60.0),
+    # Hardware mode takes the driver's cycle parameters (one file, config/driver.yaml, serves
+    # both): sensor_range_m and frame_id of proximity, cycle_period; the serial link's timing
+    # is checked as the driver checks it and changes nothing (there is no link).
+    SENSOR_RANGE,
+    FRAME_ID,
+    CYCLE_PERIOD,
+    *LINK_SPECS,
     ParamSpec('markers_period', 0.1, 'predictor mode: at most one markers message per this many '
               'seconds (the last state always follows within it); 0: one after every throw',
               minimum=0.0, maximum=10.0),
-    ParamSpec('diagnostics_period', 1.0, 'seconds between /diagnostics messages', minimum=0.1,
-              maximum=60.0),
+    DIAGNOSTIC_PERIOD,
     KEY_FILE,       # hardware mode: signs the cycle reports as the driver does
+    JOINT_STATES_RATE,      # hardware mode: the arm's swing after each (instantaneous) cycle
 )
 
 
-def check_changes(changes, loader):
+def check_changes(changes, loader, current=None):
     """
-    Reason to reject a parameter set beyond types and ranges, or None: a scene that must load.
+    Reason to reject a parameter set beyond types and ranges, or None.
 
-    ``changes`` maps names to new values; ``loader`` loads a scene (see :func:`check_scene`).
+    A scene that must load; the driver's link rules (feeder_common.params.check_link) over
+    ``current`` (name -> value) with ``changes``. ``changes`` maps names to new values;
+    ``loader`` loads a scene (see :func:`check_scene`).
     """
     if 'scene' in changes:
-        return check_scene(changes['scene'], loader)
-    return None
+        reason = check_scene(changes['scene'], loader)
+        if reason:
+            return reason
+    return check_link(changes, current or {})
 
 
 def check_start(model, edge, R):

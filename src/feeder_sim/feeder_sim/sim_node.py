@@ -34,11 +34,12 @@ import sys
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common import auth, qos
+from feeder_common.arm import ArmMotion, stand_in_follow
 from feeder_common.diagnostics import Updater
 from feeder_common.frames import BASE_FRAME, plane_point, plane_quaternion
 from feeder_common.messages import (CycleSigner, joint_state, MAX_SEQ_JUMP, parse_cycle_status,
                                     predicted_state, proximity, time_msg)
-from feeder_common.node import FeederLifecycleNode, run_node, StartupError
+from feeder_common.node import clock_note, FeederLifecycleNode, run_node, StartupError
 from feeder_common.parameters import ParameterGate
 from geometry_msgs.msg import PoseStamped
 from rclpy.lifecycle import TransitionCallbackReturn
@@ -74,6 +75,8 @@ class SimNode(FeederLifecycleNode):
         self._pubs = {}
         self._sub = None
         self._cycle_timer = None
+        self._joint_timer = None        # hardware mode: joint_states at joint_states_rate
+        self._motion = ArmMotion(wind=0.0)
         self._last_throw = None
         self._lost_seq = None           # cycle that lost the part off the arm's end
         self._seq = 0
@@ -103,7 +106,7 @@ class SimNode(FeederLifecycleNode):
             except auth.KeyFileError as exc:
                 raise StartupError(f'key_file: {exc}') from None
 
-        self._diagnostics = Updater(self, p.values['diagnostics_period'], HARDWARE_ID)
+        self._diagnostics = Updater(self, p.values['diagnostic_updater.period'], HARDWARE_ID)
         self._diagnostics.add('lifecycle', self._diag_lifecycle)
         self._diagnostics.add('prediction', self._diag_prediction)
         if self._hardware:
@@ -118,7 +121,7 @@ class SimNode(FeederLifecycleNode):
     # ------------------------------------------------------------------ parameters
     def _validate(self, changes, current):
         """On-set: the reason to reject ``changes``; never changes the node's state."""
-        reason = check_changes(changes, self._load_scene)
+        reason = check_changes(changes, self._load_scene, current)
         if reason:
             return reason
         if ('start_edge' in changes or 'start_radius' in changes) and self._scene is not None:
@@ -130,8 +133,10 @@ class SimNode(FeederLifecycleNode):
 
     def _apply(self, changes):
         """Post-set: apply accepted changes."""
-        if 'diagnostics_period' in changes:
-            self._diagnostics.set_period(changes['diagnostics_period'])
+        if 'diagnostic_updater.period' in changes:
+            self._diagnostics.set_period(changes['diagnostic_updater.period'])
+        if 'joint_states_rate' in changes and 'joint_states' in self._pubs:
+            self._start_joint_timer()
         if self._predictor is None:
             return
         if 'start_edge' in changes or 'start_radius' in changes:
@@ -211,6 +216,7 @@ class SimNode(FeederLifecycleNode):
                 'cycle_fired': pub(DiagnosticStatus, 'cycle_fired', qos.CYCLE_FIRED),
                 'joint_states': pub(JointState, 'joint_states', qos.JOINT_STATES),
             }
+            self._start_joint_timer()
         else:
             self._pubs = {
                 'pose': pub(PoseStamped, 'predicted/part_pose', qos.PREDICTION),
@@ -251,6 +257,7 @@ class SimNode(FeederLifecycleNode):
         return TransitionCallbackReturn.SUCCESS
 
     def _release(self):
+        self._stop_joint_timer()
         for p in self._pubs.values():
             self.destroy_lifecycle_publisher(p)
         self._pubs = {}
@@ -303,7 +310,8 @@ class SimNode(FeederLifecycleNode):
             if self._cycle_timer is None:
                 self._start_cycling()
             response.success = True
-            response.message = f'enabled: one cycle every {self._param("cycle_period")} s'
+            response.message = (f'enabled: one cycle every {self._param("cycle_period")} s'
+                                + clock_note(self))
         else:
             self._stop_cycling()
             response.success = True
@@ -325,6 +333,8 @@ class SimNode(FeederLifecycleNode):
         pubs = self._pubs
         pubs['cycle_fired'].publish(self._signer.cycle_fired(self._seq, stamp, HARDWARE_ID))
         pubs['joint_states'].publish(joint_state(stamp, 0.0, self._scene.release_speed))
+        self._motion.released(stamp, self._scene.release_speed,
+                              follow=stand_in_follow(self._param('cycle_period')))
         try:
             throw = self._predictor.throw()
         except ThrowmapError as exc:
@@ -345,11 +355,30 @@ class SimNode(FeederLifecycleNode):
             self._truth.cycle(self._seq, stamp, throw, self._predictor.sees())
         # proximity and cycle_status back to back: the monitor decides on both.
         pubs['proximity'].publish(proximity(stamp, throw.detected,
-                                            self._param('sensor_range_m')))
+                                            self._param('sensor_range_m'),
+                                            self._param('frame_id')))
         pubs['cycle_status'].publish(self._signer.cycle_status(
             self._seq, True, 'completed', throw.detected, stamp, HARDWARE_ID))
         pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
         return self._seq, None
+
+    def _start_joint_timer(self):
+        """(Re)start the steady joint_states (none with joint_states_rate 0)."""
+        self._stop_joint_timer()
+        rate = self._param('joint_states_rate')
+        if rate > 0:
+            self._joint_timer = self.create_timer(1.0 / rate, self._joint_tick)
+
+    def _stop_joint_timer(self):
+        if self._joint_timer is not None:
+            self.destroy_timer(self._joint_timer)
+            self._joint_timer = None
+
+    def _joint_tick(self):
+        """Publish the arm's angle now (the follow-through after a cycle), while active."""
+        if self._active and 'joint_states' in self._pubs:
+            stamp = self.get_clock().now().nanoseconds
+            self._pubs['joint_states'].publish(joint_state(stamp, *self._motion.at(stamp)))
 
     # ------------------------------------------------------------------ predictor mode
     def _on_cycle_status(self, msg):

@@ -67,7 +67,7 @@ class Predictor:
         self.ctx = Context()
         rclpy.init(context=self.ctx, domain_id=reserve_domain_id())
         self.node = SimNode(context=self.ctx, namespace=NS, parameter_overrides=[
-            Parameter('scene', value=TRIANGLE), Parameter('diagnostics_period', value=0.1)])
+            Parameter('scene', value=TRIANGLE), Parameter('diagnostic_updater.period', value=0.1)])
         autostart(self.node)
         self.on = {sub.topic_name: sub.callback for sub in self.node.subscriptions}
         assert set(self.on) == {f'{NS}/cycle_status'}, self.on
