@@ -102,13 +102,15 @@ class Driver(BenchNode):
 
     def __init__(self, rclpy):
         from diagnostic_msgs.msg import DiagnosticArray
+        from feeder_common.diagnostics import local_name
+        self.local_name = local_name
         super().__init__(rclpy, 'feeder_soak')
         self.seq = 0
         self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50)
 
     def _on_diag(self, msg):
         for s in msg.status:
-            if s.name == 'feeder_driver: actuator':
+            if self.local_name(s.name) == 'feeder_driver: actuator':
                 self.seq = int({kv.key: kv.value for kv in s.values}['seq'])
 
 

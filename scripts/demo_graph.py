@@ -165,6 +165,7 @@ def run(args, scene_path, out, procs, t0, key):
     import rclpy
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+    from feeder_common.diagnostics import local_name
     from feeder_common.messages import check_verdict, parse_predicted_state
     from feeder_interfaces.msg import Verdict
     from std_srvs.srv import SetBool
@@ -186,7 +187,7 @@ def run(args, scene_path, out, procs, t0, key):
 
     def on_diag(msg):
         for s in msg.status:
-            diags[s.name] = s
+            diags[local_name(s.name)] = s
 
     node.create_subscription(DiagnosticStatus, '/feeder/cycle_status', keep('status'), reliable)
     node.create_subscription(DiagnosticStatus, '/feeder/predicted/state', keep('predicted'),

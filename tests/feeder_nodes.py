@@ -19,6 +19,7 @@ import pathlib
 from typing import Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from feeder_common.diagnostics import local_name
 from feeder_common.messages import check_verdict, parse_predicted_state
 from feeder_common.stamps import parse_stamp_text
 from feeder_interfaces.msg import Verdict
@@ -87,8 +88,10 @@ class Diagnostics:
         ros.node.create_subscription(DiagnosticArray, '/diagnostics', self._on, RELIABLE)
 
     def _on(self, msg):
+        # By the name within the feeder (a test watches one feeder): 'feeder_driver: cycles'
+        # for '/feeder/feeder_driver: cycles' (feeder_common.diagnostics.local_name).
         for s in msg.status:
-            self.by_name.setdefault(s.name, []).append(s)
+            self.by_name.setdefault(local_name(s.name), []).append(s)
 
     def levels(self, name):
         return [s.level for s in self.by_name.get(name, [])]

@@ -201,7 +201,7 @@ def run_driver_graph(graph, ros, tmp_path, emulator_faults, cycles, faults):
     if faults:
         assert int(lv['link_losses']) >= 1 and int(lv['controller_resets']) >= 1
         assert int(lv['dropped checksum']) > 0 and int(lv['garbage bytes']) > 0
-    mv = Diagnostics.values(diags.by_name['feeder/feeder_monitor: readiness'][-1])
+    mv = Diagnostics.values(diags.by_name['feeder_monitor: readiness'][-1])
     assert int(mv['failed']) == n - sum(ok) and int(mv['ready']) == expected_ready
     assert sum(verdicts) == expected_ready
     return expected_ready

@@ -122,7 +122,7 @@ def recorder_subscribed(ros, topic, name='feeder_bag_recorder'):
 
 def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     bag = tmp_path / 'run'
-    sim_as_hardware(graph)
+    sim_as_hardware(graph, 'joint_states_rate:=0')     # joint states at release and rest only
     predictor(graph)
     monitor(graph, 'ready_deadline:=60')       # no idle republishing within the test
     ready = Statements(ros)
@@ -255,4 +255,4 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     poses = msgs['/feeder/predicted/part_pose']
     assert [p.pose.position.x for p in poses] == [p.R for p in states]
     names = {s.name for a in msgs['/diagnostics'] for s in a.status}
-    assert {'feeder_driver: actuator', 'feeder_monitor: readiness'} <= names
+    assert {'feeder/feeder_driver: actuator', 'feeder/feeder_monitor: readiness'} <= names
