@@ -192,11 +192,11 @@ def run_driver_graph(graph, ros, tmp_path, emulator_faults, cycles, faults):
 
     # The driver's own account in /diagnostics agrees.
     ros.spin_for(1.2)
-    cyc = diags.by_name['feeder/feeder_driver: cycles'][-1]
+    cyc = diags.by_name['feeder_driver: cycles'][-1]
     dv = Diagnostics.values(cyc)
     assert int(dv['fired']) == n and int(dv['completed']) == sum(ok)
     assert int(dv['failed']) == n - sum(ok)
-    link_status = diags.by_name['feeder/feeder_driver: serial link'][-1]
+    link_status = diags.by_name['feeder_driver: serial link'][-1]
     lv = Diagnostics.values(link_status)
     if faults:
         assert int(lv['link_losses']) >= 1 and int(lv['controller_resets']) >= 1

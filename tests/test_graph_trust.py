@@ -27,7 +27,8 @@ import os
 import signal
 import time
 
-from feeder_common import auth
+from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_common import auth, qos
 from feeder_common.messages import signed_verdict
 from feeder_interfaces.msg import Verdict
 from feeder_nodes import (monitor, sim_as_hardware, Statements, STARTUP_TIMEOUT,
@@ -150,6 +151,30 @@ def test_attack_8_a_killed_driver_is_known_within_2_s_and_a_restart_trusted_at_o
         [v.anomaly for v in new if v.anomaly][:3]
     assert new[0].seq == 1 and [v.seq for v in new[:20]] == list(range(1, 21))
     assert new[1].state == Verdict.STATE_WARMING_UP         # judged, warming up again
+
+
+def test_attack_8_another_live_writer_does_not_hide_a_dead_driver(graph, ros):
+    # A forger's writer on cycle_status, alive and with the driver's QoS, stays on the graph
+    # while the driver is killed: the monitor still drops the ready within 2 s.
+    sim = sim_as_hardware(graph, f'cycle_period:={PERIOD}')
+    monitor(graph)
+    ready = Statements(ros)
+    wait_for_monitor(ros, ready)
+    wait_for_readers(ros, '/feeder/cycle_status', 1)     # the monitor's
+    forger = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status',
+                                       qos.CYCLE_STATUS)
+    ros.spin_until(lambda: forger.get_subscription_count() >= 1, STARTUP_TIMEOUT,
+                   "the monitor's reader to match the forger's writer")
+    cycle_until_ready(ros, ready)
+    ros.spin_until(lambda: ready.checked[-1].ready_now, 10.0, 'a ready that holds')
+    n = len(ready)
+    t0 = time.monotonic()
+    sim.kill()
+    sim.wait()
+    ros.spin_until(lambda: any(not c.ready for c in ready.checked[n:]), 5.0, 'the drop')
+    assert time.monotonic() - t0 < 2.0, 'a killed driver hidden by a live writer'
+    assert 'not alive' in next(c for c in ready.checked[n:] if not c.ready).anomaly
+    ros.node.destroy_publisher(forger)
 
 
 def test_attack_7_a_stalled_monitor_states_no_ready_about_a_stale_cycle(graph, ros):

@@ -315,7 +315,11 @@ class MonitorNode(Node):
             self._publish_statement()
 
     def _on_driver_liveliness(self, info):
-        if info.alive_count == 0 and info.alive_count_change < 0:
+        # Any writer of cycle_status that lost its liveliness: the event does not say which
+        # one, and another live writer (a forger's) must not hide a dead or stopped driver, so
+        # every loss counts (a forger can only cost a ready this way).
+        if info.not_alive_count_change > 0 or \
+                (info.alive_count == 0 and info.alive_count_change < 0):
             self._counts['liveliness_lost'] += 1
             self._interrupt(f'{self._driver} is not alive (no liveliness within '
                             f'{qos.DRIVER_LEASE_S:g} s: it died or hangs)')
