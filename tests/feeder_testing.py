@@ -110,8 +110,10 @@ def install_env(install=INSTALL, base=None):
     """
     Environment for the executables of the colcon install ``install`` (e.g. ros2_ws/install).
 
-    Its packages' site-packages go first on PYTHONPATH and their prefixes, then this Python's
-    (the venv with the ROS wheels), on AMENT_PREFIX_PATH; output unbuffered and uncoloured.
+    Its packages' site-packages go first on PYTHONPATH, their prefixes, then this Python's
+    (the venv with the ROS wheels), on AMENT_PREFIX_PATH, and the ``lib`` folders of those that
+    have shared libraries (feeder_interfaces' typesupports) on LD_LIBRARY_PATH, as colcon's
+    setup scripts do; output unbuffered and uncoloured.
     """
     env = dict(os.environ if base is None else base)
     install = pathlib.Path(install)
@@ -122,6 +124,9 @@ def install_env(install=INSTALL, base=None):
     prefixes = [str(p) for p in pkgs] + [sys.prefix]
     env['AMENT_PREFIX_PATH'] = os.pathsep.join(
         prefixes + [env.get('AMENT_PREFIX_PATH', '')]).strip(os.pathsep)
+    libs = [str(p / 'lib') for p in pkgs if any((p / 'lib').glob('lib*.so'))]
+    env['LD_LIBRARY_PATH'] = os.pathsep.join(
+        libs + [env.get('LD_LIBRARY_PATH', '')]).strip(os.pathsep)
     env['PYTHONUNBUFFERED'] = '1'
     env['RCUTILS_COLORIZED_OUTPUT'] = '0'
     return env

@@ -16,7 +16,7 @@
 The real ROS command line (``ros2``: ros2cli, launch, launch_ros) for tests, where it exists.
 
 It has no wheels: it is found in a ROS install (``ros2`` on PATH whose Python imports
-``launch_ros``) or in a side venv built from source (shared/tools/ros-cli-venv.sh), named by
+``launch_ros``) or in a side venv built from source (scripts/ros-cli-venv.sh), named by
 ``FEEDER_ROS_CLI_VENV``. The environment adds the colcon workspace (ros2_ws/install) on top;
 the node executables keep their own interpreter (the project venv, from their shebang).
 """
@@ -30,7 +30,7 @@ import subprocess
 from feeder_testing import INSTALL, install_env
 
 SKIP_REASON = ('the real ros2 CLI / ros2 launch is not installed here (no wheels exist): '
-               'set FEEDER_ROS_CLI_VENV to a venv built with shared/tools/ros-cli-venv.sh, or '
+               'set FEEDER_ROS_CLI_VENV to a venv built with scripts/ros-cli-venv.sh, or '
                'run on a ROS 2 Kilted install')
 
 

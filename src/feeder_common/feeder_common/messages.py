@@ -28,6 +28,13 @@ values ``seq`` and ``stamp`` of the cycle, ``ready`` (``true``/``false``), ``sta
 'predicted_state'``, level OK, values ``seq`` and ``stamp`` of the cycle, ``edge`` (-1: no part
 on the arm), ``R`` (m, ``none`` without a part), ``throw_kind`` (``jog``/``flip``/``lost``).
 Every stamp is integer nanoseconds here; :func:`time_msg` and :func:`time_ns` convert.
+
+Every parser takes exactly what its builder writes (the wire is hostile: anyone on the graph
+can publish anything): the status's ``name`` and level, each value it reads given once, a
+``seq`` in ASCII decimal digits (no sign, space, underscore, other scripts' digits or leading
+zero) below 2**63, a stamp as :mod:`feeder_common.stamps` writes it, an ``R`` that is the
+``repr`` of a finite float, texts at most :data:`MAX_TEXT` characters long. Anything else is a
+ValueError naming the problem; no other exception escapes a parser, whatever the message holds.
 """
 
 from dataclasses import dataclass
@@ -41,16 +48,30 @@ from sensor_msgs.msg import JointState, Range
 
 from . import auth
 from .frames import ARM_JOINT, SENSOR_FRAME
-from .stamps import NS, parse_stamp_text, stamp_text
+from .stamps import is_decimal, NS, parse_stamp_text, stamp_text
 
 CYCLE_STATUS_NAME = 'cycle'
+CYCLE_FIRED_NAME = 'cycle_fired'
 VERDICT_NAME = 'edge1_verdict'
 PREDICTED_STATE_NAME = 'predicted_state'
 # A follower of cycle_status replays at most this many missed cycles; a longer jump of seq is
 # implausible (a forged or corrupt seq, or a driver that ran unseen for minutes): an anomaly.
 MAX_SEQ_JUMP = 1000
+# A seq is below 2**63 (an int64 holds it), so its text has at most 19 digits.
+MAX_SEQ = 2**63 - 1
+# An edge of a part (-1: none) fits an int32.
+MAX_EDGE = 2**31 - 1
+# The longest message, hardware_id or state text a parser takes (a port path, a reason).
+MAX_TEXT = 4096
+# The longest repr of a finite float ('-2.2250738585072014e-308' is 24 characters).
+_MAX_FLOAT_TEXT = 32
 _SENSOR_TEXT = {True: '1', False: '0', None: 'none'}
-_SENSOR_BIT = {'1': True, '0': False}
+_HEX = frozenset('0123456789abcdef')
+_SENSOR_BIT = {'1': True, '0': False, 'none': None}
+_READY_TEXT = {True: 'true', False: 'false'}
+_READY_BIT = {'true': True, 'false': False}
+THROW_KINDS = ('jog', 'flip', 'lost')
+_LEVELS = {DiagnosticStatus.OK: True, DiagnosticStatus.ERROR: False}
 
 
 def time_msg(stamp_ns):
@@ -60,8 +81,107 @@ def time_msg(stamp_ns):
 
 
 def time_ns(stamp):
-    """Convert builtin_interfaces/Time to integer nanoseconds."""
-    return stamp.sec * NS + stamp.nanosec
+    """
+    Convert builtin_interfaces/Time to integer nanoseconds.
+
+    ValueError for a Time no sample clock writes: ``sec`` negative (before 1970) or
+    ``nanosec`` outside [0, 1e9) (the field's documented range).
+    """
+    sec, nanosec = stamp.sec, stamp.nanosec
+    if sec < 0 or not 0 <= nanosec < NS:
+        raise ValueError(f'stamp sec={sec} nanosec={nanosec} is not a time from 1970 on with '
+                         'nanosec in [0, 1e9)')
+    return sec * NS + nanosec
+
+
+def _text(what, text, limit=MAX_TEXT):
+    """Return ``text`` if it is at most ``limit`` characters long; else ValueError."""
+    if len(text) > limit:
+        raise ValueError(f'{what} is {len(text)} characters long; at most {limit} are accepted')
+    return text
+
+
+def _clip(text):
+    """Return ``str(text)`` cut to MAX_TEXT characters (its end an ellipsis when cut)."""
+    text = str(text)
+    return text if len(text) <= MAX_TEXT else text[:MAX_TEXT - 1] + '\u2026'
+
+
+def parse_seq(text, what='seq'):
+    """
+    Parse a ``seq`` as the builders write it: ASCII decimal digits, below 2**63.
+
+    ValueError naming the problem for anything else (a sign, spaces, ``_``, digits of other
+    scripts, a leading zero, too many digits).
+    """
+    if not isinstance(text, str):
+        raise ValueError(f'{what} is text, not {type(text).__name__}')
+    if len(text) > len(str(MAX_SEQ)):
+        raise ValueError(f'{what} is {len(text)} characters long; a seq has at most '
+                         f'{len(str(MAX_SEQ))} digits')
+    if not is_decimal(text):
+        raise ValueError(f'{what} {text!r} is not a non-negative integer in ASCII decimal '
+                         'digits without a leading zero')
+    seq = int(text)
+    if seq > MAX_SEQ:
+        raise ValueError(f'{what} {seq} is beyond {MAX_SEQ}')
+    return seq
+
+
+def _parse_edge(text, what):
+    """Parse an edge index: ``-1`` (no part) or ASCII decimal digits up to MAX_EDGE."""
+    if text == '-1':
+        return -1
+    if len(text) > len(str(MAX_EDGE)) or not is_decimal(text) or int(text) > MAX_EDGE:
+        raise ValueError(f'{what} {text[:40]!r} is not -1 or an edge index in ASCII decimal '
+                         f'digits up to {MAX_EDGE}')
+    return int(text)
+
+
+def _parse_float(text, what):
+    """Parse a finite float written as its ``repr`` (the shortest text that reads back)."""
+    try:
+        value = float(text) if len(text) <= _MAX_FLOAT_TEXT else None
+    except ValueError:
+        value = None
+    if value is None or not math.isfinite(value) or repr(value) != text:
+        raise ValueError(f'{what} {text[:40]!r} is not a finite float written as its repr')
+    return value
+
+
+def _optional_stamp(text, what):
+    """Parse ``none`` (no usable stamp) or a stamp (:mod:`feeder_common.stamps`)."""
+    if text == 'none':
+        return None
+    try:
+        return parse_stamp_text(text)
+    except ValueError as exc:
+        raise ValueError(f'{what}: {exc}') from None
+
+
+def _values(msg, what, name, keys):
+    """
+    Return the values ``keys`` of status ``msg``, each given once; else ValueError naming why.
+
+    Checks the status's ``name``, that it is OK or ERROR, and the length of its texts; values
+    of other keys are ignored (a later field must not break an older reader).
+    """
+    if msg.name != name:
+        raise ValueError(f'{what} named {msg.name[:40]!r}, not {name!r}')
+    if msg.level not in _LEVELS:
+        raise ValueError(f'{what} level {msg.level!r} is neither OK nor ERROR')
+    _text(f'{what} message', msg.message)
+    _text(f'{what} hardware_id', msg.hardware_id)
+    found = {}
+    for kv in msg.values:
+        if kv.key in keys:
+            if kv.key in found:
+                raise ValueError(f'{what} gives {kv.key} twice')
+            found[kv.key] = kv.value
+    missing = [k for k in keys if k not in found]
+    if missing:
+        raise ValueError(f'{what} without a {", ".join(missing)} value')
+    return found
 
 
 @dataclass(frozen=True)
@@ -69,13 +189,13 @@ class CycleStatus:
     """
     A parsed ``cycle_status``.
 
-    ``sensor`` None: no bit (a failed cycle); ``stamp_ns`` None: no usable stamp.
+    ``sensor`` None: no bit (a failed cycle); ``stamp_ns`` the sample time, ns.
     """
 
     seq: int
     ok: bool
     sensor: Optional[bool]
-    stamp_ns: Optional[int]
+    stamp_ns: int
     message: str
     hardware_id: str
     session: str = ''       # the reporting run (CycleSigner); '' unsigned
@@ -83,40 +203,33 @@ class CycleStatus:
 
 
 def cycle_status(seq, ok, message, sensor, stamp_ns, hardware_id):
-    """Build a ``cycle_status``; ``sensor`` True/False, or None for a failed cycle."""
+    """
+    Build a ``cycle_status``; ``sensor`` True/False, or None for a failed cycle.
+
+    ``message`` and ``hardware_id`` are cut to MAX_TEXT characters (what a parser takes).
+    """
     return DiagnosticStatus(
         level=DiagnosticStatus.OK if ok else DiagnosticStatus.ERROR, name=CYCLE_STATUS_NAME,
-        message=message, hardware_id=hardware_id,
+        message=_clip(message), hardware_id=_clip(hardware_id),
         values=[KeyValue(key='seq', value=str(int(seq))),
                 KeyValue(key='sensor', value=_SENSOR_TEXT[sensor]),
                 KeyValue(key='stamp', value=stamp_text(stamp_ns))])
 
 
-def _optional_stamp(values):
-    """Return the ``stamp`` value of a status in ns; None when it is missing or unreadable."""
-    # A bad stamp does not make the status unusable: the seq still names the cycle.
-    try:
-        return parse_stamp_text(values['stamp'])
-    except (KeyError, ValueError):
-        return None
-
-
 def parse_cycle_status(msg):
-    """Parse a ``cycle_status``; ValueError naming what is wrong when ``seq`` is unusable."""
-    values = {kv.key: kv.value for kv in msg.values}
+    """Parse a ``cycle_status`` as :func:`cycle_status` writes it; ValueError naming a fault."""
+    what = 'cycle_status'
+    values = _values(msg, what, CYCLE_STATUS_NAME, ('seq', 'sensor', 'stamp'))
+    seq = parse_seq(values['seq'], f'{what} seq')
+    if values['sensor'] not in _SENSOR_BIT:
+        raise ValueError(f'{what} sensor {values["sensor"][:40]!r} is not 1, 0 or none')
     try:
-        seq = int(values['seq'])
-    except KeyError:
-        raise ValueError('cycle_status without a seq value') from None
-    except ValueError:
-        raise ValueError(f'cycle_status seq {values["seq"]!r} is not an integer') from None
-    if seq < 0:
-        raise ValueError(f'cycle_status seq {seq} is negative')
-    stamp = _optional_stamp(values)
-    session, tag = _signature(values)
-    return CycleStatus(seq, msg.level == DiagnosticStatus.OK,
-                       _SENSOR_BIT.get(values.get('sensor')), stamp, msg.message,
-                       msg.hardware_id, session, tag)
+        stamp = parse_stamp_text(values['stamp'])
+    except ValueError as exc:
+        raise ValueError(f'{what}: {exc}') from None
+    session, tag = _signature(msg.values)
+    return CycleStatus(seq, _LEVELS[msg.level], _SENSOR_BIT[values['sensor']], stamp,
+                       msg.message, msg.hardware_id, session, tag)
 
 
 @dataclass(frozen=True)
@@ -131,28 +244,39 @@ class EdgeVerdict:
 
 
 def edge_verdict(seq, stamp_ns, ready, state, anomaly=None, hardware_id=''):
-    """Build an ``edge1_verdict``; ``stamp_ns`` None: the cycle had no usable stamp."""
+    """
+    Build an ``edge1_verdict``; ``stamp_ns`` None: the cycle had no usable stamp.
+
+    Its texts are cut to MAX_TEXT characters (an anomaly can quote a failed cycle's reason).
+    """
     return DiagnosticStatus(
         level=DiagnosticStatus.ERROR if anomaly else DiagnosticStatus.OK, name=VERDICT_NAME,
-        message=anomaly or state, hardware_id=hardware_id,
+        message=_clip(anomaly or state), hardware_id=_clip(hardware_id),
         values=[KeyValue(key='seq', value=str(int(seq))),
                 KeyValue(key='stamp', value='none' if stamp_ns is None
                          else stamp_text(stamp_ns)),
-                KeyValue(key='ready', value='true' if ready else 'false'),
-                KeyValue(key='state', value=str(state))])
+                KeyValue(key='ready', value=_READY_TEXT[bool(ready)]),
+                KeyValue(key='state', value=_clip(state))])
 
 
 def parse_edge_verdict(msg):
-    """Parse an ``edge1_verdict``; ValueError naming what is wrong."""
-    values = {kv.key: kv.value for kv in msg.values}
-    try:
-        seq = int(values['seq'])
-        ready = {'true': True, 'false': False}[values['ready']]
-    except (KeyError, ValueError) as exc:
-        raise ValueError(f'edge1_verdict without a usable seq/ready ({exc!r})') from None
-    stamp = _optional_stamp(values)
-    return EdgeVerdict(seq, stamp, ready, values.get('state', ''),
-                       msg.message if msg.level == DiagnosticStatus.ERROR else '')
+    """Parse an ``edge1_verdict`` as :func:`edge_verdict` writes it; ValueError naming a fault."""
+    what = 'edge1_verdict'
+    values = _values(msg, what, VERDICT_NAME, ('seq', 'stamp', 'ready', 'state'))
+    seq = parse_seq(values['seq'], f'{what} seq')
+    stamp = _optional_stamp(values['stamp'], what)
+    if values['ready'] not in _READY_BIT:
+        raise ValueError(f'{what} ready {values["ready"][:40]!r} is not true or false')
+    state = _text(f'{what} state', values['state'])
+    ok = _LEVELS[msg.level]
+    if not state:
+        raise ValueError(f'{what} with an empty state')
+    if ok and msg.message != state:
+        raise ValueError(f'{what} of level OK whose message is not its state')
+    if not ok and not msg.message:
+        raise ValueError(f'{what} of level ERROR without the anomaly in its message')
+    return EdgeVerdict(seq, stamp, _READY_BIT[values['ready']], state,
+                       '' if ok else msg.message)
 
 
 @dataclass(frozen=True)
@@ -180,15 +304,25 @@ def predicted_state(seq, stamp_ns, edge, R, throw_kind):
 
 
 def parse_predicted_state(msg):
-    """Parse a ``predicted/state``; ValueError naming what is wrong."""
-    values = {kv.key: kv.value for kv in msg.values}
-    try:
-        seq, edge = int(values['seq']), int(values['edge'])
-        R = None if values['R'] == 'none' else float(values['R'])
-    except (KeyError, ValueError) as exc:
-        raise ValueError(f'predicted/state without a usable seq/edge/R ({exc!r})') from None
-    stamp = _optional_stamp(values)
-    return PredictedState(seq, stamp, edge, R, values.get('throw_kind', ''))
+    """Parse a ``predicted/state`` as :func:`predicted_state` writes it; ValueError if not."""
+    what = 'predicted/state'
+    keys = ('seq', 'stamp', 'edge', 'R', 'throw_kind')
+    values = _values(msg, what, PREDICTED_STATE_NAME, keys)
+    if msg.level != DiagnosticStatus.OK:
+        raise ValueError(f'{what} of a level other than OK')
+    seq = parse_seq(values['seq'], f'{what} seq')
+    stamp = _optional_stamp(values['stamp'], what)
+    edge = _parse_edge(values['edge'], f'{what} edge')
+    R = None if values['R'] == 'none' else _parse_float(values['R'], f'{what} R')
+    kind = values['throw_kind']
+    if kind not in THROW_KINDS:
+        raise ValueError(f'{what} throw_kind {kind[:40]!r} is not one of {", ".join(THROW_KINDS)}')
+    if msg.message != kind:
+        raise ValueError(f'{what} whose message is not its throw_kind')
+    if len({edge == -1, R is None, kind == 'lost'}) != 1:
+        raise ValueError(f'{what} edge {edge}, R {values["R"]!r}, throw_kind {kind!r}: edge -1, '
+                         'R none and throw_kind lost go together (no part on the arm)')
+    return PredictedState(seq, stamp, edge, R, kind)
 
 
 def proximity(stamp_ns, detected, range_m, frame_id=SENSOR_FRAME):
@@ -204,13 +338,23 @@ def proximity(stamp_ns, detected, range_m, frame_id=SENSOR_FRAME):
 
 
 def proximity_detected(msg):
-    """Sensor bit of a ``proximity`` Range (REP 117), or None for NaN (no reading)."""
+    """
+    Sensor bit of a ``proximity`` Range (REP 117), or None for NaN (no reading).
+
+    ``-inf`` detected, ``+inf`` not; a finite reading is a detection within ``[min_range,
+    max_range]``, and needs limits that are finite, not negative and in order (else
+    ValueError: such a Range says nothing). Never any other exception, whatever the floats.
+    """
     r = msg.range
     if math.isnan(r):
         return None
     if math.isinf(r):
         return r < 0
-    return bool(msg.min_range <= r <= msg.max_range)
+    lo, hi = msg.min_range, msg.max_range
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 <= lo <= hi):
+        raise ValueError(f'proximity range {r!r} with limits [{lo!r}, {hi!r}] that are not '
+                         'finite, non-negative and in order')
+    return lo <= r <= hi
 
 
 def joint_state(stamp_ns, position, velocity):
@@ -232,8 +376,8 @@ def signed_verdict(key, monitor, session, seq, stamp_ns, ready, state, anomaly, 
 
     ``seq`` 0 and ``stamp_ns`` None: no cycle judged yet.
     """
-    msg = Verdict(seq=int(seq), ready=bool(ready), state=str(state), anomaly=str(anomaly or ''),
-                  session=str(session))
+    msg = Verdict(seq=int(seq), ready=bool(ready), state=_clip(str(state)),
+                  anomaly=_clip(str(anomaly or '')), session=str(session))
     if stamp_ns is not None:
         msg.stamp = time_msg(stamp_ns)
     msg.sent = time_msg(sent_ns)
@@ -263,8 +407,11 @@ def check_verdict(msg, key, monitor, now_ns, max_age_s=1.0):
     sent it at most ``max_age_s`` ago (so a dead or stalled monitor, or a replayed message,
     reads as not ready). ``now_ns``: the consumer's clock, e.g. node.get_clock().now().
     """
-    stamp_ns = time_ns(msg.stamp) if (msg.stamp.sec or msg.stamp.nanosec) else None
-    sent_ns = time_ns(msg.sent)
+    try:
+        stamp_ns = time_ns(msg.stamp) if (msg.stamp.sec or msg.stamp.nanosec) else None
+        sent_ns = time_ns(msg.sent)
+    except ValueError as exc:       # no monitor writes such a time: not authentic
+        return VerdictCheck(False, False, int(msg.seq), None, None, f'malformed verdict: {exc}')
     fields = auth.verdict_fields(monitor, msg.session, msg.seq, stamp_ns, msg.ready, msg.state,
                                  msg.anomaly, sent_ns)
     authentic = auth.mac_ok(key, auth.VERDICT_LABEL, fields, bytes(msg.mac))
@@ -283,18 +430,26 @@ def check_verdict(msg, key, monitor, now_ns, max_age_s=1.0):
     return VerdictCheck(not reason, authentic, int(msg.seq), stamp_ns, age, reason)
 
 
-CYCLE_FIRED_NAME = 'cycle_fired'
-
 
 def _signature(values):
-    """The ``session`` and ``mac`` of a signed status; ('', b'') when absent or malformed."""
-    session, text = values.get('session', ''), values.get('mac', '')
-    if len(session) > 64 or len(text) != 2 * auth.MAC_BYTES:
-        return session[:64], b''
-    try:
-        return session, bytes.fromhex(text)
-    except ValueError:
-        return session, b''
+    """
+    The ``session`` and ``mac`` of a signed status (a list of KeyValue); ('', b'') unsigned.
+
+    Either may be absent (an unsigned report still parses, so that the monitor can say it was
+    unsigned); given twice, or not as CycleSigner writes them, is a ValueError.
+    """
+    found = {}
+    for kv in values:
+        if kv.key in ('session', 'mac'):
+            if kv.key in found:
+                raise ValueError(f'a status gives {kv.key} twice')
+            found[kv.key] = kv.value
+    session, text = found.get('session', ''), found.get('mac', '')
+    if len(session) > 64 or not all(c in _HEX for c in session):
+        raise ValueError(f'session {session[:40]!r} is not up to 64 lowercase hex digits')
+    if text and (len(text) != 2 * auth.MAC_BYTES or not all(c in _HEX for c in text)):
+        raise ValueError(f'mac {text[:40]!r} is not {2 * auth.MAC_BYTES} lowercase hex digits')
+    return session, bytes.fromhex(text)
 
 
 @dataclass(frozen=True)
@@ -302,20 +457,22 @@ class CycleFired:
     """A parsed ``cycle_fired``: cycle ``seq`` was being fired at ``stamp_ns``."""
 
     seq: int
-    stamp_ns: Optional[int]
+    stamp_ns: int
     session: str
     mac: bytes
 
 
 def parse_cycle_fired(msg):
-    """Parse a ``cycle_fired``; ValueError naming what is wrong."""
-    values = {kv.key: kv.value for kv in msg.values}
+    """Parse a ``cycle_fired`` as CycleSigner writes it; ValueError naming a fault."""
+    what = 'cycle_fired'
+    values = _values(msg, what, CYCLE_FIRED_NAME, ('seq', 'stamp'))
+    seq = parse_seq(values['seq'], f'{what} seq')
     try:
-        seq = int(values['seq'])
-    except (KeyError, ValueError) as exc:
-        raise ValueError(f'cycle_fired without a usable seq ({exc!r})') from None
-    session, tag = _signature(values)
-    return CycleFired(seq, _optional_stamp(values), session, tag)
+        stamp = parse_stamp_text(values['stamp'])
+    except ValueError as exc:
+        raise ValueError(f'{what}: {exc}') from None
+    session, tag = _signature(msg.values)
+    return CycleFired(seq, stamp, session, tag)
 
 
 class CycleSigner:

@@ -19,10 +19,12 @@ rosbag2 MCAP bags as ``ros2 bag record`` writes them (ROS-free: the recorder fee
 A bag is a directory with ``metadata.yaml`` (rosbag2 format version 9, ``ros_distro:
 kilted``) and one ``.mcap`` file laid out as rosbag2_storage_mcap writes it: profile ``ros2``,
 one ``ros2msg`` schema per type (the full definition with its dependencies, from the rosbags
-Kilted type store), one ``cdr`` channel per topic whose metadata carries
-``offered_qos_profiles`` (so a latched topic is replayed latched) and ``topic_type_hash`` (the
-RIHS01 hash of the type), messages with ``log_time`` = receive time and ``publish_time`` = send
-time, and a ``rosbag2`` metadata record holding the serialized bag metadata.
+Kilted type store, into which a type it lacks, such as feeder_interfaces/msg/Verdict, is read
+from its package's installed ``.msg`` file: ``installed_types``), one ``cdr`` channel per
+topic whose metadata carries ``offered_qos_profiles`` (so a latched topic is replayed latched)
+and ``topic_type_hash`` (the RIHS01 hash of the type), messages with ``log_time`` = receive
+time and ``publish_time`` = send time, and a ``rosbag2`` metadata record holding the
+serialized bag metadata.
 
 A bag survives its writer being killed (SIGKILL, a crash): messages are held in memory for at
 most one flush period (``BagWriter.flush``, the recorder calls it on a timer), and every flush
@@ -49,10 +51,10 @@ from mcap.exceptions import McapError
 from mcap.opcode import Opcode
 from mcap.records import (Channel, Chunk, ChunkIndex, DataEnd, Footer, Header, MessageIndex,
                           Metadata, MetadataIndex, Schema, Statistics, SummaryOffset)
-from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, QosReliability,
-                                QosTime)
+from rosbags.interfaces import (Nodetype, Qos, QosDurability, QosHistory, QosLiveliness,
+                                QosReliability, QosTime)
 from rosbags.rosbag2.metadata import dump_qos_v9
-from rosbags.typesys import get_typestore, Stores
+from rosbags.typesys import get_types_from_msg, get_typestore, Stores, TypesysError
 import yaml
 
 VERSION = 9
@@ -97,6 +99,61 @@ def _provisional_end():
     """Return a DataEnd and a footer without summary (readers scan the data section)."""
     return (_record(DataEnd(data_section_crc=0))
             + _record(Footer(summary_start=0, summary_offset_start=0, summary_crc=0)) + MAGIC)
+
+
+def installed_msg_file(msgtype):
+    """
+    Return the installed ``.msg`` file of 'pkg/msg/Type' (share/pkg/msg/Type.msg), or None.
+
+    Looked up in the ament index (AMENT_PREFIX_PATH: the colcon install, the venv, /opt/ros),
+    where rosidl_generate_interfaces installs every message's source text.
+    """
+    parts = msgtype.split('/')
+    if len(parts) != 3 or parts[1] != 'msg' or not all(parts):
+        return None
+    from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
+    try:
+        share = pathlib.Path(get_package_share_directory(parts[0]))
+    except (PackageNotFoundError, LookupError, OSError, ValueError):
+        return None
+    path = share / 'msg' / f'{parts[2]}.msg'
+    return path if path.is_file() else None
+
+
+def _named_types(fielddesc):
+    """Yield the message types a rosbags field description refers to (nested in arrays)."""
+    kind, rest = fielddesc
+    if kind == Nodetype.NAME:
+        yield rest
+    elif kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
+        yield from _named_types(rest[0])
+
+
+def installed_types(typestore, msgtype):
+    """
+    Add ``msgtype`` and the types it uses to ``typestore`` from their installed ``.msg`` files.
+
+    Only types the store lacks are read. Returns True if ``msgtype`` is in the store afterwards,
+    False if it or a type it uses has no installed definition (or one that does not parse).
+    """
+    found = {}
+    todo = [msgtype]
+    while todo:
+        name = todo.pop()
+        if name in typestore.fielddefs or name in found:
+            continue
+        path = installed_msg_file(name)
+        if path is None:
+            return False
+        try:
+            types = get_types_from_msg(path.read_text(), name)
+        except TypesysError:
+            return False
+        found.update(types)
+        for _, fields in types.values():
+            todo.extend(t for _, desc in fields for t in _named_types(desc))
+    typestore.register(found)
+    return msgtype in typestore.fielddefs
 
 
 class BagError(Exception):
@@ -476,8 +533,13 @@ class BagWriter:
         _write_metadata_yaml(self.path, self.metadata())
 
     def knows(self, msgtype):
-        """Whether the Kilted type store has ``msgtype`` (e.g. 'std_msgs/msg/Bool')."""
-        return msgtype in self.typestore.fielddefs
+        """
+        Whether ``msgtype`` (e.g. 'std_msgs/msg/Bool') can be recorded with its definition.
+
+        That is: the Kilted type store has it, or its package is installed (then it is read
+        into the store from its ``.msg`` file, with the types it uses).
+        """
+        return msgtype in self.typestore.fielddefs or installed_types(self.typestore, msgtype)
 
     def type_hash(self, msgtype):
         """RIHS01 hash of ``msgtype`` from the type store (what the type's .json file says)."""
@@ -492,6 +554,10 @@ class BagWriter:
         """
         if topic in self._channels:
             raise ValueError(f'{topic} is already in the bag')
+        if not self.knows(msgtype):
+            raise ValueError(f'{msgtype} is neither in the Kilted type store nor an installed '
+                             'message (share/<pkg>/msg/<Type>.msg on AMENT_PREFIX_PATH): build '
+                             'and source the package that defines it')
         if msgtype not in self._schemas:
             msgdef, _ = self.typestore.generate_msgdef(msgtype, ros_version=2)
             self._schemas[msgtype] = self._log.add_schema(msgtype, 'ros2msg', msgdef.encode())

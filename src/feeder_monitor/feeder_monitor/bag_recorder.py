@@ -222,8 +222,9 @@ class BagRecorder(Node):
             msgtype = types[0]
             if len(types) > 1 or not self.writer.knows(msgtype):
                 self._skipped.add(topic)
-                self.get_logger().warning(f'not recording {topic}: type {types} unknown to the '
-                                          'Kilted type store or ambiguous')
+                self.get_logger().warning(f'not recording {topic}: type {types} ambiguous, or '
+                                          'neither in the Kilted type store nor installed '
+                                          '(share/<pkg>/msg on AMENT_PREFIX_PATH)')
                 continue
             try:
                 cls = message_class(msgtype)

@@ -209,18 +209,22 @@ class MonitorNode(Node):
             return
         if admission.new_run:
             # A restarted driver: its first cycles follow none of the old run's.
-            self._interrupt(f'{self._driver} started a new run (session {status.session})')
-            self._monitor.last_seq = None
-        if status.ok:
+            reason = f'{self._driver} started a new run (session {status.session})'
+            self._monitor.new_run(reason)
+            self._note_interrupt(reason)
+        if status.ok and status.sensor is not None:
             self._remember(self._recent_bits, status.stamp_ns, (status.seq, status.sensor))
             v = self._monitor.completed(status.seq, status.sensor)
         else:
-            v = self._monitor.failed(status.seq, status.message)
+            v = self._monitor.failed(status.seq, status.message if not status.ok
+                                     else 'a completed cycle without a sensor bit')
         self._judge(v, status.stamp_ns)
         self._cross_check(status.stamp_ns)
 
     def _on_cycle_fired(self, msg):
-        # Any notice lowers a ready (a forged one can only cost a ready, never make one).
+        # Any notice lowers a ready (a forged one can only cost a ready, never make one); only
+        # a signed one of the current run moves the monitor's idea of the newest cycle, so a
+        # forged huge seq cannot make every later verdict look superseded.
         try:
             notice = parse_cycle_fired(msg)
         except ValueError:
@@ -228,17 +232,25 @@ class MonitorNode(Node):
             notice = None
         if notice is None or self._gate.fired_authentic(notice):
             self._counts['unsigned_fired'] += 1
-        seq, stamp_ns, ready, state, _ = self._statement
+        elif notice.session == self._gate.session:
+            self._monitor.fired(notice.seq)
+        seq, stamp_ns, ready = self._statement[:3]
         if ready:
             self._set_statement(seq, stamp_ns, False, Verdict.STATE_CYCLING)
 
     def _on_proximity(self, msg):
-        detected = proximity_detected(msg)
-        if detected is None:
+        try:
+            detected = proximity_detected(msg)
+            stamp_ns = time_ns(msg.header.stamp)
+            problem = None if detected is not None else 'proximity without a reading (NaN)'
+        except ValueError as exc:
+            problem = str(exc)
+        if problem:
             self._bad_input += 1
+            self.get_logger().warning(f'{problem}; ignored', throttle_duration_sec=5.0)
             return
-        self._remember(self._recent_proximity, time_ns(msg.header.stamp), detected)
-        self._cross_check(time_ns(msg.header.stamp))
+        self._remember(self._recent_proximity, stamp_ns, detected)
+        self._cross_check(stamp_ns)
 
     @staticmethod
     def _remember(table, stamp_ns, value):
@@ -313,6 +325,9 @@ class MonitorNode(Node):
     def _interrupt(self, reason):
         """No cycle can be judged (the driver left, stopped or is unproven): false, warm up."""
         self._monitor.interrupt(reason)
+        self._note_interrupt(reason)
+
+    def _note_interrupt(self, reason):
         self._anomaly_in_period = (self._monitor.last_seq, reason)
         self.get_logger().warning(f'{reason}: edge1_ready false, warming up again')
         seq, stamp_ns = self._statement[:2]
@@ -344,7 +359,7 @@ class MonitorNode(Node):
                                       f'beyond the guarantee radius {r.guarantee_radius:.4f} m: '
                                       'cannot prove the goal edge')
         elif m.state == WARMING_UP:
-            level, message = 'ok', f'warming up ({m.since_restart}/{r.warmup_cycles} throws)'
+            level, message = 'ok', f'warming up ({m.throws_to_go} throws to go)'
         else:
             level, message = 'ok', m.state
         if level != 'error' and r.provable and r.noisy_sensor:

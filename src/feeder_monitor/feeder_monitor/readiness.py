@@ -23,18 +23,29 @@ a long orbit in the limit set fixes which detection patterns can occur (longest 
 detections, shortest and longest stretch without one); anything else, a failed cycle or a gap in
 the cycle numbers is an anomaly, after which the warm-up starts again.
 
+Ready means proven now (issue 20). A verdict is never ready on an anomaly cycle, nor before a
+full warm-up after one, nor while the checks are off (the first ``settle_cycles`` throws after a
+full restart, start-up included), nor once a later cycle has fired
+(:meth:`ReadinessMonitor.fired`).
+The pattern checks are weak: a spurious detection where the limit set allows one passes them.
+So a :class:`Prediction` follows the part: the orbit positions whose preceding sensor bits equal
+the bits seen are the limit-set states consistent with them; a bit none of them shows is an
+anomaly, and a detection is ready only if every one of them lies on the goal edge (and, while
+the sensor is suspect after a sensor anomaly, even if up to two bits seen were wrong: a
+missed detection followed by a spurious one reads like a normal gap). Requiring instead that
+every consistent state *show* a detection would miss every ready on the triangle: its gaps
+between detections vary from 12 to 22 throws whatever the bits before them.
+
 With scene effects: a part lost off a finite arm (``finite_arm``) is never seen again, which
 shows as a silence longer than the limit set allows. A noisy sensor (``sensor_noise``) makes a
 detection likely, not certain, to be on the goal edge (``Rules.p_goal``); its false positives
 and negatives are in the detection patterns, because the rules read the orbit through the
 scene's own (seeded) sensor model.
 
-:class:`CyclePairer` joins the two inputs of a cycle (``proximity`` and ``cycle_status``, matched
-by their sample stamps) into one :class:`Cycle`; :class:`ReadinessMonitor` turns cycles into
+:class:`ReadinessMonitor` turns the cycles the node admits (feeder_monitor.trust) into
 verdicts.
 """
 
-from collections import deque
 from dataclasses import dataclass
 import math
 from typing import Optional
@@ -93,6 +104,150 @@ def combine_patterns(patterns):
                             pick(max, [p.max_gap for p in patterns]))
 
 
+# Flags of a bit history in a Prediction table: what the cycle after that history can show.
+MAY_MISS = 1        # the sensor can read 0
+MAY_SEE = 2         # the sensor can read 1
+OFF_GOAL = 4        # the part can lie on another edge than the goal edge
+# After a sensor anomaly (a bit the limit set cannot produce there) the sensor stays suspect
+# this many judged cycles (about 9 detections of the triangle): a ready then needs the goal
+# edge even if up to SUSPECT_FLIPS bits in the history were wrong. 150 and 2: the least of
+# (0, 50, 80, 150, 500) x (1, 2) that gave no false ready at spurious = missed rate 0.05 over
+# 8 seeds of 20,000 cycles (bench/readiness_faults.py; one flip left 1, 80 cycles left 3).
+SUSPECT_CYCLES = 150
+SUSPECT_FLIPS = 2
+# A prediction whose histories prove at least this share of the orbit's detections needs that
+# proof for every ready; below it, only while the sensor is suspect (scenes/experiment.yaml:
+# its 8-bit histories prove none, so the rule would cost every ready of a sound sensor).
+GOAL_SURE_SHARE = 0.9
+HISTORY_CHOICES = (32, 28, 24, 20, 16, 12, 8, 6, 4, 3, 2, 1)   # longest first
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """
+    What the limit set lets the next cycle show, given the sensor bits of the cycles before it.
+
+    A table read off the limit-set orbit (the scene's own map, effects included; see
+    :func:`build_prediction`): for every run of ``length`` <= ``history`` consecutive bits the
+    orbit shows, the flags of the cycles that follow such a run: whether the sensor may read 0
+    (MAY_MISS), may read 1 (MAY_SEE), and whether the part may then lie on another edge than the
+    goal edge (OFF_GOAL). Following a part is then one dictionary look-up per cycle: the states
+    of the orbit consistent with the bits seen so far are the orbit positions that follow the
+    same bits, and a bit none of them shows is one the limit set cannot produce.
+
+    It is sampled, like the detection patterns: the orbit holds ``orbit_throws`` states and
+    ``history`` is the longest run of bits whose every continuation in the orbit's second half
+    was already in its first half (:func:`choose_history`), so that a longer orbit would not
+    have added cases.
+    """
+
+    history: int                # longest run of bits looked at
+    tables: tuple               # tables[length]: {bits as an int, last at bit 0: flags}
+    orbit_throws: int
+    goal_sure_share: float = 0.0    # of the orbit's detections, those its history proves
+
+    def flags(self, length, word):
+        """Return the flags of the cycle after ``length`` bits ``word`` (None: not seen)."""
+        return self.tables[length].get(word)
+
+    def as_dict(self):
+        return {'history': self.history, 'histories': sum(len(t) for t in self.tables),
+                'goal_sure_share': round(self.goal_sure_share, 4)}
+
+
+def _history_words(bits, segments, history):
+    """
+    Pack, for each cycle i, the ``history`` bits before it into an int (bit i-1 at bit 0).
+
+    Also returns how many of them lie in i's own segment (no history spans a break).
+    """
+    b = np.asarray(bits, dtype=np.uint64)
+    words = np.zeros(b.size, dtype=np.uint64)
+    available = np.zeros(b.size, dtype=np.int64)
+    for a, z in segments:
+        available[a:z] = np.minimum(np.arange(z - a), history)
+        for back in range(1, min(history, z - a - 1) + 1):
+            words[a + back:z] |= b[a:z - back] << np.uint64(back - 1)
+    return words, available
+
+
+def _mask(length):
+    return np.uint64((1 << length) - 1)
+
+
+def _cycle_flags(bits, edges, goal_edge):
+    return (np.where(bits, MAY_SEE, MAY_MISS) |
+            np.where(np.asarray(edges) != goal_edge, OFF_GOAL, 0)).astype(np.int64)
+
+
+def _table(words, available, flags, length):
+    chosen = available >= length
+    keys = words[chosen] & _mask(length)
+    unique, inverse = np.unique(keys, return_inverse=True)
+    merged = np.zeros(unique.size, dtype=np.int64)
+    np.bitwise_or.at(merged, inverse, flags[chosen])
+    return dict(zip(unique.tolist(), merged.tolist()))
+
+
+def _clip_segments(segments, lo, hi):
+    return tuple((max(a, lo), min(z, hi)) for a, z in segments if min(z, hi) > max(a, lo))
+
+
+def choose_history(bits, edges, goal_edge, segments, choices=HISTORY_CHOICES):
+    """
+    Return the longest history (in ``choices``) the orbit samples completely, 0 if none.
+
+    Read the table off the first half of the orbit and follow the second half: the history
+    passes when no cycle there shows a bit the table excludes, nor lies off the goal edge where
+    the table says it cannot. Too long a history has cases the orbit holds only once; those
+    show as misses here, and in the monitor they would be false anomalies or, worse, false
+    certainty about the edge.
+    """
+    bits = np.asarray(bits, dtype=bool)
+    half = bits.size // 2
+    flags = _cycle_flags(bits, edges, goal_edge)
+    for history in choices:
+        words, available = _history_words(bits, _clip_segments(segments, 0, half), history)
+        table = _table(words[:half], available[:half], flags[:half], history)
+        words, available = _history_words(bits, _clip_segments(segments, half, bits.size),
+                                          history)
+        test = np.flatnonzero(available[half:] >= history) + half
+        if test.size == 0:
+            continue
+        known = np.array([table.get(w, 0) for w in (words[test] & _mask(history)).tolist()],
+                         dtype=np.int64)
+        seen = flags[test]
+        bit_ok = (known & seen & (MAY_SEE | MAY_MISS)) != 0
+        edge_ok = ((seen & OFF_GOAL) == 0) | ((known & OFF_GOAL) != 0)
+        if bit_ok.all() and edge_ok.all():
+            return history
+    return 0
+
+
+def build_prediction(bits, edges, goal_edge, segments=None, history=None):
+    """
+    Build the :class:`Prediction` of an orbit's sensor ``bits`` and ``edges``.
+
+    None if no history passes :func:`choose_history`. ``segments``: the orbit's unbroken
+    stretches.
+    """
+    bits = np.asarray(bits, dtype=bool)
+    segments = tuple(segments) if segments else ((0, bits.size),)
+    if history is None:
+        history = choose_history(bits, edges, goal_edge, segments)
+    if history <= 0:
+        return None
+    words, available = _history_words(bits, segments, history)
+    flags = _cycle_flags(bits, edges, goal_edge)
+    tables = tuple(_table(words, available, flags, length) for length in range(history + 1))
+    # How often the bits before a detection already put every consistent state on the goal
+    # edge (the triangle: all but a few; a part whose edges the bits do not tell: none).
+    full = np.flatnonzero(bits & (available >= history))
+    sure = [not tables[history][w] & OFF_GOAL for w in (words[full] & _mask(history)).tolist()]
+    share = float(np.mean(sure)) if sure else 0.0
+    return Prediction(int(history), tables, int(bits.size), share)
+
+
 @dataclass(frozen=True)
 class Rules:
     """What the limit set allows, at one sensor placement (see :func:`rules_from_analysis`)."""
@@ -111,6 +266,8 @@ class Rules:
     noisy_sensor: bool = False  # sensor_noise: a detection is evidence, not proof
     p_goal: Optional[float] = None  # P(goal edge | detection) of a noisy sensor (analysis)
     arm_length: Optional[float] = None  # finite_arm: the part can be lost off the end
+    prediction: Optional[Prediction] = None     # None: the pattern checks alone
+    prediction_off: str = ''    # why there is no prediction
 
     def as_dict(self):
         return {'goal_edge': self.goal_edge, 'sensor_radius': self.sensor_radius,
@@ -120,7 +277,9 @@ class Rules:
                 'max_silence': self.max_silence, 'orbit_throws': self.pattern.throws,
                 'orbit_detection_rate': round(self.pattern.rate, 6),
                 'noisy_sensor': self.noisy_sensor, 'p_goal_given_detection': self.p_goal,
-                'arm_length': self.arm_length}
+                'arm_length': self.arm_length,
+                'prediction_history': self.prediction.history if self.prediction else None,
+                'prediction_off': self.prediction_off}
 
 
 def limit_set_orbit(scene, analysis, throws, attempts=20):
@@ -191,26 +350,24 @@ def rules_from_analysis(scene, analysis, orbit, warmup_cycles=-1, settle_cycles=
         p_goal = float(stoch['p_goal'])
     arm = scene.arm_length if scene.arm_length is not None and \
         math.isfinite(scene.arm_length) else None
+    prediction, off = None, ''
+    if noisy:
+        # The orbit's bits hold the noise of one seeded run: a table of them would call most
+        # other runs impossible. The pattern checks (read through the noise) stay.
+        off = 'sensor_noise: the pattern checks alone'
+    else:
+        prediction = build_prediction(bits, orbit[0], int(sensor.goal_edge), segments)
+        if prediction is None:
+            off = 'the orbit samples no history completely: the pattern checks alone'
     return Rules(int(sensor.goal_edge), float(sensor.radius), float(sensor.guarantee_radius),
                  bool(sensor.feasible and sensor.radius > sensor.guarantee_radius), warmup,
-                 proven, settle, pattern, max_run, min_gap, max_silence, noisy, p_goal, arm)
-
-
-@dataclass(frozen=True)
-class Cycle:
-    """One fired cycle as the monitor sees it (a completed one has a sensor bit)."""
-
-    seq: int
-    completed: bool
-    detected: Optional[bool] = None
-    reason: str = ''            # failure reason of a failed cycle
-    note: str = ''              # '', 'proximity lost' or 'sensor disagreement'
-    stamp_ns: Optional[int] = None  # the cycle's sample stamp (cycle_status), if it had one
+                 proven, settle, pattern, max_run, min_gap, max_silence, noisy, p_goal, arm,
+                 prediction, off)
 
 
 @dataclass(frozen=True)
 class Verdict:
-    """The monitor's answer for one cycle."""
+    """The monitor's answer for one cycle (``ready`` is never true with state anomaly)."""
 
     seq: int
     ready: bool
@@ -219,42 +376,140 @@ class Verdict:
     note: str = ''                  # worth a word, not an anomaly (e.g. a late first seq)
 
 
-class ReadinessMonitor:
-    """State machine: warming up -> tracking <-> ready; anomaly on a broken premise."""
+@dataclass(frozen=True)
+class Judgement:
+    """
+    Why a completed cycle was or was not ready (for benchmarks and diagnostics).
 
-    def __init__(self, rules):
+    ``conditions``: every rule but the prediction's held (a detection, provable sensor, warm-up
+    and settling done, no anomaly, no later cycle fired). ``allowed``: the prediction lets the
+    cycle show a detection; ``goal_sure``: every orbit state consistent with the bits before the
+    cycle lies on the goal edge; ``expected``: every one of them shows a detection. Without a
+    prediction (or before it applies) the three are None.
+    """
+
+    conditions: bool
+    allowed: Optional[bool] = None
+    goal_sure: Optional[bool] = None
+    expected: Optional[bool] = None
+
+
+class ReadinessMonitor:
+    """
+    State machine: warming up -> tracking <-> ready; anomaly on a broken premise.
+
+    What a node calls, in cycle order: :meth:`fired` when a cycle starts (the held ready drops
+    at once), then exactly one of :meth:`completed`, :meth:`failed` or :meth:`untrusted` for
+    that cycle; :meth:`interrupt` when the premise breaks between cycles; :meth:`set_rules` for
+    new rules. :attr:`ready_seq` is the seq whose ready still holds (None: publish false).
+
+    Two restarts. A *full* one (start-up, a failed, missing, repeated or untrusted cycle, an
+    interruption, new rules, a detection after an impossible silence): the part may be anywhere,
+    so the warm-up and the settling (``settle_cycles`` throws with every check off, the basin's
+    longest transient) start again. A *sensor* one (a bit the limit set cannot produce at that
+    point: an impossible run, an early detection, a bit the prediction excludes, a disagreement
+    of the two inputs): nothing moved the part, the bits are in doubt, so the warm-up and the
+    prediction's history start again while the checks stay on. ``resettle_on_any_anomaly``
+    makes every restart a full one (costlier; for comparison in bench/readiness_faults.py).
+
+    A verdict is ready only when the cycle's sensor fired, the sensor is beyond the guarantee
+    radius, ``warmup_cycles`` throws have been judged since the last anomaly, the checks are on
+    (settled), the cycle revealed no anomaly, no later cycle has fired (:meth:`fired`), and,
+    with a prediction, the detection is one the limit set allows after the bits seen and every
+    state consistent with those bits lies on the goal edge.
+    """
+
+    def __init__(self, rules, resettle_on_any_anomaly=False, suspect_cycles=SUSPECT_CYCLES,
+                 suspect_flips=SUSPECT_FLIPS):
         self.rules = rules
+        self.suspect_flips = int(suspect_flips)
+        self.resettle_on_any_anomaly = bool(resettle_on_any_anomaly)
+        self.suspect_cycles = int(suspect_cycles)
+        self.suspect_left = 0       # cycles the sensor stays suspect (after an anomaly)
+        self.suspect_now = False    # the cycle being judged is one of them
         self.last_seq = None
+        self.fired_seq = None       # highest seq reported fired
+        self.ready_seq = None       # seq of the cycle whose ready still holds
         self.counts = {'cycles': 0, 'completed': 0, 'failed': 0, 'detections': 0, 'ready': 0,
-                       'anomalies': 0, 'untrusted': 0}
+                       'anomalies': 0, 'untrusted': 0, 'unexpected': 0, 'not_goal_sure': 0,
+                       'superseded': 0}
         self.note = ''
         self.last_anomaly = None
+        self.last_judgement = None
         self.state = WARMING_UP
-        self._restart()
+        self._restart_all()
 
-    def _restart(self, need_clear=False):
-        self.since_restart = 0      # completed throws since (re)start
-        self.run = 0                # current run of detections (after settling)
-        self.gap = 0                # non-detections since the last detection (after settling)
-        self.seen_detection = False  # a detection since settling
+    # ----------------------------------------------------------------- restarts
+    def _restart_all(self, need_clear=False):
+        """Full restart: warm-up, settling, pattern counters and prediction history."""
+        self.since_settle = 0       # completed throws since the last full restart
+        self._restart_sensor(need_clear)
+
+    def _restart_sensor(self, need_clear=False, keep_pattern=False):
+        """Sensor restart: warm-up and prediction history (pattern counters unless kept)."""
+        if self.resettle_on_any_anomaly:
+            self.since_settle = 0
+        self.since_restart = 0      # completed throws since the last anomaly (the warm-up)
+        self.history_word = 0       # prediction: the bits since it applies, last at bit 0
+        self.history_length = 0
         self.need_clear = need_clear  # after an impossible run: wait for a non-detection
-        self.silent = False
+        if not keep_pattern:
+            self.run = 0            # current run of detections (after settling)
+            self.gap = 0            # non-detections since the last detection (after settling)
+            self.seen_detection = False  # a detection since settling
+            self.silent = False
+
+    # ----------------------------------------------------------------- inputs
+    def fired(self, seq):
+        """
+        Take the news that cycle ``seq`` fired: the part moves, so no earlier ready holds.
+
+        Returns :attr:`ready_seq` afterwards (None: the node publishes false at once). A verdict
+        on a cycle before ``seq`` that arrives later is never ready (it would be stale).
+        """
+        seq = int(seq)
+        if self.fired_seq is None or seq > self.fired_seq:
+            self.fired_seq = seq
+        if self.ready_seq is not None and seq > self.ready_seq:
+            self.ready_seq = None
+        return self.ready_seq
 
     def interrupt(self, reason):
         """Restart the warm-up: the premise broke between cycles (the driver left or stopped)."""
         self._anomaly(self.last_seq, reason)
-        self._restart()
+        self._restart_all()
+        self.ready_seq = None
         self.state = ANOMALY
+
+    def new_run(self, reason):
+        """
+        The driver started a new run (it restarted): an anomaly, and its seqs start afresh.
+
+        Nothing of the old run's numbering carries over: neither the last seq judged nor the
+        highest seq reported fired.
+        """
+        self.interrupt(reason)
+        self.last_seq = None
+        self.fired_seq = None
 
     def set_rules(self, rules):
         """Take new rules (e.g. the sensor moved): the warm-up starts again; no anomaly."""
         self.rules = rules
-        self._restart()
+        self._restart_all()
+        self.ready_seq = None
         self.state = WARMING_UP
 
     @property
     def settled(self):
-        return self.since_restart > self.rules.settle_cycles
+        """Whether the checks apply: more than ``settle_cycles`` throws since a full restart."""
+        return self.since_settle > self.rules.settle_cycles
+
+    @property
+    def throws_to_go(self):
+        """Completed throws still needed before a detection can be ready (warm-up, settling)."""
+        r = self.rules
+        return max(r.warmup_cycles - self.since_restart, r.settle_cycles + 1 - self.since_settle,
+                   0)
 
     def _check_seq(self, seq):
         last, self.last_seq = self.last_seq, seq
@@ -284,7 +539,9 @@ class ReadinessMonitor:
         self.counts['cycles'] += 1
         self.counts['untrusted'] += 1
         anomaly = self._anomaly(seq, f'cycle {seq} not trusted: {reason}')
-        self._restart()
+        self._restart_all()
+        self.ready_seq = None
+        self.last_judgement = None
         self.state = ANOMALY
         return Verdict(seq, False, ANOMALY, anomaly)
 
@@ -295,48 +552,130 @@ class ReadinessMonitor:
         gap = self._check_seq(seq)
         text = f'cycle {seq} failed: {reason}' + (f'; {gap}' if gap else '')
         anomaly = self._anomaly(seq, text)
-        self._restart()
+        self._restart_all()
+        self.ready_seq = None
+        self.last_judgement = None
         self.state = ANOMALY
         return Verdict(seq, False, ANOMALY, anomaly)
 
     def completed(self, seq, detected, note=''):
         """Judge a completed cycle with sensor bit ``detected``: goal edge proven or not."""
+        detected = bool(detected)
         self.counts['cycles'] += 1
         self.counts['completed'] += 1
         if detected:
             self.counts['detections'] += 1
+        self.ready_seq = None
+        self.last_judgement = None
         anomaly = None
+        # This cycle is judged as suspect if it is one of the suspect_cycles after an anomaly.
+        self.suspect_now = self.suspect_left > 0
+        if self.settled:
+            # While the checks are off nothing would show a flaky sensor: the suspicion waits.
+            self.suspect_left = max(self.suspect_left - 1, 0)
         gap = self._check_seq(seq)
         if gap:
+            # Throws the monitor did not see: for it, the part may be anywhere.
             anomaly = self._anomaly(seq, gap)
-            self._restart()
+            self._restart_all()
         if note == 'sensor disagreement':
             anomaly = self._anomaly(seq, 'proximity and cycle_status disagree on the sensor bit')
-            self._restart(need_clear=bool(detected))
+            self._restart_sensor(need_clear=detected)
+            self.suspect_left = self.suspect_cycles
             return self._verdict(seq, False, anomaly)
         if self.need_clear:
             if detected:                # the impossible run goes on
                 return self._verdict(seq, False, anomaly)
             self.need_clear = False     # this throw is the first of the new warm-up
         self.since_restart += 1
+        self.since_settle += 1
+        allowed = goal_sure = expected = None
         if self.settled:
             found = self._check_pattern(detected)
             if found:
                 anomaly = self._anomaly(seq, found)
+                self.suspect_left = self.suspect_cycles
                 if detected and not self.silent:    # impossible detection pattern
-                    self._restart(need_clear=True)
+                    self._restart_sensor(need_clear=True)
                     return self._verdict(seq, False, anomaly)
         if detected and self.silent:
             # First detection after a silence the limit set cannot produce: the part may have
             # been removed and put back anywhere; this detection starts a new warm-up.
-            self._restart()
-            self.since_restart = 1
+            self._restart_all()
+            self.since_restart = self.since_settle = 1
             return self._verdict(seq, False, anomaly)
+        if self.settled and self.rules.prediction is not None and not self.silent:
+            unexpected, allowed, goal_sure, expected = self._predict(detected)
+            if unexpected and anomaly is None:
+                anomaly = self._anomaly(seq, unexpected)
+                self.counts['unexpected'] += 1
+                self.suspect_left = self.suspect_cycles
         r = self.rules
-        ready = bool(detected and r.provable and self.since_restart >= r.warmup_cycles)
-        if ready:
-            self.counts['ready'] += 1
+        conditions = bool(detected and r.provable and anomaly is None and
+                          self.since_restart >= r.warmup_cycles and self.settled)
+        superseded = self.fired_seq is not None and self.fired_seq > seq
+        ready = conditions and not superseded and goal_sure is not False
+        if conditions and goal_sure is False:
+            self.counts['not_goal_sure'] += 1
+        if conditions and superseded and goal_sure is not False:
+            self.counts['superseded'] += 1
+        self.last_judgement = Judgement(conditions and not superseded, allowed, goal_sure,
+                                        expected)
         return self._verdict(seq, ready, anomaly)
+
+    def _predict(self, detected):
+        """
+        Follow the part with the prediction one cycle.
+
+        Returns (anomaly text or None, allowed, goal_sure, expected) and moves the history on
+        (or restarts it after an anomaly).
+        """
+        pred = self.rules.prediction
+        flags = pred.flags(self.history_length, self.history_word)
+        flags = 0 if flags is None else flags
+        allowed = bool(flags & MAY_SEE)
+        goal_sure = not flags & OFF_GOAL
+        expected = not flags & MAY_MISS
+        if not flags & (MAY_SEE if detected else MAY_MISS):
+            what = 'a detection' if detected else 'no detection'
+            reason = (f'{what} where the limit set cannot show one after the last '
+                      f'{self.history_length} sensor bits')
+            # A spurious detection must not spoil the run and gap rules for the next real one;
+            # a missed detection leaves them counting (the silence rule keeps watching).
+            self._restart_sensor(keep_pattern=not detected)
+            return reason, allowed, goal_sure, expected
+        if detected and goal_sure and self.suspect_now:
+            goal_sure = self._goal_sure_despite_faults(pred)
+        elif detected and not goal_sure and not self.suspect_now and \
+                pred.goal_sure_share < GOAL_SURE_SHARE:
+            # The bits seldom tell this part's edge before a detection: while the sensor has
+            # shown no fault, a detection the limit set allows is proof enough (the guarantee
+            # radius: no limit-set state off the goal edge reaches the sensor).
+            goal_sure = None
+        self.history_word = ((self.history_word << 1) | int(detected)) & ((1 << pred.history) - 1)
+        self.history_length = min(self.history_length + 1, pred.history)
+        return None, allowed, goal_sure, expected
+
+    def _goal_sure_despite_faults(self, pred):
+        """
+        Tell whether the part is on the goal edge even if ``suspect_flips`` bits seen were wrong.
+
+        A missed detection hides the part's flip off the goal edge; a spurious detection a few
+        cycles later then reads exactly like the next real one (the limit set's gaps vary by 10
+        cycles), and would be a false ready. A spurious detection in the history, taken for
+        the last real one, shifts the phase the same way. So every history the orbit shows
+        that differs from the one seen in at most ``suspect_flips`` bits must put the part on
+        the goal edge too.
+        """
+        length, word = self.history_length, self.history_word
+        variants = [word]
+        for _ in range(self.suspect_flips):
+            variants = {v ^ (1 << back) for v in variants for back in range(length)}
+            for variant in variants:
+                flags = pred.flags(length, variant)
+                if flags is not None and flags & OFF_GOAL:
+                    return False
+        return True
 
     def _check_pattern(self, detected):
         """Update run/gap after settling; the reason if the limit set cannot produce them."""
@@ -366,109 +705,17 @@ class ReadinessMonitor:
         return None
 
     def _verdict(self, seq, ready, anomaly):
+        """Make the verdict; the one place where state and ready are tied together."""
         note, self.note = self.note, ''
         if anomaly or self.need_clear or self.silent:
             state = ANOMALY
-        elif self.since_restart < self.rules.warmup_cycles:
+        elif self.since_restart < self.rules.warmup_cycles or not self.settled:
             state = WARMING_UP
         else:
             state = READY if ready else TRACKING
+        ready = state == READY
+        if ready:
+            self.counts['ready'] += 1
+            self.ready_seq = seq
         self.state = state
         return Verdict(seq, ready, state, anomaly, note)
-
-
-@dataclass
-class _Status:
-    seq: int
-    ok: bool
-    detected: Optional[bool]
-    stamp: Optional[float]
-    reason: str
-    arrival: float
-    stamp_ns: Optional[int] = None
-
-
-class CyclePairer:
-    """
-    Joins ``proximity`` and ``cycle_status`` of each cycle, in cycle order.
-
-    ``cycle_status`` says that a cycle happened (and its seq); ``proximity`` carries the bit.
-    They are matched by sample stamp (within ``tolerance`` s; FIFO when a status has no stamp).
-    A completed status whose proximity does not come (a newer one arrives first, or ``timeout``
-    s pass) is decided on the status's own bit (note ``proximity lost``); a proximity whose
-    status never comes is dropped (``orphans``): the seq gap tells the monitor.
-    """
-
-    def __init__(self, tolerance=1e-3, timeout=0.5):
-        self.tolerance = float(tolerance)
-        self.timeout = float(timeout)
-        self._statuses = deque()
-        self._proximities = deque()     # (stamp, detected, arrival)
-        self.counts = {'proximity_lost': 0, 'orphans': 0, 'disagreements': 0}
-
-    def add_proximity(self, stamp, detected, now):
-        self._proximities.append((float(stamp), bool(detected), float(now)))
-        return self._drain(now)
-
-    def add_status(self, seq, ok, detected, stamp, reason, now, stamp_ns=None):
-        self._statuses.append(_Status(int(seq), bool(ok), detected,
-                                      None if stamp is None else float(stamp), str(reason),
-                                      float(now), stamp_ns))
-        return self._drain(now)
-
-    def expire(self, now):
-        """Decide statuses that waited too long; drop proximities nobody claimed."""
-        out = self._drain(now)
-        if not self._statuses:
-            while self._proximities and now - self._proximities[0][2] > self.timeout:
-                self._proximities.popleft()
-                self.counts['orphans'] += 1
-        return out
-
-    @property
-    def pending(self):
-        return len(self._statuses), len(self._proximities)
-
-    def _drain(self, now):
-        out = []
-        while self._statuses:
-            st = self._statuses[0]
-            if not st.ok:
-                self._statuses.popleft()
-                out.append(Cycle(st.seq, False, None, st.reason, stamp_ns=st.stamp_ns))
-                continue
-            prox = self._match(st)
-            if prox is not None:
-                self._statuses.popleft()
-                self._proximities.popleft()
-                note = ''
-                if st.detected is not None and st.detected != prox[1]:
-                    note = 'sensor disagreement'
-                    self.counts['disagreements'] += 1
-                out.append(Cycle(st.seq, True, prox[1], '', note, st.stamp_ns))
-                continue
-            newer = bool(self._proximities)     # _match dropped every older one
-            if (newer or now - st.arrival > self.timeout) and st.detected is not None:
-                self._statuses.popleft()
-                self.counts['proximity_lost'] += 1
-                out.append(Cycle(st.seq, True, st.detected, '', 'proximity lost', st.stamp_ns))
-                continue
-            if newer or now - st.arrival > self.timeout:
-                # Neither a bit in the status nor a proximity: report it as a failed cycle.
-                self._statuses.popleft()
-                out.append(Cycle(st.seq, False, None, 'no sensor bit for a completed cycle',
-                                 stamp_ns=st.stamp_ns))
-                continue
-            break
-        return out
-
-    def _match(self, st):
-        """Find the proximity of status ``st`` (dropping older unclaimed ones), or None."""
-        if st.stamp is None:
-            return self._proximities[0] if self._proximities else None
-        while self._proximities and self._proximities[0][0] < st.stamp - self.tolerance:
-            self._proximities.popleft()
-            self.counts['orphans'] += 1
-        if self._proximities and abs(self._proximities[0][0] - st.stamp) <= self.tolerance:
-            return self._proximities[0]
-        return None

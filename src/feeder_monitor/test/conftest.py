@@ -12,6 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
+import os
 import pathlib
 import sys
 
@@ -22,8 +23,16 @@ HERE = pathlib.Path(__file__).resolve()
 REPO = HERE.parents[3]
 SCENES = REPO / 'scenes'
 # Test the source trees (also when installed copies are on PYTHONPATH).
+# The graph test support (feeder_testing: a free domain id) lives with the tests.
 sys.path[:0] = [str(HERE.parents[1]), str(HERE.parents[2] / 'feeder_sim'),
-                str(HERE.parents[2] / 'feeder_common')]
+                str(HERE.parents[2] / 'feeder_common'), str(REPO / 'tests')]
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+
+
+@pytest.fixture(scope='session')
+def domain_id():
+    from feeder_testing import reserve_domain_id
+    return reserve_domain_id()
 
 
 @pytest.fixture(scope='session')

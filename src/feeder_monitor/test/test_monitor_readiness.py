@@ -14,7 +14,7 @@
 
 import random
 
-from feeder_monitor.readiness import (ANOMALY, combine_patterns, CyclePairer, detection_pattern,
+from feeder_monitor.readiness import (ANOMALY, combine_patterns, detection_pattern,
                                       limit_set_orbit, ReadinessMonitor, READY, Rules,
                                       rules_from_analysis, TRACKING, WARMING_UP)
 import numpy as np
@@ -84,7 +84,10 @@ def test_rules_reject_a_warmup_below_the_proven_one(triangle, triangle_analysis,
 
 # ------------------------------------------------------------------ state machine
 def test_ready_only_after_warmup():
-    m = ReadinessMonitor(make_rules(warmup_cycles=3, settle_cycles=100))
+    # settle_cycles 0 and no pattern checks: the warm-up alone (issue 20: before settle_cycles
+    # no detection may be ready, so settle_cycles=100 no longer switches the checks off).
+    m = ReadinessMonitor(make_rules(warmup_cycles=3, settle_cycles=0, max_run=None,
+                                    min_gap=None, max_silence=None))
     v = feed(m, [1, 0, 1, 0, 1])
     assert [x.ready for x in v] == [False, False, True, False, True]
     assert [x.state for x in v] == [WARMING_UP, WARMING_UP, READY, TRACKING, READY]
@@ -135,7 +138,8 @@ def test_silence_is_an_anomaly_and_the_next_detection_restarts_the_warmup():
 
 
 def test_failed_cycles_and_seq_gaps_restart_the_warmup():
-    m = ReadinessMonitor(make_rules(warmup_cycles=2, settle_cycles=100))
+    m = ReadinessMonitor(make_rules(warmup_cycles=2, settle_cycles=0, max_run=None,
+                                    min_gap=None, max_silence=None))
     feed(m, [0, 0, 0])
     v = m.failed(4, 'timeout')
     assert v.state == ANOMALY and 'cycle 4 failed: timeout' in v.anomaly and not v.ready
@@ -146,7 +150,8 @@ def test_failed_cycles_and_seq_gaps_restart_the_warmup():
     v = m.completed(3, True)
     assert 'went back' in v.anomaly and not v.ready
     assert m.counts == {'cycles': 9, 'completed': 8, 'failed': 1, 'detections': 5, 'ready': 2,
-                        'anomalies': 3, 'untrusted': 0}
+                        'anomalies': 3, 'untrusted': 0, 'unexpected': 0, 'not_goal_sure': 0,
+                        'superseded': 0}
 
 
 def test_sensor_disagreement_is_an_anomaly():
@@ -183,10 +188,13 @@ def test_on_real_orbits_every_ready_is_on_the_goal_edge(triangle, triangle_analy
             if v.ready:
                 ready_total += 1
                 assert edges[k] == rules.goal_edge
-            if bit and k >= rules.warmup_cycles and edges[k] == rules.goal_edge and \
-                    m.counts['anomalies'] == 0:
+            # Issue 20: only once the checks are on, and when the prediction puts every state
+            # consistent with the bits on the goal edge (not the first detection it follows).
+            judged = m.last_judgement
+            if bit and m.settled and edges[k] == rules.goal_edge and \
+                    m.counts['anomalies'] == 0 and judged and judged.goal_sure:
                 assert v.ready
-    assert ready_total > 100
+    assert ready_total > 60
 
 
 def test_scene_start_orbit_has_no_anomaly(triangle, triangle_analysis, orbit):
@@ -196,7 +204,9 @@ def test_scene_start_orbit_has_no_anomaly(triangle, triangle_analysis, orbit):
     bits = sees(triangle.part, edges[1:], radii[1:], rules.sensor_radius, 0.0)
     verdicts = feed(m, bits)
     assert m.counts['anomalies'] == 0
-    assert sum(v.ready for v in verdicts) == int(bits[rules.warmup_cycles - 1:].sum())
+    # Issue 20: no ready before settle_cycles; the prediction's first detection has no history.
+    proven = int(bits[rules.settle_cycles:].sum())
+    assert proven - 2 <= sum(v.ready for v in verdicts) <= proven
 
 
 def test_a_misplaced_sensor_is_caught(triangle, triangle_analysis, orbit):
@@ -208,62 +218,6 @@ def test_a_misplaced_sensor_is_caught(triangle, triangle_analysis, orbit):
     verdicts = feed(m, bits)
     assert m.counts['anomalies'] > 0
     assert any(v.state == ANOMALY for v in verdicts)
-
-
-# ------------------------------------------------------------------ pairing
-def test_pairs_by_stamp_in_either_order():
-    p = CyclePairer(tolerance=1e-3, timeout=0.5)
-    assert p.add_proximity(10.0, True, now=0.0) == []
-    (c,) = p.add_status(1, True, True, 10.0, 'completed', now=0.001)
-    assert (c.seq, c.completed, c.detected, c.note) == (1, True, True, '')
-    assert p.add_status(2, True, False, 10.5, 'completed', now=0.5) == []
-    (c,) = p.add_proximity(10.5004, False, now=0.501)
-    assert (c.seq, c.detected) == (2, False)
-    assert p.pending == (0, 0)
-
-
-def test_failed_status_needs_no_proximity_and_keeps_order():
-    p = CyclePairer()
-    assert p.add_status(1, True, True, 1.0, 'completed', now=0.0) == []
-    assert p.add_status(2, False, None, None, 'timeout', now=0.01) == []   # waits behind 1
-    out = p.add_proximity(1.0, True, now=0.02)
-    assert [(c.seq, c.completed) for c in out] == [(1, True), (2, False)]
-    assert out[1].reason == 'timeout'
-
-
-def test_lost_proximity_uses_the_status_bit():
-    p = CyclePairer(timeout=0.5)
-    p.add_status(1, True, True, 1.0, 'completed', now=0.0)
-    out = p.add_proximity(2.0, False, now=0.1)         # proximity of seq 1 never came
-    assert [(c.seq, c.detected, c.note) for c in out] == [(1, True, 'proximity lost')]
-    p.add_status(2, True, False, 2.0, 'completed', now=0.11)
-    p.add_status(3, True, True, 3.0, 'completed', now=0.2)
-    assert p.expire(now=0.6) == []
-    (c,) = p.expire(now=0.71)
-    assert (c.seq, c.detected, c.note) == (3, True, 'proximity lost')
-    assert p.counts['proximity_lost'] == 2
-
-
-def test_disagreement_and_orphans():
-    p = CyclePairer()
-    p.add_proximity(0.5, True, now=0.0)                 # before the monitor saw any status
-    assert p.add_status(1, True, False, 1.0, 'completed', now=0.0) == []
-    (c,) = p.add_proximity(1.0, True, now=0.01)
-    assert c.note == 'sensor disagreement' and c.detected is True
-    assert p.counts['orphans'] == 1 and p.counts['disagreements'] == 1
-    p.add_proximity(5.0, False, now=1.0)
-    assert p.expire(now=1.2) == [] and p.pending == (0, 1)
-    p.expire(now=1.6)
-    assert p.pending == (0, 0) and p.counts['orphans'] == 2
-
-
-def test_statuses_without_stamp_pair_in_order():
-    p = CyclePairer()
-    p.add_proximity(7.0, False, now=0.0)
-    p.add_proximity(8.0, True, now=0.0)
-    out = p.add_status(1, True, None, None, 'completed', now=0.0)
-    out += p.add_status(2, True, None, None, 'completed', now=0.0)
-    assert [(c.seq, c.detected) for c in out] == [(1, False), (2, True)]
 
 
 def test_config_yaml_and_docs_match_the_table():
@@ -349,11 +303,15 @@ def test_100000_cycles_of_the_triangle_orbit(triangle, triangle_analysis, orbit)
     m = ReadinessMonitor(rules)
     verdicts = np.array([m.completed(k + 1, bool(b)).ready for k, b in enumerate(bits)])
     assert m.counts['anomalies'] == 0, m.last_anomaly
+    # Issue 20: no ready while the checks are off (the first settle_cycles throws).
     truth = bits & (edges == rules.goal_edge) & \
-        (np.arange(1, len(bits) + 1) >= rules.warmup_cycles)
+        (np.arange(1, len(bits) + 1) > rules.settle_cycles)
     false_ready = np.flatnonzero(verdicts & ~truth) + 1
     missed = np.flatnonzero(truth & ~verdicts) + 1
-    assert false_ready.size == 0 and missed.size == 0, (false_ready[:5], missed[:5])
+    assert false_ready.size == 0, false_ready[:5]
+    # The prediction leaves a few detections unproven (bits that a state off the goal edge can
+    # show too): 9 of about 5,800 on this orbit; each one counted, none an anomaly.
+    assert missed.size == m.counts['not_goal_sure'] <= 20, missed[:20]
     assert truth.sum() > 3000       # a detection rate of 3-10 % (test_rules_of_the_triangle)
 
 

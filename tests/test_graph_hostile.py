@@ -1,0 +1,115 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Issue 20, attack 3 on real DDS: one message killed the monitor (and the predictor).
+
+A ``cycle_status`` whose ``stamp`` is ``'1'`` and 400 zeros raised OverflowError in the
+monitor (exit status 1) and AssertionError in the predictor (a Time of 10**391 s). Here this
+test's own process publishes it, and more garbage on ``cycle_status`` and ``proximity``, to the
+installed monitor_node and sim_node processes: both stay up, count the bad input in
+/diagnostics, and judge and predict the next real cycle.
+"""
+
+import math
+
+from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_common.messages import cycle_status, proximity
+from feeder_nodes import (Diagnostics, monitor, PredictedStates, predictor, RELIABLE,
+                          sim_as_hardware, watch_monitor)
+from hostile_messages import KILLER_STAMP, TRICKY
+from sensor_msgs.msg import Range
+from std_srvs.srv import Trigger
+
+
+def garbage_statuses(seq, stamp):
+    """Return the killer status first, then every tricky text as seq, stamp and sensor."""
+    out = []
+    for key, index in (('stamp', 2), ('seq', 0), ('sensor', 1)):
+        for text in ((KILLER_STAMP,) if key == 'stamp' else ()) + TRICKY:
+            msg = cycle_status(seq, True, 'completed', True, stamp, 'forger')
+            msg.values[index].value = text
+            out.append(msg)
+    return out
+
+
+def garbage_ranges(stamp):
+    """Return Ranges no sensor writes: unusable limits, NaN, stamps before 1970 or past 1e9 ns."""
+    out = []
+    for rng, lo, hi, sec, nanosec in (
+            (0.01, math.nan, 0.02, 1, 0), (0.01, -math.inf, math.inf, 1, 0),
+            (0.01, 0.03, 0.02, 1, 0), (math.nan, 0.02, 0.02, 1, 0),
+            (-math.inf, 0.02, 0.02, -5, 0), (-math.inf, 0.02, 0.02, 1, 4_000_000_000),
+            (3.4e38, -3.4e38, 3.4e38, 2**31 - 1, 999_999_999)):
+        msg = proximity(stamp, True, 0.02)
+        msg.range, msg.min_range, msg.max_range = rng, lo, hi
+        msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+        out.append(msg)
+    return out
+
+
+def test_the_killer_status_and_garbage_leave_monitor_and_predictor_judging(graph, ros):
+    sim_as_hardware(graph, 'cycle_period:=0.05')
+    pred = predictor(graph)
+    mon = monitor(graph)
+    ready, verdicts, statuses = watch_monitor(ros)
+    states = PredictedStates(ros)
+    diags = Diagnostics(ros)
+    status_pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', RELIABLE)
+    prox_pub = ros.node.create_publisher(Range, '/feeder/proximity', RELIABLE)
+    # the monitor's, the predictor's and this test's readers; the monitor's proximity reader
+    ros.spin_until(lambda: status_pub.get_subscription_count() >= 3 and
+                   prox_pub.get_subscription_count() >= 1, 60.0, 'the readers of the forger')
+    ros.spin_for(0.5)
+
+    stamp = ros.node.get_clock().now().nanoseconds
+    bad = garbage_statuses(5, stamp)
+    status_pub.publish(bad[0])          # alone: it was enough
+    ros.spin_for(1.0)
+    assert mon.poll() is None, f'monitor exited with {mon.returncode}:\n{graph.log(mon)}'
+    assert pred.poll() is None, f'predictor exited with {pred.returncode}:\n{graph.log(pred)}'
+    for k, msg in enumerate(bad[1:]):
+        status_pub.publish(msg)
+        if k % 10 == 0:
+            ros.spin_for(0.01)
+    for msg in garbage_ranges(stamp):
+        prox_pub.publish(msg)
+    ros.spin_for(1.0)
+    assert mon.poll() is None, f'monitor exited with {mon.returncode}:\n{graph.log(mon)}'
+    assert pred.poll() is None, f'predictor exited with {pred.returncode}:\n{graph.log(pred)}'
+
+    # The forger leaves; a real cycle is judged and predicted.
+    ros.node.destroy_publisher(status_pub)
+    ros.node.destroy_publisher(prox_pub)
+    ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') == 1, 20.0,
+                   'the forger to leave')
+    res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
+    assert res.success, res.message
+    seq = int(res.message.split()[-1])
+    ros.spin_until(lambda: any(v.seq == seq for v in verdicts.parsed), 10.0,
+                   f'the verdict of cycle {seq}')
+    ros.spin_until(lambda: any(s.seq == seq for s in states.parsed), 10.0,
+                   f'the prediction of cycle {seq}')
+
+    # Counted in /diagnostics, and said in the log (throttled: a few lines, not hundreds).
+    def counted(name, key):
+        got = diags.by_name.get(name, [])
+        return bool(got) and int(Diagnostics.values(got[-1])[key]) > 0
+
+    ros.spin_until(lambda: counted('feeder_monitor: inputs', 'bad_input'), 5.0,
+                   "the monitor's count of bad input")
+    ros.spin_until(lambda: counted('feeder_sim: sensor agreement', 'bad_status'), 5.0,
+                   "the predictor's count of bad statuses")
+    log = graph.log(mon)
+    assert 'ignored' in log and log.count('ignored') < 20, log[-3000:]
