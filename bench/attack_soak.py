@@ -245,7 +245,7 @@ def run(args, out):
 # ---- reading back -----------------------------------------------------------------------------
 
 def read_bag(bag):
-    """(topic, log_time_ns, message) of the bag in log order (mcap reader; rclpy deserializes)."""
+    """Return (topic, log_time_ns, message) of the bag in log order (mcap reader, rclpy)."""
     from mcap.reader import make_reader
     from rclpy.serialization import deserialize_message
     classes = {}
@@ -267,7 +267,7 @@ def read_bag(bag):
 
 
 def read_truth(path):
-    """(header, {driver seq: fire record}, host-side bit error lines) of a truth log."""
+    """Return (header, {driver seq: fire record}, host-side bit error lines) of a truth log."""
     header, by_seq, rx_errors = None, {}, 0
     full = None
     for line in open(path, encoding='utf-8'):
@@ -289,7 +289,7 @@ def read_truth(path):
 
 
 def anomaly_kind(text):
-    """The cause of an anomaly, from its text (feeder_monitor.readiness and monitor_node)."""
+    """Name the cause of an anomaly from its text (feeder_monitor.readiness and monitor_node)."""
     t = text or ''
     if 'not trusted' in t:
         for key, kind in (('unsigned', 'unsigned report'), ('bad MAC', 'bad MAC'),
@@ -302,7 +302,7 @@ def anomaly_kind(text):
     if 'failed:' in t:
         return 'failed cycle'
     if 'detection after only' in t or 'consecutive detections' in t or \
-            'no detection for' in t:
+            'no detection for' in t or 'limit set cannot show' in t:
         return 'sensor pattern'
     if 'missing cycles' in t or 'seq went back' in t:
         return 'seq gap'
@@ -311,6 +311,16 @@ def anomaly_kind(text):
     if 'not alive' in t or 'left its active' in t or 'stalled' in t or 'new run' in t:
         return 'driver or monitor liveness'
     return 'other'
+
+
+def monitor_rules(out):
+    """Return (warm-up, settle) throws from the monitor's log line of its rules."""
+    import re
+    text = (out / 'logs' / 'monitor.log').read_text(errors='replace')
+    m = re.search(r'warm-up (\d+), settle (\d+)', text)
+    if not m:
+        raise SystemExit('attack_soak: the monitor log names no warm-up and settle')
+    return int(m.group(1)), int(m.group(2))
 
 
 def cause_group(kind, genuine_stale):
@@ -405,29 +415,36 @@ def reconcile(out):
     ready_keys = {(v[1], v[2]) for v in ready_verdicts if v[7]}
     rogue = sum(1 for s in statements if not s[7] and s[3])
     unbacked = sum(1 for s in statements if s[7] and s[3] and (s[1], s[2]) not in ready_keys)
-    after_fire = sum(1 for s in statements if s[7] and s[3] and s[1] + 1 in fired_stamp and
-                     fired_stamp[s[1] + 1] is not None and s[6] > fired_stamp[s[1] + 1])
+    lags = [s[6] - fired_stamp[s[1] + 1] for s in statements
+            if s[7] and s[3] and fired_stamp.get(s[1] + 1) is not None and
+            s[6] > fired_stamp[s[1] + 1]]
 
-    # Anomalies in log order, with their cause; then each missed ready's cause.
-    anomalies = []          # (log index, kind, group)
+    # Anomalies in log order, with their cause and the newest genuine seq judged before
+    # them; then each missed ready's cause.
+    anomalies = []          # (log index, kind, group, newest genuine seq)
     genuine_keys = {(seq, st.stamp_ns) for seq, st in genuine.items()}
+    newest = 0
     for v in verdicts:
+        if v[0] in gv_index:
+            newest = max(newest, v[1])
         if v[5]:
             kind = anomaly_kind(v[5])
             is_first_of_genuine = (v[1], v[2]) in genuine_keys and first[(v[1], v[2])] is v
-            anomalies.append((v[0], kind, cause_group(kind, is_first_of_genuine)))
+            anomalies.append((v[0], kind, cause_group(kind, is_first_of_genuine), newest))
     # Interrupts (the driver left or stalled, the monitor stalled) show on edge1_ready only.
     # A statement is republished while idle: count each interrupt once.
     interrupts, prev = [], None
     for s in statements:
         if s[7] and s[5] and (s[1], s[5]) != prev and \
                 anomaly_kind(s[5]) == 'driver or monitor liveness':
-            interrupts.append((s[0], anomaly_kind(s[5])))
+            interrupts.append((s[0], anomaly_kind(s[5]), s[1]))
         prev = (s[1], s[5]) if s[7] else prev
-    events = sorted(anomalies + [(i, k, k) for i, k in interrupts])
-    kinds = collections.Counter(k for _, k, _ in anomalies)
-    kinds.update(k for _, k in interrupts)
+    events = sorted(anomalies + [(i, k, k, seq) for i, k, seq in interrupts])
+    kinds = collections.Counter(a[1] for a in anomalies)
+    kinds.update(k for _, k, _ in interrupts)
     idx = [e[0] for e in events]
+    warmup_m, settle = monitor_rules(out)
+    window = warmup_m + settle + 1      # throws after a restart before a ready can come
     candidates = 0
     missed = collections.Counter()
     for seq, st in genuine.items():
@@ -445,8 +462,17 @@ def reconcile(out):
         if v[5]:
             missed[f'{cause_group(anomaly_kind(v[5]), False)} (this cycle)'] += 1
             continue
+        nxt = fired_stamp.get(seq + 1)
+        if nxt is not None and v[6] > nxt:
+            missed['superseded: the next cycle fired before the verdict'] += 1
+            continue
         k = bisect.bisect_left(idx, v[0]) - 1
-        missed[events[k][2] if k >= 0 else 'start-up warm-up'] += 1
+        if k >= 0 and seq - events[k][3] <= window:
+            missed[events[k][2]] += 1
+        elif k < 0 and seq <= window:
+            missed['start-up warm-up'] += 1
+        else:
+            missed['not proven by the rules (e.g. the prediction unsure of the edge)'] += 1
 
     completed = [st for st in genuine.values() if st.ok]
     flaky = collections.Counter(truth[st.seq].get('flaky') for st in completed
@@ -479,8 +505,10 @@ def reconcile(out):
         ('ready verdicts on the goal edge but not in the sensor view (spurious bit)',
          false_unseen),
         ('ready verdicts not authentic / stale', f'{bad_ready} / {stale_ready}'),
-        ('signed ready statements sent after the next cycle fired', after_fire),
+        ('signed ready statements sent after the next cycle fired (its notice in flight)',
+         f'{len(lags)}' + (f', at most {max(lags) / 1e6:.1f} ms after' if lags else '')),
         ('unsigned ready statements on edge1_ready (rogue writer)', rogue),
+        ('monitor rules: warm-up, settle (throws)', f'{warmup_m}, {settle}'),
         ('cycles seen on the goal edge with bit 1 after the warm-up', candidates),
         ('missed readies', f'{sum(missed.values())} '
                            f'({100 * sum(missed.values()) / max(candidates, 1):.1f} %)'),
@@ -489,8 +517,9 @@ def reconcile(out):
     rows += [(f'anomalies: {k}', v) for k, v in kinds.most_common()]
     rows += [(k, v) for k, v in sorted(count.items())]
     for k, v in sorted(forger.get('sent', {}).items()):
-        rows.append((f'forger sent: {k}', f'{v} (acked by every reader: '
-                     f'{forger.get("acked", {}).get(k, 0)})'))
+        acked = f' (acknowledged by every reader before it left: ' \
+            f'{forger.get("acked", {}).get(k, 0)})' if k.startswith('hit') else ''
+        rows.append((f'forger sent: {k}', f'{v}{acked}'))
     false = false_edge + ready_not_genuine + unbacked
     return rows, false, false_list
 
