@@ -31,8 +31,9 @@ makes the next attack of this round, in turn:
   ``Verdict(ready=True)`` for the last seen seq.
 
 Each attack sent is one JSON line in ``--log`` (time, kind, seq, stamp; for a hit and run,
-whether every reader acknowledged it before it left: it waits at most 1 s); on SIGINT/SIGTERM it prints the counts and writes them to ``--counts``.
-Run it with the workspace's environment (``. scripts/setup.sh``)::
+whether every reader acknowledged it before it left: it waits at most 1 s); on SIGINT or
+SIGTERM it prints the counts and writes them to ``--counts``. Run it with the workspace's
+environment (``. scripts/setup.sh``)::
 
     python bench/forger.py [--ns /feeder] [--every 2.0] [--log F] [--counts F]
 """
