@@ -245,14 +245,13 @@ def run(args, out):
 # ---- reading back -----------------------------------------------------------------------------
 
 def read_bag(bag):
-    """Return (topic, log_time_ns, message) of the bag in log order (mcap reader, rclpy)."""
+    """Yield (topic, log_time_ns, message) of the bag in log order (mcap reader, rclpy)."""
     from mcap.reader import make_reader
     from rclpy.serialization import deserialize_message
     classes = {}
     files = sorted(pathlib.Path(bag).glob('*.mcap'))
     if not files:
         raise SystemExit(f'attack_soak: no .mcap file in {bag}')
-    out = []
     for path in files:
         with open(path, 'rb') as fh:
             for schema, channel, message in make_reader(fh).iter_messages(log_time_order=True):
@@ -261,9 +260,8 @@ def read_bag(bag):
                     pkg, kind, name = schema.name.split('/')
                     cls = classes[schema.name] = getattr(
                         importlib.import_module(f'{pkg}.{kind}'), name)
-                out.append((channel.topic, message.log_time,
-                            deserialize_message(message.data, cls)))
-    return out
+                yield (channel.topic, message.log_time,
+                       deserialize_message(message.data, cls))
 
 
 def read_truth(path):

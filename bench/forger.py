@@ -91,6 +91,8 @@ class Forger:
                                                     qos.CYCLE_FIRED)
         self.ready_pub = self.node.create_publisher(Verdict, f'{self.ns}/edge1_ready',
                                                     qos.edge1_ready(1.0))
+        self.executor = rclpy.executors.SingleThreadedExecutor(context=self.ctx)
+        self.executor.add_node(self.node)
 
     # ---- what the genuine driver says -------------------------------------------------------
     def _on_status(self, msg):
@@ -127,6 +129,18 @@ class Forger:
                                        'note': note}) + '\n')
             self.log.flush()
 
+    def spin(self, timeout):
+        """Handle at most one pending message (the long-lived node's), waiting ``timeout`` s."""
+        self.executor.spin_once(timeout_sec=timeout)
+
+    def drain(self, most=1000):
+        """Handle the messages already waiting, so that ``last_seq`` is the newest seen."""
+        for _ in range(most):
+            before = (self.last_seq, len(self.genuine))
+            self.executor.spin_once(timeout_sec=0.0)
+            if (self.last_seq, len(self.genuine)) == before:
+                break
+
     def _forged_status(self, seq, stamp_ns, signed):
         """Build a report of cycle ``seq``, sensor 1: unsigned, or signed with a wrong key."""
         from feeder_common.messages import cycle_status, CycleSigner
@@ -148,7 +162,8 @@ class Forger:
                                         self.qos.CYCLE_STATUS)
             end = time.monotonic() + 2.0
             while pub.get_subscription_count() < expected and time.monotonic() < end:
-                time.sleep(0.005)
+                self.spin(0.005)        # keep up with the driver meanwhile
+            self.drain()
             seq = self.last_seq + 1
             stamp = node.get_clock().now().nanoseconds
             pub.publish(self._forged_status(seq, stamp, signed))
@@ -213,7 +228,8 @@ class Forger:
         self._record('rogue_ready', self.last_seq, now)
 
     def attack(self, kind):
-        """Make one attack of ``kind`` (one of ATTACKS)."""
+        """Make one attack of ``kind`` (one of ATTACKS), on the newest report seen."""
+        self.drain()
         {'hit_unsigned': lambda: self.hit_and_run(False),
          'hit_bad_mac': lambda: self.hit_and_run(True),
          'replay_fresh': self.replay_fresh, 'replay_stale': self.replay_stale,
@@ -229,6 +245,7 @@ class Forger:
 
     def close(self):
         """Leave the graph."""
+        self.executor.shutdown()
         self.node.destroy_node()
         self.rclpy.shutdown(context=self.ctx)
         if self.log:
@@ -263,18 +280,15 @@ def main(argv=None):
           flush=True)
     k = 0
     next_at = time.monotonic() + args.every
-    executor = rclpy.executors.SingleThreadedExecutor(context=forger.ctx)
-    executor.add_node(forger.node)
     try:
         while not stop:
-            executor.spin_once(timeout_sec=0.05)
+            forger.spin(0.05)
             if time.monotonic() >= next_at and forger.last_seq > 0:
                 forger.attack(kinds[k % len(kinds)])
                 k += 1
                 next_at = time.monotonic() + args.every
     finally:
         summary = forger.summary()
-        executor.shutdown()
         forger.close()
         print('forger: ' + json.dumps(summary), flush=True)
         if args.counts:
