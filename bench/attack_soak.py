@@ -34,9 +34,12 @@ emulator's truth log by seq (the driver's seq is the wire seq unwrapped: wire = 
 * verdicts with ready true that are not authentic (MAC) or stale (sent > 1 s after the
   cycle was sampled), and ready statements sent after the next cycle had fired;
 * a **missed ready** is a genuine completed cycle after the warm-up whose part is seen on the
-  goal edge with a true bit, whose verdict is not ready; its cause is the anomaly that
-  restarted the warm-up (the newest one before it): a forgery, a failed cycle (bit errors),
-  the sensor pattern (the flaky sensor), or the start-up;
+  goal edge with a true bit, whose verdict is not ready. Its cause: the anomaly of that cycle;
+  else the newest anomaly before it if it came less than warm-up + settle throws (the
+  monitor's rules, from its log) before: a forgery, a failed cycle (bit errors), the sensor
+  pattern (the flaky sensor); else the start-up; else *superseded* when the verdict was sent
+  after the next cycle fired; else *not proven by the rules* (e.g. the prediction not sure of
+  the edge while it suspects the sensor);
 * anomalies by kind, failed cycles by reason, the flaky readings and bit errors of the
   truth log, the forgeries sent by kind.
 
@@ -460,15 +463,14 @@ def reconcile(out):
         if v[5]:
             missed[f'{cause_group(anomaly_kind(v[5]), False)} (this cycle)'] += 1
             continue
-        nxt = fired_stamp.get(seq + 1)
-        if nxt is not None and v[6] > nxt:
-            missed['superseded: the next cycle fired before the verdict'] += 1
-            continue
         k = bisect.bisect_left(idx, v[0]) - 1
+        nxt = fired_stamp.get(seq + 1)
         if k >= 0 and seq - events[k][3] <= window:
             missed[events[k][2]] += 1
         elif k < 0 and seq <= window:
             missed['start-up warm-up'] += 1
+        elif nxt is not None and v[6] > nxt:
+            missed['superseded: the next cycle fired before the verdict'] += 1
         else:
             missed['not proven by the rules (e.g. the prediction unsure of the edge)'] += 1
 
