@@ -540,10 +540,12 @@ def report(out):
 def main():
     """Run the soak (or reread one) and report; the exit status."""
     ap = argparse.ArgumentParser(description=__doc__.split('\n\n')[0].strip())
-    ap.add_argument('--cycles', type=int, default=100_000)
-    ap.add_argument('--spurious-rate', type=float, default=0.01)
+    ap.add_argument('--cycles', type=int, default=100_000,
+                    help='cycles the driver fires (default 100000)')
+    ap.add_argument('--spurious-rate', type=float, default=0.01,
+                    help='flaky sensor: a 1 when the part is not seen (default 0.01)')
     ap.add_argument('--miss-rate', type=float, default=None,
-                    help='default: the spurious rate')
+                    help='flaky sensor: a 0 when the part is seen (default: the spurious rate)')
     ap.add_argument('--bit-error-rate', type=float, default=1e-4,
                     help='per byte, both directions (default 1e-4)')
     ap.add_argument('--forge-every', type=float, default=2.0, metavar='S',
@@ -552,8 +554,10 @@ def main():
                     help="driver cycle_period, s (default 0.01, the driver's minimum)")
     ap.add_argument('--cycle-time', type=float, default=0.004,
                     help="emulator's FIRE-to-SENS time, s (default 0.004)")
-    ap.add_argument('--seed', type=int, default=1)
-    ap.add_argument('--out', type=pathlib.Path, default=None)
+    ap.add_argument('--seed', type=int, default=1,
+                    help="seed of the emulator's flaky sensor and bit errors (default 1)")
+    ap.add_argument('--out', type=pathlib.Path, default=None,
+                    help='run folder (default out/attack-soak-<date>-<time>)')
     ap.add_argument('--reread', type=pathlib.Path, default=None, metavar='DIR',
                     help='reconcile a finished run in DIR again (no new run)')
     args = ap.parse_args()
