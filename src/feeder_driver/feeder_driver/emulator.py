@@ -24,8 +24,12 @@ off a finite arm leaves the arm empty: later throws move nothing and the sensor 
 SIGUSR1). A throw that leaves the domain of f ends its cycle with ``ERR,<seq>,FAULT``. A
 stable symlink (``--link``) points at the pty's slave, so a driver can reopen the same path
 after an emulated unplug. Fault switches drop replies, inject garbage, delay replies, reset
-the controller or unplug the port; ``--truth-log`` writes one JSON line per FIRE received so
-tests can account for every cycle. CLI table: docs/driver.md.
+the controller or unplug the port. Two faults are random and seeded: a flaky sensor
+(``--spurious-rate``: a 1 when the part is not seen; ``--miss-rate``: a 0 when it is) and bit
+errors on the line (``--bit-error-rate``: each byte sent has that probability of one flipped
+bit; ``--host-bit-error-rate`` the same for each byte read from the host). ``--truth-log``
+writes one JSON line per FIRE received so tests can account for every cycle. CLI table:
+docs/driver.md.
 """
 
 import argparse
@@ -68,6 +72,13 @@ def _positive_int(name, value):
     if isinstance(value, bool) or not isinstance(value, int) or value < 1:
         raise EmulatorError(f'{name}: must be an integer >= 1, got {value!r}')
     return value
+
+
+def _rate(name, value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+            not 0.0 <= value <= 1.0:
+        raise EmulatorError(f'{name}: must be a probability 0..1, got {value!r}')
+    return float(value)
 
 
 def _nonneg(name, value):
@@ -177,7 +188,8 @@ class Faults:
 
     def __init__(self, drop_ack_every=None, drop_sens_every=None, garbage_every=None,
                  delay=0.0, delay_every=None, reset_after=None, unplug_after=None,
-                 unplug_for=1.0, seed=0):
+                 unplug_for=1.0, seed=0, spurious_rate=0.0, miss_rate=0.0,
+                 bit_error_rate=0.0, host_bit_error_rate=0.0):
         self.drop_ack_every = _positive_int('--drop-ack-every', drop_ack_every)
         self.drop_sens_every = _positive_int('--drop-sens-every', drop_sens_every)
         self.garbage_every = _positive_int('--garbage-every', garbage_every)
@@ -194,6 +206,56 @@ class Faults:
         self.unplug_after = unplug_after
         self.unplug_for = _nonneg('--unplug-for', unplug_for)
         self.rng = random.Random(seed)
+        self.spurious_rate = _rate('--spurious-rate', spurious_rate)
+        self.miss_rate = _rate('--miss-rate', miss_rate)
+        self.bit_error_rate = _rate('--bit-error-rate', bit_error_rate)
+        self.host_bit_error_rate = _rate('--host-bit-error-rate', host_bit_error_rate)
+        # One generator per random fault, each seeded from ``seed``: switching one fault on
+        # does not change the draws of another.
+        self._flaky_rng = random.Random(f'{seed}:flaky-sensor')
+        self._tx_rng = random.Random(f'{seed}:bit-errors-tx')
+        self._rx_rng = random.Random(f'{seed}:bit-errors-rx')
+        self.flaky = {'spurious': 0, 'miss': 0}
+        self.flipped = {'tx': 0, 'rx': 0}     # bytes with a flipped bit, each direction
+
+    def flaky_bit(self, bit):
+        """
+        Report the reading ``bit`` through the flaky sensor: (bit sent, None/spurious/miss).
+
+        One draw per reading, whatever the rates, so a run's draws do not depend on the part.
+        """
+        u = self._flaky_rng.random()
+        if not bit and u < self.spurious_rate:
+            self.flaky['spurious'] += 1
+            return 1, 'spurious'
+        if bit and u < self.miss_rate:
+            self.flaky['miss'] += 1
+            return 0, 'miss'
+        return bit, None
+
+    @staticmethod
+    def _flip(data, rate, rng):
+        if rate <= 0.0 or not data:
+            return data, 0
+        out = bytearray(data)
+        n = 0
+        for i in range(len(out)):
+            if rng.random() < rate:
+                out[i] ^= 1 << rng.randrange(8)
+                n += 1
+        return bytes(out), n
+
+    def corrupt_tx(self, data):
+        """Bytes sent to the host, each with one bit flipped at ``bit_error_rate``: (data, n)."""
+        data, n = self._flip(data, self.bit_error_rate, self._tx_rng)
+        self.flipped['tx'] += n
+        return data, n
+
+    def corrupt_rx(self, data):
+        """Bytes read from the host, with ``host_bit_error_rate``: (data, n flipped)."""
+        data, n = self._flip(data, self.host_bit_error_rate, self._rx_rng)
+        self.flipped['rx'] += n
+        return data, n
 
     @staticmethod
     def _every(n, k):
@@ -238,6 +300,8 @@ class _Cycle:
         self.sent = {'ack': False, 'rel': False, 'sens': False}
         self.edge = self.R = self.kind = self.bit = self.seen = self.edge0 = None
         self.error = None
+        self.flaky = None           # 'spurious' or 'miss': the flaky sensor changed the bit
+        self.flips = {}             # frame -> bytes with a flipped bit (sent by the emulator)
 
 
 class Controller:
@@ -292,6 +356,10 @@ class Controller:
         self._epoch = 0     # bumps on reset/unplug: scheduled actions of older epochs lapse
         self._wake_r, self._wake_w = os.pipe()
         self._stop = threading.Event()
+        f = self.faults
+        self.header.update(spurious_rate=f.spurious_rate, miss_rate=f.miss_rate,
+                           bit_error_rate=f.bit_error_rate,
+                           host_bit_error_rate=f.host_bit_error_rate)
         if self._truth:
             self._write_truth(dict({'type': 'header', 'firmware': firmware}, **self.header))
 
@@ -370,7 +438,10 @@ class Controller:
             if self._place_requested.is_set():
                 self._place_part()
             if self.pty.plugged and self.pty.master in ready:
-                data = self.pty.read()
+                data, flipped = self.faults.corrupt_rx(self.pty.read())
+                if flipped:
+                    self._write_truth({'type': 'rx_bit_errors', 'bytes': flipped,
+                                       't': self._clock()})
                 for event in self.parser.feed(data):
                     self._on_host(event)
             self._run_due()
@@ -386,9 +457,13 @@ class Controller:
             if epoch == self._epoch:
                 action(*args)
 
-    def _send(self, message):
+    def _send(self, message, cyc=None):
         if self.pty.plugged:
-            self.pty.write(p.encode(message))
+            data, flipped = self.faults.corrupt_tx(p.encode(message))
+            if flipped and cyc is not None:
+                name = type(message).__name__.lower()
+                cyc.flips[name] = cyc.flips.get(name, 0) + flipped
+            self.pty.write(data)
 
     def _heartbeat(self):
         uptime = int((self._clock() - self._boot_t0) * 1000) & p.UINT32_MAX
@@ -435,7 +510,7 @@ class Controller:
             return
         self._garbage(cyc)
         if 'drop_ack' not in cyc.faults:
-            self._send(p.Ack(cyc.seq))
+            self._send(p.Ack(cyc.seq), cyc)
             cyc.sent['ack'] = True
         if 'reset' in cyc.faults:
             # The controller resets before the arm moves: no throw, the cycle is forgotten.
@@ -459,7 +534,8 @@ class Controller:
             cyc.bit = int(bool(self._sense(cyc.edge, cyc.R)))
             if self._sees is not None:
                 cyc.seen = bool(self._sees(cyc.edge, cyc.R))
-        self._send(p.Rel(cyc.seq, self.release_speed_mrad_s))
+            cyc.bit, cyc.flaky = self.faults.flaky_bit(cyc.bit)
+        self._send(p.Rel(cyc.seq, self.release_speed_mrad_s), cyc)
         cyc.sent['rel'] = True
         if 'unplug' in cyc.faults:
             # Unplugged while the part is in flight: the throw happens, SENS never leaves.
@@ -484,12 +560,18 @@ class Controller:
             return
         if cyc.error is not None:
             self._finish(cyc, 'fault')
-            self._send(p.Err(cyc.seq, 'FAULT', cyc.error.code_text))
+            self._send(p.Err(cyc.seq, 'FAULT', cyc.error.code_text), cyc)
             return
-        # Log before sending, so a reader of the log never sees a SENS it cannot account for.
+        # Log before sending, so a reader of the log never sees a SENS it cannot account for;
+        # the bit errors of the SENS are drawn first, so the log can name them too.
         cyc.sent['sens'] = True
+        sens = p.Sens(cyc.seq, cyc.bit)
+        data, flipped = self.faults.corrupt_tx(p.encode(sens))
+        if flipped:
+            cyc.flips['sens'] = cyc.flips.get('sens', 0) + flipped
         self._finish(cyc, 'completed')
-        self._send(p.Sens(cyc.seq, cyc.bit))
+        if self.pty.plugged:
+            self.pty.write(data)
 
     def _stop_cycle(self):
         cyc = self.cycle
@@ -503,7 +585,8 @@ class Controller:
         rec = {'type': 'fire', 'seq': cyc.seq, 'cycle': cyc.k, 'outcome': outcome,
                'faults': cyc.faults, 'throw': cyc.thrown, 'edge': cyc.edge, 'R': cyc.R,
                'kind': cyc.kind, 'bit': cyc.bit, 'seen': cyc.seen, 'edge0': cyc.edge0,
-               'sent': dict(cyc.sent), 't': cyc.fired_at}
+               'sent': dict(cyc.sent), 't': cyc.fired_at, 'flaky': cyc.flaky,
+               'bit_errors': dict(cyc.flips)}
         if cyc.error is not None:
             rec['error'] = str(cyc.error)
         if not cyc.thrown and self.state is not None:
@@ -636,9 +719,22 @@ def build_arg_parser():
                     help='after N cycles, unplug during the next one (after its REL)')
     ap.add_argument('--unplug-for', type=float, default=1.0, metavar='S',
                     help='seconds unplugged (default %(default)s)')
+    ap.add_argument('--spurious-rate', type=float, default=0.0, metavar='P',
+                    help='flaky sensor: report 1 with probability P when the reading is 0 '
+                         '(default 0)')
+    ap.add_argument('--miss-rate', type=float, default=0.0, metavar='P',
+                    help='flaky sensor: report 0 with probability P when the reading is 1 '
+                         '(default 0)')
+    ap.add_argument('--bit-error-rate', type=float, default=0.0, metavar='P',
+                    help='each byte sent to the host has one bit flipped with probability P '
+                         '(default 0)')
+    ap.add_argument('--host-bit-error-rate', type=float, default=0.0, metavar='P',
+                    help='each byte read from the host has one bit flipped with probability '
+                         'P before it is parsed (default 0)')
     ap.add_argument('--seed', type=int, default=None,
-                    help="seed of the garbage (default 0) and of the scene's random effects, "
-                         "release_noise and sensor_noise (default: the scene's noise.seed)")
+                    help='seed of the garbage, the flaky sensor and the bit errors (default '
+                         "0) and of the scene's random effects, release_noise and "
+                         "sensor_noise (default: the scene's noise.seed)")
     ap.add_argument('--truth-log', metavar='FILE',
                     help='one JSON line per FIRE received (and a header line)')
     ap.add_argument('--firmware', default=FIRMWARE, help='firmware name in HELLO')
@@ -658,7 +754,9 @@ def main(argv=None):
     try:
         faults = Faults(args.drop_ack_every, args.drop_sens_every, args.garbage_every,
                         args.delay, args.delay_every, args.reset_after, args.unplug_after,
-                        args.unplug_for, 0 if args.seed is None else args.seed)
+                        args.unplug_for, 0 if args.seed is None else args.seed,
+                        args.spurious_rate, args.miss_rate, args.bit_error_rate,
+                        args.host_bit_error_rate)
         ctl = from_scene(args.scene, args.sensor_radius, args.seed, link=args.link,
                          cycle_time=args.cycle_time, heartbeat=args.heartbeat, faults=faults,
                          truth_log=args.truth_log, firmware=args.firmware, log=log,
@@ -687,7 +785,10 @@ def main(argv=None):
         # interpreter resets its handlers to the default; as feeder_common.node.run_node.
         for s in (signal.SIGINT, signal.SIGTERM):
             signal.signal(s, signal.SIG_IGN)
-    log(f'stopped after {ctl.cycles} cycles')
+    f = ctl.faults
+    log(f'stopped after {ctl.cycles} cycles (flaky sensor: {f.flaky["spurious"]} spurious, '
+        f'{f.flaky["miss"]} missed; bytes with a bit error: {f.flipped["tx"]} sent, '
+        f'{f.flipped["rx"]} read)')
     return 0
 
 

@@ -218,11 +218,107 @@ def test_truth_log_file(scene_path, sensor_radius, link_path, tmp_path):
     assert set(lines[1]) >= {'edge', 'R', 'kind', 'bit', 'faults', 'outcome'}
 
 
+def _fire_all(cl, seqs, wait=0.03):
+    """Send FIREs one by one without waiting for their replies (some may be corrupted)."""
+    for seq in seqs:
+        cl.send(p.Fire(seq))
+        time.sleep(wait)
+        cl.events.extend(cl.parser.feed(cl.ser.read(4096)))
+    time.sleep(0.1)
+    cl.events.extend(cl.parser.feed(cl.ser.read(4096)))
+
+
+def test_flaky_sensor_is_seeded_and_logged(scene_path, sensor_radius, link_path, tmp_path):
+    runs = []
+    for run in range(2):
+        log = tmp_path / f'truth{run}.jsonl'
+        faults = Faults(spurious_rate=0.2, miss_rate=0.3, seed=7)
+        with EmulatorThread(scene_path, link_path, sensor_radius=sensor_radius,
+                            cycle_time=0.002, faults=faults, truth_log=str(log)):
+            cl = Client(link_path)
+            for seq in range(1, 151):
+                cl.send(p.Fire(seq))
+                cl.wait(lambda e, s=seq: isinstance(e, p.Sens) and e.seq == s)
+            cl.close()
+        lines = [json.loads(x) for x in log.read_text().splitlines()]
+        assert lines[0]['spurious_rate'] == 0.2 and lines[0]['miss_rate'] == 0.3
+        recs = lines[1:]
+        sens = {e.seq: e.bit for e in cl.events if isinstance(e, p.Sens)}
+        for r in recs:
+            assert sens[r['seq']] == r['bit'], 'the log holds the bit that was sent'
+            if r['flaky'] is None:
+                assert r['bit'] == int(r['seen'])
+            elif r['flaky'] == 'spurious':
+                assert not r['seen'] and r['bit'] == 1
+            else:
+                assert r['flaky'] == 'miss' and r['seen'] and r['bit'] == 0
+        kinds = [r['flaky'] for r in recs]
+        assert kinds.count('spurious') > 0 and kinds.count('miss') > 0
+        runs.append(kinds)
+    assert runs[0] == runs[1], 'the same seed gives the same flaky readings'
+
+
+def test_bit_errors_flip_one_bit_per_hit_byte_seeded():
+    data = bytes(range(256)) * 4
+    out, n = Faults(bit_error_rate=1.0, seed=3).corrupt_tx(data)
+    assert n == len(data)
+    assert all(bin(a ^ b).count('1') == 1 for a, b in zip(data, out))
+    assert Faults(bit_error_rate=0.0).corrupt_tx(data) == (data, 0)
+    a = Faults(bit_error_rate=0.01, seed=5).corrupt_tx(data)
+    assert a == Faults(bit_error_rate=0.01, seed=5).corrupt_tx(data) and 0 < a[1] < 60
+    assert a != Faults(bit_error_rate=0.01, seed=6).corrupt_tx(data)
+    rx, m = Faults(host_bit_error_rate=1.0, seed=3).corrupt_rx(data)
+    assert m == len(data) and rx != data
+
+
+def test_bit_errors_are_refused_by_the_crc(scene_path, sensor_radius, link_path, tmp_path):
+    log = tmp_path / 'truth.jsonl'
+    with EmulatorThread(scene_path, link_path, sensor_radius=sensor_radius, cycle_time=0.004,
+                        faults=Faults(bit_error_rate=0.02, seed=11),
+                        truth_log=str(log)) as emu:
+        cl = Client(link_path)
+        _fire_all(cl, range(1, 121))
+        cl.close()
+        flipped = emu.controller.faults.flipped['tx']
+    recs = [json.loads(x) for x in log.read_text().splitlines()][1:]
+    assert [r['seq'] for r in recs] == list(range(1, 121))
+    got = {(type(e).__name__.lower(), e.seq) for e in cl.events if hasattr(e, 'seq')}
+    hit = [(frame, r['seq']) for r in recs for frame in r['bit_errors']]
+    assert hit and flipped >= len(hit)
+    # A frame with a flipped bit never arrives (nor a wrong one: every bit is as logged);
+    # every other reply does.
+    for frame, seq in hit:
+        assert (frame, seq) not in got
+    for r in recs:
+        for frame in ('ack', 'rel', 'sens'):
+            if frame not in r['bit_errors']:
+                assert (frame, r['seq']) in got
+    bits = {e.seq: e.bit for e in cl.events if isinstance(e, p.Sens)}
+    assert all(bits[r['seq']] == r['bit'] for r in recs if r['seq'] in bits)
+    assert cl.parser.dropped_frames >= len(hit)
+
+
+def test_host_bit_errors_refuse_the_fire(scene_path, sensor_radius, link_path, tmp_path):
+    log = tmp_path / 'truth.jsonl'
+    with EmulatorThread(scene_path, link_path, sensor_radius=sensor_radius, cycle_time=0.004,
+                        faults=Faults(host_bit_error_rate=1.0, seed=2), truth_log=str(log)):
+        cl = Client(link_path)
+        _fire_all(cl, range(1, 6))
+        cl.close()
+    lines = [json.loads(x) for x in log.read_text().splitlines()][1:]
+    assert lines and all(x['type'] == 'rx_bit_errors' for x in lines)
+    assert not any(isinstance(e, (p.Ack, p.Sens)) for e in cl.events)
+    assert any(isinstance(e, p.Err) and e.seq is None for e in cl.events)
+
+
 @pytest.mark.parametrize('kwargs, text', [
     ({'drop_ack_every': 0}, '--drop-ack-every'),
     ({'delay': -1.0}, '--delay'),
     ({'delay_every': 3}, '--delay-every: needs --delay'),
     ({'reset_after': -2}, '--reset-after'),
+    ({'spurious_rate': 1.5}, '--spurious-rate'),
+    ({'miss_rate': -0.1}, '--miss-rate'),
+    ({'bit_error_rate': 'x'}, '--bit-error-rate'),
 ])
 def test_bad_fault_options(kwargs, text):
     with pytest.raises(EmulatorError, match=text):
