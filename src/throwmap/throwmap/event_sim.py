@@ -35,7 +35,13 @@ Phases (per unit mass, frame F, heights over the arm surface):
 * FLIGHT: gravity plus the body force, integrated with fixed-step RK4 (``integrator_step``).
   Contact is looked for at the end of every step: a vertex at or below the arm and moving down.
   The crossing is refined by bisection on re-integrated sub-steps to ``contact_root_tol``. A
-  graze shorter than a step is missed; the accuracy benchmark shows how often.
+  graze shorter than a step is missed; the accuracy benchmark shows how often. With
+  ``flight_method`` 'rk8' the flight takes order-8 steps of ``flight_step`` instead; contacts
+  are looked for on each step's quintic Hermite interpolant (positions, velocities and
+  accelerations at both ends) at points no farther apart than ``integrator_step`` (farther
+  where a bound on the vertices' downward speed proves the arm out of reach), bisected there,
+  and the state at the crossing is integrated from the step's start in one order-8 sub-step
+  (:func:`build`'s ``flight_to_contact``).
 * IMPACT at one vertex: the impact hook. A vertex that stays on the arm has its normal velocity
   removed (a further normal impulse, which only dissipates); a pinned pivot (not
   ``unilateral``) is then caught by a sticking impulse. A pinned pivot also holds a vertex that
@@ -56,8 +62,10 @@ Phases (per unit mass, frame F, heights over the arm surface):
 from collections import namedtuple
 import math
 
+from .accuracy import FLIGHT_RK8
 from .catch import flat_landing_edge, record, stays_on_edge, sticking_impact, tip_pivot
 from .jit import njit
+from .rk8 import make_step
 from .status import (ERR_NONFINITE, ERR_PAINLEVE, ERR_SETTLE_CAP, ERR_SIM_CAP, EV_BOUNCE,
                      EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_HELD, EV_LANDING, EV_LIFTOFF,
                      EV_SETTLE_SNAP, EV_TIP_FROM_REST, OK)
@@ -176,6 +184,65 @@ def contact_to_cm(xp, phi, vxp, om, bu_p, bv_p):
 
 
 @njit
+def centre_side(vx, vy, om, phi, bu, bv, k):
+    """
+    Return om times the side of edge k's line (k to k + 1) on which the instantaneous centre lies.
+
+    The centre of the velocity field is z x v / om from the CM; in the body frame of the start
+    edge (where bu, bv are) this is om-free once multiplied by om, so the value is smooth in the
+    state and changes sign where the centre crosses the line (or om changes sign). Distributed
+    friction-like forces (the plate's drag) are not smooth there.
+    """
+    c = math.cos(phi)
+    s = math.sin(phi)
+    bx = c * vx + s * vy
+    by = -s * vx + c * vy
+    kn = (k + 1) % bu.shape[0]
+    ex = bu[kn] - bu[k]
+    ey = bv[kn] - bv[k]
+    return ex * (bx - om * bv[k]) - ey * (-by - om * bu[k])
+
+
+@njit
+def centre_crossing(vx0, vy0, om0, p0, vx1, vy1, om1, p1, bu, bv):
+    """Return an edge whose line the instantaneous centre crosses between two states, or -1."""
+    for k in range(bu.shape[0]):
+        a = centre_side(vx0, vy0, om0, p0, bu, bv, k)
+        b = centre_side(vx1, vy1, om1, p1, bu, bv, k)
+        if (a > 0.0 and b <= 0.0) or (a < 0.0 and b >= 0.0):
+            return k
+    return -1
+
+
+@njit
+def hermite5(q0, v0, a0, q1, v1, a1, h):
+    """Coefficients (q0, h v0, h^2 a0 / 2, c3, c4, c5) of the quintic in s = t / h on [0, h]."""
+    d = q1 - q0 - h * v0 - 0.5 * h * h * a0
+    e = h * (v1 - v0 - h * a0)
+    f = h * h * (a1 - a0)
+    return (q0, h * v0, 0.5 * h * h * a0, 10.0 * d - 4.0 * e + 0.5 * f,
+            -15.0 * d + 7.0 * e - f, 6.0 * d - 3.0 * e + 0.5 * f)
+
+
+@njit
+def _quintic(c, s):
+    """Value and d/ds of the quintic with coefficients c at s."""
+    q = c[0] + s * (c[1] + s * (c[2] + s * (c[3] + s * (c[4] + s * c[5]))))
+    dq = c[1] + s * (2.0 * c[2] + s * (3.0 * c[3] + s * (4.0 * c[4] + s * 5.0 * c[5])))
+    return q, dq
+
+
+@njit
+def hermite_at(cx, cy, cp, tau, h):
+    """State (x, y, phi, vx, vy, om) of the interpolants cx, cy, cp at time tau of [0, h]."""
+    s = tau / h
+    x, dx = _quintic(cx, s)
+    y, dy = _quintic(cy, s)
+    p, dp = _quintic(cp, s)
+    return x, y, p, dx / h, dy / h, dp / h
+
+
+@njit
 def _event(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1):
     nan = math.nan
     return record(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1, nan, nan, nan, nan, nan)
@@ -217,6 +284,103 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         vy_new = vy + dt * (b1 + 2.0 * b2 + 2.0 * b3 + b4) / 6.0
         om_new = om + dt * (c1 + 2.0 * c2 + 2.0 * c3 + c4) / 6.0
         return x_new, y_new, p_new, vx_new, vy_new, om_new
+
+    rk8_step = make_step(flight_rhs)
+
+    @njit(cache=False)
+    def flight_to_contact(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size,
+                          edge, prm, knobs, steps):
+        """
+        Fly with order-8 steps until a vertex meets the arm moving down (flight_method 'rk8').
+
+        Returns (status, vertex, x, y, phi, vx, vy, om, t, steps) at the crossing. Each step's
+        state in between is the quintic Hermite interpolant of its ends (error O(step^6) of the
+        body force's smooth part: only used to find the crossing). Samples are at most
+        integrator_step apart, farther only where the lowest vertex (but the one that just
+        left) is higher than a bound on every vertex's downward speed over the step times the
+        gap. The crossing is bisected on the interpolant to contact_root_tol and its state is
+        then integrated from the step's start in one order-8 sub-step.
+        """
+        nan = math.nan
+        H = knobs.flight_step
+        dts = knobs.integrator_step
+        root = knobs.contact_root_tol
+        ax0, ay0, ao0 = flight_rhs(vx, vy, om, phi, g, rho2, edge, prm)
+        while True:
+            steps += 1
+            if steps > knobs.max_sim_steps:
+                return ERR_SIM_CAP, -1, x, y, phi, vx, vy, om, t, steps
+            x1, y1, p1, vx1, vy1, om1 = rk8_step(x, y, phi, vx, vy, om, H, ax0, ay0, ao0, g,
+                                                 rho2, edge, prm)
+            if not (math.isfinite(y1) and math.isfinite(om1) and math.isfinite(x1)):
+                return ERR_NONFINITE, -1, x, y, phi, vx, vy, om, t, steps
+            ax1, ay1, ao1 = flight_rhs(vx1, vy1, om1, p1, g, rho2, edge, prm)
+            cx = hermite5(x, vx, ax0, x1, vx1, ax1, H)
+            cy = hermite5(y, vy, ay0, y1, vy1, ay1, H)
+            cp = hermite5(phi, om, ao0, p1, om1, ao1, H)
+            h_step = H
+            kc = centre_crossing(vx, vy, om, phi, vx1, vy1, om1, p1, bu, bv)
+            if kc >= 0:
+                # The body force may have a kink there (distributed friction): end the step
+                # just past it, so that every step integrates a smooth force.
+                side0 = centre_side(vx, vy, om, phi, bu, bv, kc)
+                lo = 0.0
+                hi = H
+                while hi - lo > root:
+                    mid = 0.5 * (lo + hi)
+                    _, _, ps, us, vs, os_ = hermite_at(cx, cy, cp, mid, H)
+                    if centre_side(us, vs, os_, ps, bu, bv, kc) * side0 > 0.0:
+                        lo = mid
+                    else:
+                        hi = mid
+                h_step = hi
+                x1, y1, p1, vx1, vy1, om1 = rk8_step(x, y, phi, vx, vy, om, h_step, ax0, ay0,
+                                                     ao0, g, rho2, edge, prm)
+                ax1, ay1, ao1 = flight_rhs(vx1, vy1, om1, p1, g, rho2, edge, prm)
+                cx = hermite5(x, vx, ax0, x1, vx1, ax1, h_step)
+                cy = hermite5(y, vy, ay0, y1, vy1, ay1, h_step)
+                cp = hermite5(phi, om, ao0, p1, om1, ao1, h_step)
+            vb = 1.05 * (max(abs(vy), abs(vy1)) + max(abs(om), abs(om1)) * size) + 1e-12
+            tau = 0.0
+            hit = -1
+            lo = 0.0
+            while tau < h_step:
+                xs, ys, ps, us, vs, os_ = hermite_at(cx, cy, cp, tau, h_step)
+                _, low = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+                gap = low / vb if low > 0.0 else 0.0
+                lo = tau
+                tau = min(h_step, tau + max(gap, dts))
+                xs, ys, ps, us, vs, os_ = hermite_at(cx, cy, cp, tau, h_step)
+                if sep >= 0:
+                    h1, un1 = vertex_normal(ys, ps, vs, os_, bu[sep], bv[sep])
+                    if h1 > 0.0 or (sep_rising and un1 < 0.0):
+                        sep = -1
+                k, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+                if k >= 0:
+                    hit = k
+                    break
+            if hit < 0:
+                x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
+                ax0, ay0, ao0 = ax1, ay1, ao1
+                t += h_step
+                continue
+            hi = tau
+            while hi - lo > root:
+                mid = 0.5 * (lo + hi)
+                xs, ys, ps, us, vs, os_ = hermite_at(cx, cy, cp, mid, h_step)
+                km, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+                if km >= 0:
+                    hi = mid
+                    hit = km
+                else:
+                    lo = mid
+            xe, ye, pe, vxe, vye, ome = rk8_step(x, y, phi, vx, vy, om, hi, ax0, ay0, ao0, g,
+                                                 rho2, edge, prm)
+            k2, _ = lowest_approaching(xe, ye, pe, vxe, vye, ome, bu, bv, sep)
+            if k2 >= 0:
+                hit = k2
+            return OK, hit, xe, ye, pe, vxe, vye, ome, t + hi, steps
+        return OK, -1, nan, nan, nan, nan, nan, nan, nan, steps
 
     @njit(cache=False)
     def bounce_resolved(rx, ry, vx, vy, om, phi, g, rho2, root, scale, edge, prm, unilateral):
@@ -418,38 +582,45 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
             if impacts > max_imp:
                 return ERR_SETTLE_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
             if mode == MODE_FLIGHT:
-                x1, y1, p1, vx1, vy1, om1 = flight_step(x, y, phi, vx, vy, om, dt, g, rho2,
-                                                        edge, prm)
-                if not (math.isfinite(y1) and math.isfinite(om1)):
-                    return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
-                            x_hi)
-                if sep >= 0:
-                    h1, un1 = vertex_normal(y1, p1, vy1, om1, bu[sep], bv[sep])
-                    if h1 > 0.0 or (sep_rising and un1 < 0.0):
-                        sep = -1
-                k, _ = lowest_approaching(x1, y1, p1, vx1, vy1, om1, bu, bv, sep)
-                if k < 0:
-                    x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
-                    t += dt
-                    continue
-                lo = 0.0
-                hi = dt
-                while hi - lo > root:
-                    mid = 0.5 * (lo + hi)
-                    xm, ym, pm, vxm, vym, omm = flight_step(x, y, phi, vx, vy, om, mid, g, rho2,
+                if knobs.flight_method == FLIGHT_RK8:
+                    code, k, x, y, phi, vx, vy, om, t, steps = flight_to_contact(
+                        x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge,
+                        prm, knobs, steps)
+                    if code != OK:
+                        return code, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
+                else:
+                    x1, y1, p1, vx1, vy1, om1 = flight_step(x, y, phi, vx, vy, om, dt, g, rho2,
                                                             edge, prm)
-                    km, _ = lowest_approaching(xm, ym, pm, vxm, vym, omm, bu, bv, sep)
-                    if km >= 0:
-                        hi = mid
-                        k = km
-                    else:
-                        lo = mid
-                x, y, phi, vx, vy, om = flight_step(x, y, phi, vx, vy, om, hi, g, rho2, edge,
-                                                    prm)
-                t += hi
-                k2, _ = lowest_approaching(x, y, phi, vx, vy, om, bu, bv, sep)
-                if k2 >= 0:
-                    k = k2
+                    if not (math.isfinite(y1) and math.isfinite(om1)):
+                        return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec,
+                                x_lo, x_hi)
+                    if sep >= 0:
+                        h1, un1 = vertex_normal(y1, p1, vy1, om1, bu[sep], bv[sep])
+                        if h1 > 0.0 or (sep_rising and un1 < 0.0):
+                            sep = -1
+                    k, _ = lowest_approaching(x1, y1, p1, vx1, vy1, om1, bu, bv, sep)
+                    if k < 0:
+                        x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
+                        t += dt
+                        continue
+                    lo = 0.0
+                    hi = dt
+                    while hi - lo > root:
+                        mid = 0.5 * (lo + hi)
+                        xm, ym, pm, vxm, vym, omm = flight_step(x, y, phi, vx, vy, om, mid, g,
+                                                                rho2, edge, prm)
+                        km, _ = lowest_approaching(xm, ym, pm, vxm, vym, omm, bu, bv, sep)
+                        if km >= 0:
+                            hi = mid
+                            k = km
+                        else:
+                            lo = mid
+                    x, y, phi, vx, vy, om = flight_step(x, y, phi, vx, vy, om, hi, g, rho2,
+                                                        edge, prm)
+                    t += hi
+                    k2, _ = lowest_approaching(x, y, phi, vx, vy, om, bu, bv, sep)
+                    if k2 >= 0:
+                        k = k2
                 sep = -1
                 c = math.cos(phi)
                 s = math.sin(phi)
