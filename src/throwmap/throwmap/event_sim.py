@@ -62,7 +62,7 @@ Phases (per unit mass, frame F, heights over the arm surface):
 from collections import namedtuple
 import math
 
-from .accuracy import FLIGHT_RK8
+from .accuracy import FLIGHT_RK8, ROLL_ENERGY
 from .catch import flat_landing_edge, record, stays_on_edge, sticking_impact, tip_pivot
 from .jit import njit
 from .rk8 import make_step
@@ -76,6 +76,8 @@ ContactLaw = namedtuple('ContactLaw', ['mu', 'unilateral', 'sticking'])
 STICKING_CONTACT = ContactLaw(math.inf, False, True)
 
 EPS = 2.220446049250313e-16
+GRADE = 4.0     # flight_method rk8: step ratio of the graded steps about a kink of the force
+CENTRE_SAMPLES = 8  # flight_method rk8: points per step at which centre crossings are looked for
 MODE_FLIGHT = 0
 MODE_CONTACT = 1
 MODE_FLAT = 2
@@ -215,6 +217,57 @@ def centre_crossing(vx0, vy0, om0, p0, vx1, vy1, om1, p1, bu, bv):
 
 
 @njit
+def roll_u(psi, u0, alpha0, sd, g, lp, inertia, a0, a2):
+    """
+    Return u = omega^2 / 2 and du/dpsi after a roll by psi >= 0 about a pinned pivot.
+
+    The CM is at angle alpha0 from the arm, seen from the pivot at distance lp; sd the sense
+    of the roll (the sign of omega); inertia = rho^2 + lp^2; the body force's torque about the
+    pivot is -sd (a0 + a2 omega^2). The work-energy equation in the angle,
+    inertia du/dpsi = sd g lp cos(alpha0 + sd psi) - a0 - 2 a2 u, is linear in u: closed form.
+    """
+    th = alpha0 + sd * psi
+    if a2 == 0.0:
+        u = u0 + g * lp * (math.sin(th) - math.sin(alpha0)) / inertia - a0 * psi / inertia
+    else:
+        beta = 2.0 * a2 / inertia
+        ex = math.exp(-beta * psi)
+        u = (ex * u0 + sd * g * lp / (inertia * (beta * beta + 1.0))
+             * ((beta * math.cos(th) + sd * math.sin(th))
+                - ex * (beta * math.cos(alpha0) + sd * math.sin(alpha0)))
+             + a0 / inertia * math.expm1(-beta * psi) / beta)
+    return u, (sd * g * lp * math.cos(th) - a0 - 2.0 * a2 * u) / inertia
+
+
+@njit
+def roll_turn(u0, alpha0, sd, psi_end, g, lp, inertia, a0, a2):
+    """
+    Return the roll angle in [0, psi_end] at which omega first vanishes, or -1 if it does not.
+
+    Newton's method from psi = 0. While u falls, u is convex in psi (inertia u'' =
+    |g| lp sin(theta) - 2 a2 u' > 0, the CM being above the arm), so the iterates approach the
+    first zero from below and never pass it: an iterate beyond psi_end, or one where u has
+    stopped falling, proves there is no zero before psi_end. From rest (u0 = 0, du > 0) the
+    part rolls away from the top: the gravity torque grows, and where u' would reach zero
+    inertia u'' > 0, so u' stays >= 0: no zero.
+    """
+    psi = 0.0
+    for _ in range(200):
+        u, du = roll_u(psi, u0, alpha0, sd, g, lp, inertia, a0, a2)
+        if du >= 0.0:
+            return -1.0
+        if u <= 0.0:
+            return psi
+        step = -u / du
+        psi += step
+        if psi >= psi_end:
+            return -1.0
+        if step <= 4.0 * EPS * (1.0 + psi):
+            return psi
+    return psi
+
+
+@njit
 def hermite5(q0, v0, a0, q1, v1, a1, h):
     """Coefficients (q0, h v0, h^2 a0 / 2, c3, c4, c5) of the quintic in s = t / h on [0, h]."""
     d = q1 - q0 - h * v0 - 0.5 * h * h * a0
@@ -306,40 +359,65 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         dts = knobs.integrator_step
         root = knobs.contact_root_tol
         ax0, ay0, ao0 = flight_rhs(vx, vy, om, phi, g, rho2, edge, prm)
+        tol = knobs.flight_tol
+        h_fine = H / (GRADE * GRADE * GRADE)
+        h_next = H
         while True:
             steps += 1
             if steps > knobs.max_sim_steps:
                 return ERR_SIM_CAP, -1, x, y, phi, vx, vy, om, t, steps
-            x1, y1, p1, vx1, vy1, om1 = rk8_step(x, y, phi, vx, vy, om, H, ax0, ay0, ao0, g,
-                                                 rho2, edge, prm)
+            h_try = min(H, h_next)
+            x1, y1, p1, vx1, vy1, om1, ax1, ay1, ao1, err = rk8_step(
+                x, y, phi, vx, vy, om, h_try, ax0, ay0, ao0, g, rho2, edge, prm)
             if not (math.isfinite(y1) and math.isfinite(om1) and math.isfinite(x1)):
                 return ERR_NONFINITE, -1, x, y, phi, vx, vy, om, t, steps
-            ax1, ay1, ao1 = flight_rhs(vx1, vy1, om1, p1, g, rho2, edge, prm)
-            cx = hermite5(x, vx, ax0, x1, vx1, ax1, H)
-            cy = hermite5(y, vy, ay0, y1, vy1, ay1, H)
-            cp = hermite5(phi, om, ao0, p1, om1, ao1, H)
-            h_step = H
-            kc = centre_crossing(vx, vy, om, phi, vx1, vy1, om1, p1, bu, bv)
+            cx = hermite5(x, vx, ax0, x1, vx1, ax1, h_try)
+            cy = hermite5(y, vy, ay0, y1, vy1, ay1, h_try)
+            cp = hermite5(phi, om, ao0, p1, om1, ao1, h_try)
+            h_step = h_try
+            # Look for the instantaneous centre crossing an edge's line at CENTRE_SAMPLES points
+            # of the step (it can sweep across the whole part within a step near the apex).
+            kc = -1
+            lo = 0.0
+            hi = 0.0
+            _, _, pa, ua, va, oa = hermite_at(cx, cy, cp, 0.0, h_try)
+            for i in range(1, CENTRE_SAMPLES + 1):
+                hi = h_try * i / CENTRE_SAMPLES
+                _, _, pb, ub, vb_, ob = hermite_at(cx, cy, cp, hi, h_try)
+                kc = centre_crossing(ua, va, oa, pa, ub, vb_, ob, pb, bu, bv)
+                if kc >= 0:
+                    break
+                lo = hi
+                pa, ua, va, oa = pb, ub, vb_, ob
+            passed = False
             if kc >= 0:
-                # The body force may have a kink there (distributed friction): end the step
-                # just past it, so that every step integrates a smooth force.
-                side0 = centre_side(vx, vy, om, phi, bu, bv, kc)
-                lo = 0.0
-                hi = H
+                # The body force may have a kink there (distributed friction): the solution's
+                # higher derivatives blow up on either side. Approach it in steps that shrink
+                # geometrically (GRADE), end a step just past it, and leave it likewise.
+                side0 = centre_side(ua, va, oa, pa, bu, bv, kc)
                 while hi - lo > root:
                     mid = 0.5 * (lo + hi)
-                    _, _, ps, us, vs, os_ = hermite_at(cx, cy, cp, mid, H)
+                    _, _, ps, us, vs, os_ = hermite_at(cx, cy, cp, mid, h_try)
                     if centre_side(us, vs, os_, ps, bu, bv, kc) * side0 > 0.0:
                         lo = mid
                     else:
                         hi = mid
-                h_step = hi
-                x1, y1, p1, vx1, vy1, om1 = rk8_step(x, y, phi, vx, vy, om, h_step, ax0, ay0,
-                                                     ao0, g, rho2, edge, prm)
-                ax1, ay1, ao1 = flight_rhs(vx1, vy1, om1, p1, g, rho2, edge, prm)
+                passed = hi <= h_fine
+                h_step = hi if passed else (1.0 - 1.0 / GRADE) * hi
+                x1, y1, p1, vx1, vy1, om1, ax1, ay1, ao1, err = rk8_step(
+                    x, y, phi, vx, vy, om, h_step, ax0, ay0, ao0, g, rho2, edge, prm)
                 cx = hermite5(x, vx, ax0, x1, vx1, ax1, h_step)
                 cy = hermite5(y, vy, ay0, y1, vy1, ay1, h_step)
                 cp = hermite5(phi, om, ao0, p1, om1, ao1, h_step)
+            if err > tol and h_step > 64.0 * root:
+                # rejected: DOP853's step-size rule (order 8), at least a tenth
+                h_next = h_step * max(0.1, 0.9 * (tol / err) ** 0.125)
+                continue
+            h_next = h_step * (5.0 if err == 0.0 else min(5.0, 0.9 * (tol / err) ** 0.125))
+            if passed:
+                h_next = min(h_next, h_fine)
+            elif kc >= 0:
+                h_next = min(h_next, h_step)
             vb = 1.05 * (max(abs(vy), abs(vy1)) + max(abs(om), abs(om1)) * size) + 1e-12
             tau = 0.0
             hit = -1
@@ -374,13 +452,45 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
                     hit = km
                 else:
                     lo = mid
-            xe, ye, pe, vxe, vye, ome = rk8_step(x, y, phi, vx, vy, om, hi, ax0, ay0, ao0, g,
-                                                 rho2, edge, prm)
+            xe, ye, pe, vxe, vye, ome, _, _, _, _ = rk8_step(x, y, phi, vx, vy, om, hi, ax0, ay0,
+                                                             ao0, g, rho2, edge, prm)
             k2, _ = lowest_approaching(xe, ye, pe, vxe, vye, ome, bu, bv, sep)
             if k2 >= 0:
                 hit = k2
             return OK, hit, xe, ye, pe, vxe, vye, ome, t + hi, steps
         return OK, -1, nan, nan, nan, nan, nan, nan, nan, steps
+
+    @njit(cache=False)
+    def pivot_torque(om, phi, bu_p, bv_p, edge, prm):
+        """Torque about the pivot (bu_p, bv_p) of the body force while rolling about it at om."""
+        c = math.cos(phi)
+        s = math.sin(phi)
+        cx = -(c * bu_p - s * bv_p)
+        cy = -(s * bu_p + c * bv_p)
+        fx, fy, tq = body_force(-om * cy, om * cx, om, phi, edge, prm)
+        return tq + cx * fy - cy * fx
+
+    @njit(cache=False)
+    def roll_torque_fit(phi, bu_p, bv_p, edge, prm):
+        """
+        Return (ok, a0, a2): the body force's torque about a pivot as -sign(om) (a0 + a2 om^2).
+
+        Fitted at om = 1 and 2 rad/s and checked, to 1e-9 of the torque, at om = 0, -1 and 4
+        and half a radian further round: ok is False when the torque has another form (then
+        the roll takes rk4 steps).
+        """
+        t1 = pivot_torque(1.0, phi, bu_p, bv_p, edge, prm)
+        t2 = pivot_torque(2.0, phi, bu_p, bv_p, edge, prm)
+        a2 = (t1 - t2) / 3.0
+        a0 = -t1 - a2
+        t4 = pivot_torque(4.0, phi, bu_p, bv_p, edge, prm)
+        tol = 1e-9 * abs(t4)
+        ok = (abs(pivot_torque(0.0, phi, bu_p, bv_p, edge, prm)) <= tol
+              and abs(t4 + a0 + 16.0 * a2) <= tol
+              and abs(pivot_torque(-1.0, phi, bu_p, bv_p, edge, prm) - a0 - a2) <= tol
+              and abs(pivot_torque(1.0, phi + 0.5, bu_p, bv_p, edge, prm) - t1) <= tol
+              and a0 >= -tol and a2 >= -tol)
+        return ok, max(a0, 0.0), max(a2, 0.0)
 
     @njit(cache=False)
     def bounce_resolved(rx, ry, vx, vy, om, phi, g, rho2, root, scale, edge, prm, unilateral):
@@ -571,6 +681,12 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         # a re-contact within one step is then found by the bisection like any other.
         sep = -1
         sep_rising = False
+        # closed-form rolls (roll_method 'energy', pinned pivot): the torque fit of pivot fit_p
+        roll_energy = knobs.roll_method == ROLL_ENERGY and not unilateral
+        fit_p = -1
+        fit_ok = False
+        a0 = 0.0
+        a2 = 0.0
         # flat state
         j_flat = -1
         out_edge = -1
@@ -680,59 +796,105 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
                                               prm)
                 continue
             if mode == MODE_CONTACT:
-                code, kk = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2,
-                                           law, edge, prm)
-                if code == NO_EVENT:
-                    xp1, p1, v1, o1 = contact_step(xp, phi, vxp, om, rdt, sliding, sigma, bu[p],
-                                                   bv[p], g, rho2, mu, edge, prm)
-                    if not (math.isfinite(p1) and math.isfinite(o1)):
-                        return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec,
-                                x_lo, x_hi)
-                    code, kk = contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, g,
+                if roll_energy and not sliding and fit_p != p:
+                    fit_ok, a0, a2 = roll_torque_fit(phi, bu[p], bv[p], edge, prm)
+                    fit_p = p
+                if roll_energy and not sliding and fit_ok:
+                    # Roll about the pinned pivot p in closed form: on to the next landing, or to
+                    # the turning point (then the hold test, and the next roll from rest).
+                    c = math.cos(phi)
+                    s = math.sin(phi)
+                    cx = -(c * bu[p] - s * bv[p])
+                    cy = -(s * bu[p] + c * bv[p])
+                    alpha = math.atan2(cy, cx)
+                    lp = math.sqrt(bu[p] * bu[p] + bv[p] * bv[p])
+                    inertia = rho2 + lp * lp
+                    if om > 0.0:
+                        sd = 1.0
+                    elif om < 0.0:
+                        sd = -1.0
+                    elif cx > 0.0:
+                        sd = -1.0
+                    elif cx < 0.0:
+                        sd = 1.0
+                    else:
+                        sd = 1.0 if alpha <= acw[p] else -1.0
+                    if om == 0.0 and sd * g * lp * math.cos(alpha) - a0 <= 0.0:
+                        fit_ok = False      # held at rest with no hold rule: rk4 decides
+                        continue
+                    target = acw[p] if sd < 0.0 else accw[p]
+                    psi_end = max(sd * (target - alpha), 0.0)
+                    psi_t = roll_turn(0.5 * om * om, alpha, sd, psi_end, g, lp, inertia, a0, a2)
+                    if psi_t >= 0.0:
+                        phi += sd * psi_t
+                        om = 0.0
+                        vxp = 0.0
+                        held, dphi = static_hold(phi, 0.0, True, size, bu[p], bv[p], g, edge, prm)
+                        if held:
+                            phi += dphi
+                            e_now = -g * contact_to_cm(xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
+                            nrec = _event(rec, nrec, EV_HELD, p, -1, xp, 0.0, 0.0, e_now, e_now)
+                        continue
+                    u_end, _ = roll_u(psi_end, 0.5 * om * om, alpha, sd, g, lp, inertia, a0, a2)
+                    phi += target - alpha
+                    om = sd * math.sqrt(max(2.0 * u_end, 0.0))
+                    vxp = 0.0
+                    code = LANDING
+                    kk = (p + 1) % n if sd < 0.0 else (p - 1) % n
+                else:
+                    code, kk = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g,
                                                rho2, law, edge, prm)
                     if code == NO_EVENT:
-                        turned = om * o1 <= 0.0
-                        xp, phi, vxp, om = xp1, p1, v1, o1
-                        t += rdt
+                        xp1, p1, v1, o1 = contact_step(xp, phi, vxp, om, rdt, sliding, sigma,
+                                                       bu[p], bv[p], g, rho2, mu, edge, prm)
+                        if not (math.isfinite(p1) and math.isfinite(o1)):
+                            return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec,
+                                    x_lo, x_hi)
+                        code, kk = contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, g,
+                                                   rho2, law, edge, prm)
+                        if code == NO_EVENT:
+                            turned = om * o1 <= 0.0
+                            xp, phi, vxp, om = xp1, p1, v1, o1
+                            t += rdt
+                            x_lo = min(x_lo, xp)
+                            x_hi = max(x_hi, xp)
+                            if not sliding:
+                                held, dphi = static_hold(phi, om, turned, size, bu[p], bv[p], g,
+                                                         edge, prm)
+                                if held:
+                                    # The body force holds the part balanced on a corner; the
+                                    # feeder's vibration breaks the tie: turned to the edge of the
+                                    # holding zone on its CM's side, it falls from rest.
+                                    phi += dphi
+                                    e_now = -g * contact_to_cm(xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
+                                    om = 0.0
+                                    nrec = _event(rec, nrec, EV_HELD, p, -1, xp, 0.0, 0.0, e_now,
+                                                  e_now)
+                            continue
+                        lo = 0.0
+                        hi = rdt
+                        while hi - lo > root:
+                            mid = 0.5 * (lo + hi)
+                            xm, pm, vm, omm = contact_step(xp, phi, vxp, om, mid, sliding, sigma,
+                                                           bu[p], bv[p], g, rho2, mu, edge, prm)
+                            cm_, km_ = contact_trigger(xm, pm, vm, omm, sliding, sigma, p, bu,
+                                                       bv, g, rho2, law, edge, prm)
+                            if cm_ != NO_EVENT:
+                                hi = mid
+                                code = cm_
+                                kk = km_
+                            else:
+                                lo = mid
+                        xp, phi, vxp, om = contact_step(xp, phi, vxp, om, hi, sliding, sigma,
+                                                        bu[p], bv[p], g, rho2, mu, edge, prm)
+                        t += hi
                         x_lo = min(x_lo, xp)
                         x_hi = max(x_hi, xp)
-                        if not sliding:
-                            held, dphi = static_hold(phi, om, turned, size, bu[p], bv[p], g,
-                                                     edge, prm)
-                            if held:
-                                # The body force holds the part balanced on a corner; the
-                                # feeder's vibration breaks the tie: turned to the edge of the
-                                # holding zone on its CM's side, it falls from rest.
-                                phi += dphi
-                                e_now = -g * contact_to_cm(xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
-                                om = 0.0
-                                nrec = _event(rec, nrec, EV_HELD, p, -1, xp, 0.0, 0.0, e_now,
-                                              e_now)
-                        continue
-                    lo = 0.0
-                    hi = rdt
-                    while hi - lo > root:
-                        mid = 0.5 * (lo + hi)
-                        xm, pm, vm, omm = contact_step(xp, phi, vxp, om, mid, sliding, sigma,
-                                                       bu[p], bv[p], g, rho2, mu, edge, prm)
-                        cm_, km_ = contact_trigger(xm, pm, vm, omm, sliding, sigma, p, bu, bv,
-                                                   g, rho2, law, edge, prm)
-                        if cm_ != NO_EVENT:
-                            hi = mid
-                            code = cm_
-                            kk = km_
-                        else:
-                            lo = mid
-                    xp, phi, vxp, om = contact_step(xp, phi, vxp, om, hi, sliding, sigma, bu[p],
-                                                    bv[p], g, rho2, mu, edge, prm)
-                    t += hi
-                    x_lo = min(x_lo, xp)
-                    x_hi = max(x_hi, xp)
-                    code2, kk2 = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g,
-                                                 rho2, law, edge, prm)
-                    if code2 != NO_EVENT:
-                        code = code2
-                        kk = kk2
+                        code2, kk2 = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv,
+                                                     g, rho2, law, edge, prm)
+                        if code2 != NO_EVENT:
+                            code = code2
+                            kk = kk2
                 if code == PAINLEVE:
                     return (ERR_PAINLEVE, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
                             x_hi)
