@@ -131,10 +131,12 @@ class SimulatorAccuracy:
     flight_tol : the error allowed per step of flight_method 'rk8' (DOP853's estimate, in m,
         rad, m/s and rad/s alike); steps shrink and grow to meet it.
     roll_method : how the event simulator rolls about a pinned pivot (a hinge: not
-        ``unilateral``): 'rk4' (steps of roll_step, events bisected; the accuracy reference) or
-        'energy' (closed form: the work-energy equation in the roll angle, exact when the body
-        force's torque about the pivot is -sign(omega) (a0 + a2 omega^2), which is checked
-        numerically at the start of every roll; otherwise that roll takes rk4 steps).
+        ``unilateral``): 'energy' (default: closed form, the work-energy equation in the roll
+        angle, exact when the body force's torque about the pivot is -sign(omega) (a0 +
+        a2 omega^2), as the plate's and the air's are; checked numerically for every pivot,
+        otherwise that roll takes rk4 steps) or 'rk4' (steps of roll_step, events bisected;
+        the default before issue 24, kept as the reference). Unilateral contacts (liftoff,
+        impact_restitution's) always take rk4 steps.
     """
 
     contact_method: str = 'advancement'
@@ -146,7 +148,7 @@ class SimulatorAccuracy:
     max_sim_steps: int = 500_000
     flight_method: str = 'rk4'
     flight_step: float = 0.02
-    roll_method: str = 'rk4'
+    roll_method: str = 'energy'
     flight_tol: float = 1e-12
 
     def __post_init__(self):
