@@ -44,6 +44,19 @@ from throwmap.scene import read_yaml, Scene
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 WRONG_EDGE_MM = 10.0      # a throw that ends on the wrong edge counts as a 10 mm error
+# Issue 24's methods: the order-8 flight with error control (and the default closed-form roll).
+RK8_FLIGHT = {'flight_method': 'rk8', 'flight_step': 0.1, 'flight_tol': 1e-9}
+FAST_CONFIGS = [
+    {'integrator_step': 5e-3},
+    {'integrator_step': 2e-3},
+    dict(RK8_FLIGHT, flight_tol=1e-6),
+    RK8_FLIGHT,
+    dict(RK8_FLIGHT, flight_tol=1e-11),
+]
+
+
+def knob_text(v):
+    return v if isinstance(v, str) else format(v, 'g')
 
 
 def load(name, **changes):
@@ -363,15 +376,20 @@ def pareto_plot(rows, path):
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(9, 6))
-    markers = {'base: advancement': 'o', 'base: scan': 's', 'backplate_friction': '^',
-               'impact_restitution': 'v', 'pymunk': 'X'}
-    for group, mk in markers.items():
+    markers = {'base: advancement': ('o', 'C0'), 'base: scan': ('s', 'C1'),
+               'backplate_friction': ('^', 'C2'),
+               'backplate_friction, before issue 24': ('^', 'none'),
+               'air_drag': ('D', 'C4'), 'air_drag, before issue 24': ('D', 'none'),
+               'impact_restitution': ('v', 'C3'), 'pymunk': ('X', 'C7')}
+    for group, (mk, face) in markers.items():
         sel = [r for r in rows if r['group'] == group and math.isfinite(r['us'])]
         if not sel:
             continue
         # mean error per throw (mm), a wrong edge counting 10 mm; floored so exact rows show
         err = [max(r['err'], 1e-12) for r in sel]
-        ax.loglog([r['us'] for r in sel], err, mk, label=group, ms=8, alpha=0.8)
+        edge = 'C2' if 'backplate' in group else 'C4' if 'air' in group else None
+        ax.loglog([r['us'] for r in sel], err, mk, label=group, ms=8, alpha=0.8,
+                  mfc=face if face != 'none' else 'none', mec=edge if face == 'none' else None)
         for r, e in zip(sel, err):
             label = r['config'].split(' (')[0].replace('advancement, ', '').replace(
                 'scan, ', '').replace(' s, iterations=', ' s x')
@@ -379,7 +397,8 @@ def pareto_plot(rows, path):
                         textcoords='offset points')
     ax.set_xlabel('time per throw (us, one core)')
     ax.set_ylabel(f'mean error per throw (mm; wrong edge = {WRONG_EDGE_MM:g} mm; floor 1e-12)')
-    ax.set_title('What accuracy costs: throwmap knobs and effects vs pymunk')
+    ax.set_title('What accuracy costs: throwmap knobs and effects vs pymunk '
+                 '(hollow: defaults before issue 24)')
     ax.grid(True, which='both', alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -470,12 +489,22 @@ def main():
                                                    'contact': {'restitution': 0.0}}),
         ('backplate_friction', {'effects': ['backplate_friction'], 'gravity': None,
                                 'plate': dict(plate, mu=0.1)}),
+        ('backplate_friction, before issue 24 (roll_method rk4)',
+         {'effects': ['backplate_friction'], 'gravity': None, 'plate': dict(plate, mu=0.1),
+          'accuracy': {'roll_method': 'rk4'}}),
+        ('backplate_friction, flight rk8 (flight_tol 1e-9)',
+         {'effects': ['backplate_friction'], 'gravity': None, 'plate': dict(plate, mu=0.1),
+          'accuracy': RK8_FLIGHT}),
         ('backplate_friction at 0 (mu_p 0)', {'effects': ['backplate_friction'],
                                               'gravity': None, 'plate': dict(plate, mu=0.0)}),
         ('air_drag', {'effects': ['air_drag'], 'air': air}),
+        ('air_drag, before issue 24 (roll_method rk4)', {'effects': ['air_drag'], 'air': air,
+                                                          'accuracy': {'roll_method': 'rk4'}}),
         ('air_drag at 0 (C_d 0)', {'effects': ['air_drag'],
                                    'air': dict(air, drag_coefficient=0.0)}),
         ('all seven', all_on),
+        ('all seven, before issue 24 (roll_method rk4)',
+         dict(all_on, accuracy={'roll_method': 'rk4'})),
         ('all seven at 0', all_zero),
     ]
     print('\n### Effects: time per throw at the default knobs (triangle)\n')
@@ -506,7 +535,7 @@ def main():
     # The reference drag is the exact one (plate_quadrature 0, closed form): a quadrature
     # reference would share the quadrature error it is meant to measure.
     exp_ref_knobs = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'plate_quadrature': 0,
-                     'contact_root_tol': 1e-13}
+                     'contact_root_tol': 1e-13, 'roll_method': 'rk4', 'flight_method': 'rk4'}
     exp_states = random_states(tri.model, n_states // 4, seed=1, r_hi=0.28)
     exp_start = (1, 0.12)
     ref_e = reference(load('experiment', accuracy=exp_ref_knobs).model, exp_states, exp_start,
@@ -515,8 +544,17 @@ def main():
                          ref_e, exp_start, orbit_throws, band_throws)]
     s = load('experiment')
     fr_rows.append(evaluate('defaults (' + ', '.join(
-        f'{k}={getattr(s.model.knobs, k):g}' for k in exp_ref_knobs) + ')',
+        f'{k}={knob_text(getattr(s.model.knobs, k))}' for k in exp_ref_knobs) + ')',
         'backplate_friction', s.model, ref_e, exp_states, exp_start, orbit_throws, band_throws))
+    s = load('experiment', accuracy={'roll_method': 'rk4'})
+    fr_rows.append(evaluate('defaults before issue 24 (roll_method=rk4)',
+                            'backplate_friction, before issue 24', s.model, ref_e, exp_states,
+                            exp_start, orbit_throws, band_throws))
+    for knobs in FAST_CONFIGS:
+        s = load('experiment', accuracy=knobs)
+        fr_rows.append(evaluate(', '.join(f'{k}={knob_text(v)}' for k, v in knobs.items()),
+                                'backplate_friction', s.model, ref_e, exp_states, exp_start,
+                                orbit_throws, band_throws))
     # All knobs together, coarse to fine: the operating points a user would pick (the plot).
     presets = [('coarse', {'integrator_step': 5e-3, 'roll_step': 5e-3, 'plate_quadrature': 0}),
                ('fast', {'integrator_step': 2e-3, 'roll_step': 2e-3, 'plate_quadrature': 0}),
@@ -548,12 +586,33 @@ def main():
           'each knob alone from the reference (exact drag, steps 5e-5 s, root 1e-13 s)')
     rows += fr_rows
 
+    # --- air_drag knobs (triangle scene), before and after issue 24
+    air_ref_knobs = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'contact_root_tol': 1e-13,
+                     'roll_method': 'rk4', 'flight_method': 'rk4'}
+    air_scene = {'effects': ['air_drag'], 'air': air}
+    ref_a = reference(load('triangle', accuracy=air_ref_knobs, **air_scene).model, states,
+                      start, orbit_throws, band_throws)
+    ad_rows = [floor_row('air_drag', load('triangle', accuracy=air_ref_knobs,
+                                          **air_scene).model, ref_a, start, orbit_throws,
+                         band_throws)]
+    for label, group, knobs in [('defaults', 'air_drag', {}),
+                                ('defaults before issue 24 (roll_method=rk4)',
+                                 'air_drag, before issue 24', {'roll_method': 'rk4'})] + [
+            (', '.join(f'{k}={knob_text(v)}' for k, v in kn.items()), 'air_drag', kn)
+            for kn in FAST_CONFIGS]:
+        s = load('triangle', accuracy=knobs, **air_scene)
+        ad_rows.append(evaluate(label, group, s.model, ref_a, states, start, orbit_throws,
+                                band_throws))
+    table(ad_rows, 'air_drag (triangle scene, C_d 1.2, 4 cm^2, 20 g): configurations against '
+          'the reference (rk4 steps 5e-5 s, root 1e-13 s)')
+    rows += ad_rows
+
     # --- impact_restitution knobs (rectangle scene)
     rect = load('rectangle')
     rect_states = random_states(rect.model, n_states // 4, seed=2, r_hi=0.25)
     rect_start = rect.default_start()
     rect_ref_knobs = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'contact_root_tol': 1e-13,
-                      'settle_energy': 1e-10}
+                      'settle_energy': 1e-10, 'roll_method': 'rk4', 'flight_method': 'rk4'}
     ref_r = reference(load('rectangle', accuracy=rect_ref_knobs).model,
                       rect_states, rect_start, orbit_throws, band_throws)
     re_rows = [floor_row('impact_restitution', load('rectangle', accuracy=rect_ref_knobs).model,

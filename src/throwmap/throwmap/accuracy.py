@@ -31,13 +31,20 @@ SETTLE_RULES = ('full', 'first_stable')
 CONTACT_METHODS = ('advancement', 'scan')
 METHOD_ADVANCEMENT = 0
 METHOD_SCAN = 1
+FLIGHT_METHODS = ('rk4', 'rk8')
+FLIGHT_RK4 = 0
+FLIGHT_RK8 = 1
+ROLL_METHODS = ('rk4', 'energy')
+ROLL_RK4 = 0
+ROLL_ENERGY = 1
 
 # The knobs as compiled code takes them, and the settle rule (first_stable: the catch ends on
 # the first stable edge that lands, section IV's simplification).
 Knobs = namedtuple('Knobs', ['contact_time_tol', 'flat_landing_tol', 'max_flight_steps',
                              'max_impacts', 'first_stable', 'contact_method',
                              'contact_scan_step', 'contact_root_tol', 'integrator_step',
-                             'roll_step', 'settle_energy', 'max_sim_steps'])
+                             'roll_step', 'settle_energy', 'max_sim_steps', 'flight_method',
+                             'flight_step', 'roll_method', 'flight_tol'])
 
 
 def check_knob(name, value, default):
@@ -114,6 +121,22 @@ class SimulatorAccuracy:
         exact rule holds).
     max_sim_steps : cap on integrator steps per throw in the event simulator: it bounds the work
         of one throw (500000 steps: 500 s simulated at 1 ms steps).
+    flight_method : how the event simulator integrates flight: 'rk4' (fixed RK4 steps of
+        integrator_step, contacts bisected on re-integrated sub-steps; the accuracy reference)
+        or 'rk8' (fixed steps of flight_step with the order-8 Dormand-Prince tableau, contacts
+        looked for on the step's quintic Hermite interpolant no farther apart than
+        integrator_step, or farther where a speed bound proves no vertex can reach the arm,
+        and the contact state integrated exactly from the step's start).
+    flight_step : s, the largest step of flight_method 'rk8'.
+    flight_tol : the error allowed per step of flight_method 'rk8' (DOP853's estimate, in m,
+        rad, m/s and rad/s alike); steps shrink and grow to meet it.
+    roll_method : how the event simulator rolls about a pinned pivot (a hinge: not
+        ``unilateral``): 'energy' (default: closed form, the work-energy equation in the roll
+        angle, exact when the body force's torque about the pivot is -sign(omega) (a0 +
+        a2 omega^2), as the plate's and the air's are; checked numerically for every pivot,
+        otherwise that roll takes rk4 steps) or 'rk4' (steps of roll_step, events bisected;
+        the default before issue 24, kept as the reference). Unilateral contacts (liftoff,
+        impact_restitution's) always take rk4 steps.
     """
 
     contact_method: str = 'advancement'
@@ -123,13 +146,23 @@ class SimulatorAccuracy:
     roll_step: float = 1e-3
     settle_energy: float = 1e-8
     max_sim_steps: int = 500_000
+    flight_method: str = 'rk4'
+    flight_step: float = 0.02
+    roll_method: str = 'energy'
+    flight_tol: float = 1e-12
 
     def __post_init__(self):
         if self.contact_method not in CONTACT_METHODS:
             raise InputError('accuracy.contact_method', f'unknown method {self.contact_method!r}',
                              f'use one of {", ".join(CONTACT_METHODS)}')
+        if self.flight_method not in FLIGHT_METHODS:
+            raise InputError('accuracy.flight_method', f'unknown method {self.flight_method!r}',
+                             f'use one of {", ".join(FLIGHT_METHODS)}')
+        if self.roll_method not in ROLL_METHODS:
+            raise InputError('accuracy.roll_method', f'unknown method {self.roll_method!r}',
+                             f'use one of {", ".join(ROLL_METHODS)}')
         for f in fields(self):
-            if f.name != 'contact_method':
+            if f.name not in ('contact_method', 'flight_method', 'roll_method'):
                 check_knob(f.name, getattr(self, f.name), f.default)
 
 
@@ -146,4 +179,6 @@ def compiled_knobs(accuracy, simulator=None, settle_rule='full'):
                  METHOD_SCAN if sim.contact_method == 'scan' else METHOD_ADVANCEMENT,
                  float(sim.contact_scan_step), float(sim.contact_root_tol),
                  float(sim.integrator_step), float(sim.roll_step), float(sim.settle_energy),
-                 int(sim.max_sim_steps))
+                 int(sim.max_sim_steps), FLIGHT_METHODS.index(sim.flight_method),
+                 float(sim.flight_step), ROLL_METHODS.index(sim.roll_method),
+                 float(sim.flight_tol))

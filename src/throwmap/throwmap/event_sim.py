@@ -35,7 +35,13 @@ Phases (per unit mass, frame F, heights over the arm surface):
 * FLIGHT: gravity plus the body force, integrated with fixed-step RK4 (``integrator_step``).
   Contact is looked for at the end of every step: a vertex at or below the arm and moving down.
   The crossing is refined by bisection on re-integrated sub-steps to ``contact_root_tol``. A
-  graze shorter than a step is missed; the accuracy benchmark shows how often.
+  graze shorter than a step is missed; the accuracy benchmark shows how often. With
+  ``flight_method`` 'rk8' the flight takes order-8 steps of ``flight_step`` instead; contacts
+  are looked for on each step's quintic Hermite interpolant (positions, velocities and
+  accelerations at both ends) at points no farther apart than ``integrator_step`` (farther
+  where a bound on the vertices' downward speed proves the arm out of reach), bisected there,
+  and the state at the crossing is integrated from the step's start in one order-8 sub-step
+  (:func:`build`'s ``flight_to_contact``).
 * IMPACT at one vertex: the impact hook. A vertex that stays on the arm has its normal velocity
   removed (a further normal impulse, which only dissipates); a pinned pivot (not
   ``unilateral``) is then caught by a sticking impulse. A pinned pivot also holds a vertex that
@@ -56,8 +62,10 @@ Phases (per unit mass, frame F, heights over the arm surface):
 from collections import namedtuple
 import math
 
+from .accuracy import FLIGHT_RK8, ROLL_ENERGY
 from .catch import flat_landing_edge, record, stays_on_edge, sticking_impact, tip_pivot
 from .jit import njit
+from .rk8 import make_step
 from .status import (ERR_NONFINITE, ERR_PAINLEVE, ERR_SETTLE_CAP, ERR_SIM_CAP, EV_BOUNCE,
                      EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_HELD, EV_LANDING, EV_LIFTOFF,
                      EV_SETTLE_SNAP, EV_TIP_FROM_REST, OK)
@@ -68,6 +76,8 @@ ContactLaw = namedtuple('ContactLaw', ['mu', 'unilateral', 'sticking'])
 STICKING_CONTACT = ContactLaw(math.inf, False, True)
 
 EPS = 2.220446049250313e-16
+GRADE = 4.0     # flight_method rk8: step ratio of the graded steps about a kink of the force
+CENTRE_SAMPLES = 8  # flight_method rk8: points per step at which centre crossings are looked for
 MODE_FLIGHT = 0
 MODE_CONTACT = 1
 MODE_FLAT = 2
@@ -176,6 +186,116 @@ def contact_to_cm(xp, phi, vxp, om, bu_p, bv_p):
 
 
 @njit
+def centre_side(vx, vy, om, phi, bu, bv, k):
+    """
+    Return om times the side of edge k's line (k to k + 1) on which the instantaneous centre lies.
+
+    The centre of the velocity field is z x v / om from the CM; in the body frame of the start
+    edge (where bu, bv are) this is om-free once multiplied by om, so the value is smooth in the
+    state and changes sign where the centre crosses the line (or om changes sign). Distributed
+    friction-like forces (the plate's drag) are not smooth there.
+    """
+    c = math.cos(phi)
+    s = math.sin(phi)
+    bx = c * vx + s * vy
+    by = -s * vx + c * vy
+    kn = (k + 1) % bu.shape[0]
+    ex = bu[kn] - bu[k]
+    ey = bv[kn] - bv[k]
+    return ex * (bx - om * bv[k]) - ey * (-by - om * bu[k])
+
+
+@njit
+def centre_crossing(vx0, vy0, om0, p0, vx1, vy1, om1, p1, bu, bv):
+    """Return an edge whose line the instantaneous centre crosses between two states, or -1."""
+    for k in range(bu.shape[0]):
+        a = centre_side(vx0, vy0, om0, p0, bu, bv, k)
+        b = centre_side(vx1, vy1, om1, p1, bu, bv, k)
+        if (a > 0.0 and b <= 0.0) or (a < 0.0 and b >= 0.0):
+            return k
+    return -1
+
+
+@njit
+def roll_u(psi, u0, alpha0, sd, g, lp, inertia, a0, a2):
+    """
+    Return u = omega^2 / 2 and du/dpsi after a roll by psi >= 0 about a pinned pivot.
+
+    The CM is at angle alpha0 from the arm, seen from the pivot at distance lp; sd the sense
+    of the roll (the sign of omega); inertia = rho^2 + lp^2; the body force's torque about the
+    pivot is -sd (a0 + a2 omega^2). The work-energy equation in the angle,
+    inertia du/dpsi = sd g lp cos(alpha0 + sd psi) - a0 - 2 a2 u, is linear in u: closed form.
+    """
+    th = alpha0 + sd * psi
+    if a2 == 0.0:
+        u = u0 + g * lp * (math.sin(th) - math.sin(alpha0)) / inertia - a0 * psi / inertia
+    else:
+        beta = 2.0 * a2 / inertia
+        ex = math.exp(-beta * psi)
+        u = (ex * u0 + sd * g * lp / (inertia * (beta * beta + 1.0))
+             * ((beta * math.cos(th) + sd * math.sin(th))
+                - ex * (beta * math.cos(alpha0) + sd * math.sin(alpha0)))
+             + a0 / inertia * math.expm1(-beta * psi) / beta)
+    return u, (sd * g * lp * math.cos(th) - a0 - 2.0 * a2 * u) / inertia
+
+
+@njit
+def roll_turn(u0, alpha0, sd, psi_end, g, lp, inertia, a0, a2):
+    """
+    Return the roll angle in [0, psi_end] at which omega first vanishes, or -1 if it does not.
+
+    Newton's method from psi = 0. While u falls, u is convex in psi (inertia u'' =
+    |g| lp sin(theta) - 2 a2 u' > 0, the CM being above the arm), so the iterates approach the
+    first zero from below and never pass it: an iterate beyond psi_end, or one where u has
+    stopped falling, proves there is no zero before psi_end. From rest (u0 = 0, du > 0) the
+    part rolls away from the top: the gravity torque grows, and where u' would reach zero
+    inertia u'' > 0, so u' stays >= 0: no zero.
+    """
+    psi = 0.0
+    for _ in range(200):
+        u, du = roll_u(psi, u0, alpha0, sd, g, lp, inertia, a0, a2)
+        if du >= 0.0:
+            return -1.0
+        if u <= 0.0:
+            return psi
+        step = -u / du
+        psi += step
+        if psi >= psi_end:
+            return -1.0
+        if step <= 4.0 * EPS * (1.0 + psi):
+            return psi
+    return psi
+
+
+@njit
+def hermite5(q0, v0, a0, q1, v1, a1, h):
+    """Coefficients (q0, h v0, h^2 a0 / 2, c3, c4, c5) of the quintic in s = t / h on [0, h]."""
+    d = q1 - q0 - h * v0 - 0.5 * h * h * a0
+    e = h * (v1 - v0 - h * a0)
+    f = h * h * (a1 - a0)
+    return (q0, h * v0, 0.5 * h * h * a0, 10.0 * d - 4.0 * e + 0.5 * f,
+            -15.0 * d + 7.0 * e - f, 6.0 * d - 3.0 * e + 0.5 * f)
+
+
+@njit
+def _quintic(c, s):
+    """Value and d/ds of the quintic with coefficients c at s."""
+    q = c[0] + s * (c[1] + s * (c[2] + s * (c[3] + s * (c[4] + s * c[5]))))
+    dq = c[1] + s * (2.0 * c[2] + s * (3.0 * c[3] + s * (4.0 * c[4] + s * 5.0 * c[5])))
+    return q, dq
+
+
+@njit
+def hermite_at(cx, cy, cp, tau, h):
+    """State (x, y, phi, vx, vy, om) of the interpolants cx, cy, cp at time tau of [0, h]."""
+    s = tau / h
+    x, dx = _quintic(cx, s)
+    y, dy = _quintic(cy, s)
+    p, dp = _quintic(cp, s)
+    return x, y, p, dx / h, dy / h, dp / h
+
+
+@njit
 def _event(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1):
     nan = math.nan
     return record(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1, nan, nan, nan, nan, nan)
@@ -217,6 +337,160 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         vy_new = vy + dt * (b1 + 2.0 * b2 + 2.0 * b3 + b4) / 6.0
         om_new = om + dt * (c1 + 2.0 * c2 + 2.0 * c3 + c4) / 6.0
         return x_new, y_new, p_new, vx_new, vy_new, om_new
+
+    rk8_step = make_step(flight_rhs)
+
+    @njit(cache=False)
+    def flight_to_contact(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size,
+                          edge, prm, knobs, steps):
+        """
+        Fly with order-8 steps until a vertex meets the arm moving down (flight_method 'rk8').
+
+        Returns (status, vertex, x, y, phi, vx, vy, om, t, steps) at the crossing. Each step's
+        state in between is the quintic Hermite interpolant of its ends (error O(step^6) of the
+        body force's smooth part: only used to find the crossing). Samples are at most
+        integrator_step apart, farther only where the lowest vertex (but the one that just
+        left) is higher than a bound on every vertex's downward speed over the step times the
+        gap. The crossing is bisected on the interpolant to contact_root_tol and its state is
+        then integrated from the step's start in one order-8 sub-step.
+        """
+        nan = math.nan
+        H = knobs.flight_step
+        dts = knobs.integrator_step
+        root = knobs.contact_root_tol
+        ax0, ay0, ao0 = flight_rhs(vx, vy, om, phi, g, rho2, edge, prm)
+        tol = knobs.flight_tol
+        h_fine = H / (GRADE * GRADE * GRADE)
+        h_next = H
+        while True:
+            steps += 1
+            if steps > knobs.max_sim_steps:
+                return ERR_SIM_CAP, -1, x, y, phi, vx, vy, om, t, steps
+            h_try = min(H, h_next)
+            x1, y1, p1, vx1, vy1, om1, ax1, ay1, ao1, err = rk8_step(
+                x, y, phi, vx, vy, om, h_try, ax0, ay0, ao0, g, rho2, edge, prm)
+            if not (math.isfinite(y1) and math.isfinite(om1) and math.isfinite(x1)):
+                return ERR_NONFINITE, -1, x, y, phi, vx, vy, om, t, steps
+            cx = hermite5(x, vx, ax0, x1, vx1, ax1, h_try)
+            cy = hermite5(y, vy, ay0, y1, vy1, ay1, h_try)
+            cp = hermite5(phi, om, ao0, p1, om1, ao1, h_try)
+            h_step = h_try
+            # Look for the instantaneous centre crossing an edge's line at CENTRE_SAMPLES points
+            # of the step (it can sweep across the whole part within a step near the apex).
+            kc = -1
+            lo = 0.0
+            hi = 0.0
+            _, _, pa, ua, va, oa = hermite_at(cx, cy, cp, 0.0, h_try)
+            for i in range(1, CENTRE_SAMPLES + 1):
+                hi = h_try * i / CENTRE_SAMPLES
+                _, _, pb, ub, vb_, ob = hermite_at(cx, cy, cp, hi, h_try)
+                kc = centre_crossing(ua, va, oa, pa, ub, vb_, ob, pb, bu, bv)
+                if kc >= 0:
+                    break
+                lo = hi
+                pa, ua, va, oa = pb, ub, vb_, ob
+            passed = False
+            if kc >= 0:
+                # The body force may have a kink there (distributed friction): the solution's
+                # higher derivatives blow up on either side. Approach it in steps that shrink
+                # geometrically (GRADE), end a step just past it, and leave it likewise.
+                side0 = centre_side(ua, va, oa, pa, bu, bv, kc)
+                while hi - lo > root:
+                    mid = 0.5 * (lo + hi)
+                    _, _, ps, us, vs, os_ = hermite_at(cx, cy, cp, mid, h_try)
+                    if centre_side(us, vs, os_, ps, bu, bv, kc) * side0 > 0.0:
+                        lo = mid
+                    else:
+                        hi = mid
+                passed = hi <= h_fine
+                h_step = hi if passed else (1.0 - 1.0 / GRADE) * hi
+                x1, y1, p1, vx1, vy1, om1, ax1, ay1, ao1, err = rk8_step(
+                    x, y, phi, vx, vy, om, h_step, ax0, ay0, ao0, g, rho2, edge, prm)
+                cx = hermite5(x, vx, ax0, x1, vx1, ax1, h_step)
+                cy = hermite5(y, vy, ay0, y1, vy1, ay1, h_step)
+                cp = hermite5(phi, om, ao0, p1, om1, ao1, h_step)
+            if err > tol and h_step > 64.0 * root:
+                # rejected: DOP853's step-size rule (order 8), at least a tenth
+                h_next = h_step * max(0.1, 0.9 * (tol / err) ** 0.125)
+                continue
+            h_next = h_step * (5.0 if err == 0.0 else min(5.0, 0.9 * (tol / err) ** 0.125))
+            if passed:
+                h_next = min(h_next, h_fine)
+            elif kc >= 0:
+                h_next = min(h_next, h_step)
+            vb = 1.05 * (max(abs(vy), abs(vy1)) + max(abs(om), abs(om1)) * size) + 1e-12
+            tau = 0.0
+            hit = -1
+            lo = 0.0
+            while tau < h_step:
+                xs, ys, ps, us, vs, os_ = hermite_at(cx, cy, cp, tau, h_step)
+                _, low = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+                gap = low / vb if low > 0.0 else 0.0
+                lo = tau
+                tau = min(h_step, tau + max(gap, dts))
+                xs, ys, ps, us, vs, os_ = hermite_at(cx, cy, cp, tau, h_step)
+                if sep >= 0:
+                    h1, un1 = vertex_normal(ys, ps, vs, os_, bu[sep], bv[sep])
+                    if h1 > 0.0 or (sep_rising and un1 < 0.0):
+                        sep = -1
+                k, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+                if k >= 0:
+                    hit = k
+                    break
+            if hit < 0:
+                x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
+                ax0, ay0, ao0 = ax1, ay1, ao1
+                t += h_step
+                continue
+            hi = tau
+            while hi - lo > root:
+                mid = 0.5 * (lo + hi)
+                xs, ys, ps, us, vs, os_ = hermite_at(cx, cy, cp, mid, h_step)
+                km, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+                if km >= 0:
+                    hi = mid
+                    hit = km
+                else:
+                    lo = mid
+            xe, ye, pe, vxe, vye, ome, _, _, _, _ = rk8_step(x, y, phi, vx, vy, om, hi, ax0, ay0,
+                                                             ao0, g, rho2, edge, prm)
+            k2, _ = lowest_approaching(xe, ye, pe, vxe, vye, ome, bu, bv, sep)
+            if k2 >= 0:
+                hit = k2
+            return OK, hit, xe, ye, pe, vxe, vye, ome, t + hi, steps
+        return OK, -1, nan, nan, nan, nan, nan, nan, nan, steps
+
+    @njit(cache=False)
+    def pivot_torque(om, phi, bu_p, bv_p, edge, prm):
+        """Torque about the pivot (bu_p, bv_p) of the body force while rolling about it at om."""
+        c = math.cos(phi)
+        s = math.sin(phi)
+        cx = -(c * bu_p - s * bv_p)
+        cy = -(s * bu_p + c * bv_p)
+        fx, fy, tq = body_force(-om * cy, om * cx, om, phi, edge, prm)
+        return tq + cx * fy - cy * fx
+
+    @njit(cache=False)
+    def roll_torque_fit(phi, bu_p, bv_p, edge, prm):
+        """
+        Return (ok, a0, a2): the body force's torque about a pivot as -sign(om) (a0 + a2 om^2).
+
+        Fitted at om = 1 and 2 rad/s and checked, to 1e-9 of the torque, at om = 0, -1 and 4
+        and half a radian further round: ok is False when the torque has another form (then
+        the roll takes rk4 steps).
+        """
+        t1 = pivot_torque(1.0, phi, bu_p, bv_p, edge, prm)
+        t2 = pivot_torque(2.0, phi, bu_p, bv_p, edge, prm)
+        a2 = (t1 - t2) / 3.0
+        a0 = -t1 - a2
+        t4 = pivot_torque(4.0, phi, bu_p, bv_p, edge, prm)
+        tol = 1e-9 * abs(t4)
+        ok = (abs(pivot_torque(0.0, phi, bu_p, bv_p, edge, prm)) <= tol
+              and abs(t4 + a0 + 16.0 * a2) <= tol
+              and abs(pivot_torque(-1.0, phi, bu_p, bv_p, edge, prm) - a0 - a2) <= tol
+              and abs(pivot_torque(1.0, phi + 0.5, bu_p, bv_p, edge, prm) - t1) <= tol
+              and a0 >= -tol and a2 >= -tol)
+        return ok, max(a0, 0.0), max(a2, 0.0)
 
     @njit(cache=False)
     def bounce_resolved(rx, ry, vx, vy, om, phi, g, rho2, root, scale, edge, prm, unilateral):
@@ -407,6 +681,12 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         # a re-contact within one step is then found by the bisection like any other.
         sep = -1
         sep_rising = False
+        # closed-form rolls (roll_method 'energy', pinned pivot): the torque fit of pivot fit_p
+        roll_energy = knobs.roll_method == ROLL_ENERGY and not unilateral
+        fit_p = -1
+        fit_ok = False
+        a0 = 0.0
+        a2 = 0.0
         # flat state
         j_flat = -1
         out_edge = -1
@@ -418,38 +698,45 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
             if impacts > max_imp:
                 return ERR_SETTLE_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
             if mode == MODE_FLIGHT:
-                x1, y1, p1, vx1, vy1, om1 = flight_step(x, y, phi, vx, vy, om, dt, g, rho2,
-                                                        edge, prm)
-                if not (math.isfinite(y1) and math.isfinite(om1)):
-                    return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
-                            x_hi)
-                if sep >= 0:
-                    h1, un1 = vertex_normal(y1, p1, vy1, om1, bu[sep], bv[sep])
-                    if h1 > 0.0 or (sep_rising and un1 < 0.0):
-                        sep = -1
-                k, _ = lowest_approaching(x1, y1, p1, vx1, vy1, om1, bu, bv, sep)
-                if k < 0:
-                    x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
-                    t += dt
-                    continue
-                lo = 0.0
-                hi = dt
-                while hi - lo > root:
-                    mid = 0.5 * (lo + hi)
-                    xm, ym, pm, vxm, vym, omm = flight_step(x, y, phi, vx, vy, om, mid, g, rho2,
+                if knobs.flight_method == FLIGHT_RK8:
+                    code, k, x, y, phi, vx, vy, om, t, steps = flight_to_contact(
+                        x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge,
+                        prm, knobs, steps)
+                    if code != OK:
+                        return code, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
+                else:
+                    x1, y1, p1, vx1, vy1, om1 = flight_step(x, y, phi, vx, vy, om, dt, g, rho2,
                                                             edge, prm)
-                    km, _ = lowest_approaching(xm, ym, pm, vxm, vym, omm, bu, bv, sep)
-                    if km >= 0:
-                        hi = mid
-                        k = km
-                    else:
-                        lo = mid
-                x, y, phi, vx, vy, om = flight_step(x, y, phi, vx, vy, om, hi, g, rho2, edge,
-                                                    prm)
-                t += hi
-                k2, _ = lowest_approaching(x, y, phi, vx, vy, om, bu, bv, sep)
-                if k2 >= 0:
-                    k = k2
+                    if not (math.isfinite(y1) and math.isfinite(om1)):
+                        return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec,
+                                x_lo, x_hi)
+                    if sep >= 0:
+                        h1, un1 = vertex_normal(y1, p1, vy1, om1, bu[sep], bv[sep])
+                        if h1 > 0.0 or (sep_rising and un1 < 0.0):
+                            sep = -1
+                    k, _ = lowest_approaching(x1, y1, p1, vx1, vy1, om1, bu, bv, sep)
+                    if k < 0:
+                        x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
+                        t += dt
+                        continue
+                    lo = 0.0
+                    hi = dt
+                    while hi - lo > root:
+                        mid = 0.5 * (lo + hi)
+                        xm, ym, pm, vxm, vym, omm = flight_step(x, y, phi, vx, vy, om, mid, g,
+                                                                rho2, edge, prm)
+                        km, _ = lowest_approaching(xm, ym, pm, vxm, vym, omm, bu, bv, sep)
+                        if km >= 0:
+                            hi = mid
+                            k = km
+                        else:
+                            lo = mid
+                    x, y, phi, vx, vy, om = flight_step(x, y, phi, vx, vy, om, hi, g, rho2,
+                                                        edge, prm)
+                    t += hi
+                    k2, _ = lowest_approaching(x, y, phi, vx, vy, om, bu, bv, sep)
+                    if k2 >= 0:
+                        k = k2
                 sep = -1
                 c = math.cos(phi)
                 s = math.sin(phi)
@@ -509,59 +796,105 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
                                               prm)
                 continue
             if mode == MODE_CONTACT:
-                code, kk = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2,
-                                           law, edge, prm)
-                if code == NO_EVENT:
-                    xp1, p1, v1, o1 = contact_step(xp, phi, vxp, om, rdt, sliding, sigma, bu[p],
-                                                   bv[p], g, rho2, mu, edge, prm)
-                    if not (math.isfinite(p1) and math.isfinite(o1)):
-                        return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec,
-                                x_lo, x_hi)
-                    code, kk = contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, g,
+                if roll_energy and not sliding and fit_p != p:
+                    fit_ok, a0, a2 = roll_torque_fit(phi, bu[p], bv[p], edge, prm)
+                    fit_p = p
+                if roll_energy and not sliding and fit_ok:
+                    # Roll about the pinned pivot p in closed form: on to the next landing, or to
+                    # the turning point (then the hold test, and the next roll from rest).
+                    c = math.cos(phi)
+                    s = math.sin(phi)
+                    cx = -(c * bu[p] - s * bv[p])
+                    cy = -(s * bu[p] + c * bv[p])
+                    alpha = math.atan2(cy, cx)
+                    lp = math.sqrt(bu[p] * bu[p] + bv[p] * bv[p])
+                    inertia = rho2 + lp * lp
+                    if om > 0.0:
+                        sd = 1.0
+                    elif om < 0.0:
+                        sd = -1.0
+                    elif cx > 0.0:
+                        sd = -1.0
+                    elif cx < 0.0:
+                        sd = 1.0
+                    else:
+                        sd = 1.0 if alpha <= acw[p] else -1.0
+                    if om == 0.0 and sd * g * lp * math.cos(alpha) - a0 <= 0.0:
+                        fit_ok = False      # held at rest with no hold rule: rk4 decides
+                        continue
+                    target = acw[p] if sd < 0.0 else accw[p]
+                    psi_end = max(sd * (target - alpha), 0.0)
+                    psi_t = roll_turn(0.5 * om * om, alpha, sd, psi_end, g, lp, inertia, a0, a2)
+                    if psi_t >= 0.0:
+                        phi += sd * psi_t
+                        om = 0.0
+                        vxp = 0.0
+                        held, dphi = static_hold(phi, 0.0, True, size, bu[p], bv[p], g, edge, prm)
+                        if held:
+                            phi += dphi
+                            e_now = -g * contact_to_cm(xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
+                            nrec = _event(rec, nrec, EV_HELD, p, -1, xp, 0.0, 0.0, e_now, e_now)
+                        continue
+                    u_end, _ = roll_u(psi_end, 0.5 * om * om, alpha, sd, g, lp, inertia, a0, a2)
+                    phi += target - alpha
+                    om = sd * math.sqrt(max(2.0 * u_end, 0.0))
+                    vxp = 0.0
+                    code = LANDING
+                    kk = (p + 1) % n if sd < 0.0 else (p - 1) % n
+                else:
+                    code, kk = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g,
                                                rho2, law, edge, prm)
                     if code == NO_EVENT:
-                        turned = om * o1 <= 0.0
-                        xp, phi, vxp, om = xp1, p1, v1, o1
-                        t += rdt
+                        xp1, p1, v1, o1 = contact_step(xp, phi, vxp, om, rdt, sliding, sigma,
+                                                       bu[p], bv[p], g, rho2, mu, edge, prm)
+                        if not (math.isfinite(p1) and math.isfinite(o1)):
+                            return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec,
+                                    x_lo, x_hi)
+                        code, kk = contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, g,
+                                                   rho2, law, edge, prm)
+                        if code == NO_EVENT:
+                            turned = om * o1 <= 0.0
+                            xp, phi, vxp, om = xp1, p1, v1, o1
+                            t += rdt
+                            x_lo = min(x_lo, xp)
+                            x_hi = max(x_hi, xp)
+                            if not sliding:
+                                held, dphi = static_hold(phi, om, turned, size, bu[p], bv[p], g,
+                                                         edge, prm)
+                                if held:
+                                    # The body force holds the part balanced on a corner; the
+                                    # feeder's vibration breaks the tie: turned to the edge of the
+                                    # holding zone on its CM's side, it falls from rest.
+                                    phi += dphi
+                                    e_now = -g * contact_to_cm(xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
+                                    om = 0.0
+                                    nrec = _event(rec, nrec, EV_HELD, p, -1, xp, 0.0, 0.0, e_now,
+                                                  e_now)
+                            continue
+                        lo = 0.0
+                        hi = rdt
+                        while hi - lo > root:
+                            mid = 0.5 * (lo + hi)
+                            xm, pm, vm, omm = contact_step(xp, phi, vxp, om, mid, sliding, sigma,
+                                                           bu[p], bv[p], g, rho2, mu, edge, prm)
+                            cm_, km_ = contact_trigger(xm, pm, vm, omm, sliding, sigma, p, bu,
+                                                       bv, g, rho2, law, edge, prm)
+                            if cm_ != NO_EVENT:
+                                hi = mid
+                                code = cm_
+                                kk = km_
+                            else:
+                                lo = mid
+                        xp, phi, vxp, om = contact_step(xp, phi, vxp, om, hi, sliding, sigma,
+                                                        bu[p], bv[p], g, rho2, mu, edge, prm)
+                        t += hi
                         x_lo = min(x_lo, xp)
                         x_hi = max(x_hi, xp)
-                        if not sliding:
-                            held, dphi = static_hold(phi, om, turned, size, bu[p], bv[p], g,
-                                                     edge, prm)
-                            if held:
-                                # The body force holds the part balanced on a corner; the
-                                # feeder's vibration breaks the tie: turned to the edge of the
-                                # holding zone on its CM's side, it falls from rest.
-                                phi += dphi
-                                e_now = -g * contact_to_cm(xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
-                                om = 0.0
-                                nrec = _event(rec, nrec, EV_HELD, p, -1, xp, 0.0, 0.0, e_now,
-                                              e_now)
-                        continue
-                    lo = 0.0
-                    hi = rdt
-                    while hi - lo > root:
-                        mid = 0.5 * (lo + hi)
-                        xm, pm, vm, omm = contact_step(xp, phi, vxp, om, mid, sliding, sigma,
-                                                       bu[p], bv[p], g, rho2, mu, edge, prm)
-                        cm_, km_ = contact_trigger(xm, pm, vm, omm, sliding, sigma, p, bu, bv,
-                                                   g, rho2, law, edge, prm)
-                        if cm_ != NO_EVENT:
-                            hi = mid
-                            code = cm_
-                            kk = km_
-                        else:
-                            lo = mid
-                    xp, phi, vxp, om = contact_step(xp, phi, vxp, om, hi, sliding, sigma, bu[p],
-                                                    bv[p], g, rho2, mu, edge, prm)
-                    t += hi
-                    x_lo = min(x_lo, xp)
-                    x_hi = max(x_hi, xp)
-                    code2, kk2 = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g,
-                                                 rho2, law, edge, prm)
-                    if code2 != NO_EVENT:
-                        code = code2
-                        kk = kk2
+                        code2, kk2 = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv,
+                                                     g, rho2, law, edge, prm)
+                        if code2 != NO_EVENT:
+                            code = code2
+                            kk = kk2
                 if code == PAINLEVE:
                     return (ERR_PAINLEVE, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
                             x_hi)
