@@ -52,6 +52,19 @@ def cycle_until_ready(ros, ready, limit_s=120.0):
     enable(ros, False)
 
 
+def kill_when_ready_and_time_the_drop(ros, ready, driver):
+    """Get a ready that holds, SIGKILL ``driver``; the ready must drop within 2 s, as such."""
+    cycle_until_ready(ros, ready)
+    ros.spin_until(lambda: ready.checked[-1].ready_now, 10.0, 'a ready that holds')
+    n = len(ready)
+    t0 = time.monotonic()
+    driver.kill()
+    driver.wait()
+    ros.spin_until(lambda: any(not c.ready for c in ready.checked[n:]), 5.0, 'the drop')
+    assert time.monotonic() - t0 < 2.0, 'a killed driver took more than 2 s to be known'
+    assert 'not alive' in next(c for c in ready.checked[n:] if not c.ready).anomaly
+
+
 def start_driver_on_emulator(graph, tmp_path, cycle_time):
     link = tmp_path / 'feeder-tty'
     emu = graph.start('feeder_driver', 'controller_emulator', '--scene', TRIANGLE,
@@ -120,15 +133,7 @@ def test_attack_8_a_killed_driver_is_known_within_2_s_and_a_restart_trusted_at_o
     wait_for_monitor(ros, ready)
     verdicts.wait_matched()
     wait_for_readers(ros, '/feeder/cycle_status', 1)     # the monitor's
-    cycle_until_ready(ros, ready)
-    ros.spin_until(lambda: ready.checked[-1].ready_now, 10.0, 'a ready that holds')
-    n = len(ready)
-    t0 = time.monotonic()
-    sim.kill()
-    sim.wait()
-    ros.spin_until(lambda: any(not c.ready for c in ready.checked[n:]), 5.0, 'the drop')
-    assert time.monotonic() - t0 < 2.0, 'a killed driver took more than 2 s to be known'
-    assert 'not alive' in next(c for c in ready.checked[n:] if not c.ready).anomaly
+    kill_when_ready_and_time_the_drop(ros, ready, sim)
     # A new driver run: its reports are judged from the first one (no distrust period).
     m = len(verdicts)
     sim_as_hardware(graph, f'cycle_period:={PERIOD}')
@@ -165,15 +170,7 @@ def test_attack_8_another_live_writer_does_not_hide_a_dead_driver(graph, ros):
                                        qos.CYCLE_STATUS)
     ros.spin_until(lambda: forger.get_subscription_count() >= 1, STARTUP_TIMEOUT,
                    "the monitor's reader to match the forger's writer")
-    cycle_until_ready(ros, ready)
-    ros.spin_until(lambda: ready.checked[-1].ready_now, 10.0, 'a ready that holds')
-    n = len(ready)
-    t0 = time.monotonic()
-    sim.kill()
-    sim.wait()
-    ros.spin_until(lambda: any(not c.ready for c in ready.checked[n:]), 5.0, 'the drop')
-    assert time.monotonic() - t0 < 2.0, 'a killed driver hidden by a live writer'
-    assert 'not alive' in next(c for c in ready.checked[n:] if not c.ready).anomaly
+    kill_when_ready_and_time_the_drop(ros, ready, sim)
     ros.node.destroy_publisher(forger)
 
 

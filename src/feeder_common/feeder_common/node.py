@@ -171,6 +171,26 @@ def _nothing():
 FLUSH_TIMEOUT_S = 0.5
 
 
+class RateTimer:
+    """A node's timer at a rate that can change at run time (rate 0: no timer)."""
+
+    def __init__(self, node, callback):
+        self._node = node
+        self._callback = callback
+        self._timer = None
+
+    def start(self, rate_hz):
+        """(Re)start at ``rate_hz`` calls per second; 0 stops it."""
+        self.stop()
+        if rate_hz > 0:
+            self._timer = self._node.create_timer(1.0 / rate_hz, self._callback)
+
+    def stop(self):
+        if self._timer is not None:
+            self._node.destroy_timer(self._timer)
+            self._timer = None
+
+
 def flush(publisher, timeout=FLUSH_TIMEOUT_S):
     """
     Wait until every reliable reader acknowledged ``publisher``'s messages (at most ``timeout``).

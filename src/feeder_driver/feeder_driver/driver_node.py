@@ -33,7 +33,7 @@ from feeder_common import auth, qos
 from feeder_common.arm import ArmMotion
 from feeder_common.diagnostics import Updater
 from feeder_common.messages import CycleSigner, joint_state, proximity
-from feeder_common.node import (clock_note, FeederLifecycleNode, flush, run_node,
+from feeder_common.node import (clock_note, FeederLifecycleNode, flush, RateTimer, run_node,
                                 StartupError)
 from feeder_common.parameters import ParameterGate
 from rclpy.lifecycle import TransitionCallbackReturn
@@ -56,11 +56,12 @@ class DriverNode(FeederLifecycleNode):
     def __init__(self, node_name='feeder_driver', **kwargs):
         # Set before Node.__init__: a context shutdown may destroy a half-built node.
         self.core = self.link = self.diagnostics = None
-        self._tick_timer = self._joint_timer = None
+        self._tick_timer = None
         self._pub_prox = self._pub_status = self._pub_joint = self._pub_fired = None
         # The arm between cycle events, for joint_states at joint_states_rate.
         self._motion = ArmMotion()
         super().__init__(node_name, **kwargs)
+        self._joint_timer = RateTimer(self, self._joint_tick)
         self._params = ParameterGate(self, params.SPECS, params.validate,
                                      self._apply_parameters)
         self._params.declare_all()
@@ -106,7 +107,7 @@ class DriverNode(FeederLifecycleNode):
             self.destroy_timer(self._tick_timer)
             self._tick_timer = self.create_timer(self._tick_period(), self._tick)
         if 'joint_states_rate' in changed and self._pub_joint is not None:
-            self._start_joint_timer()
+            self._joint_timer.start(self._p['joint_states_rate'])
 
     def _tick_period(self):
         return max(MIN_TICK_PERIOD_S, min(TICK_PERIOD_S, self._p['cycle_period'] / 2))
@@ -125,7 +126,7 @@ class DriverNode(FeederLifecycleNode):
             self.link = SerialLink(self._p['port'], self._p['baud_rate'], self._on_rx,
                                    self._on_lost)
             self._tick_timer = self.create_timer(self._tick_period(), self._tick)
-            self._start_joint_timer()
+            self._joint_timer.start(self._p['joint_states_rate'])
             self._apply(self.core.start(time.monotonic()))
         except Exception as exc:    # noqa: B902 - report, then let lifecycle fail cleanly
             self.get_logger().error(f'configure failed: {exc!r}')
@@ -174,7 +175,7 @@ class DriverNode(FeederLifecycleNode):
         if self._tick_timer is not None:
             self.destroy_timer(self._tick_timer)
             self._tick_timer = None
-        self._stop_joint_timer()
+        self._joint_timer.stop()
         for pub in self._own_publishers():
             self.destroy_lifecycle_publisher(pub)
         self._pub_prox = self._pub_status = self._pub_joint = self._pub_fired = None
@@ -329,18 +330,6 @@ class DriverNode(FeederLifecycleNode):
     def _publish_joint(self, stamp, velocity):
         if self._pub_joint is not None:
             self._publish(self._pub_joint, joint_state(stamp, 0.0, velocity))
-
-    def _start_joint_timer(self):
-        """(Re)start the steady joint_states (none with joint_states_rate 0)."""
-        self._stop_joint_timer()
-        rate = self._p['joint_states_rate']
-        if rate > 0:
-            self._joint_timer = self.create_timer(1.0 / rate, self._joint_tick)
-
-    def _stop_joint_timer(self):
-        if self._joint_timer is not None:
-            self.destroy_timer(self._joint_timer)
-            self._joint_timer = None
 
     def _joint_tick(self):
         """Publish the arm's angle now (feeder_common.arm), while active."""

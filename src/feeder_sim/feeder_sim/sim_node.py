@@ -39,7 +39,8 @@ from feeder_common.diagnostics import Updater
 from feeder_common.frames import BASE_FRAME, plane_point, plane_quaternion
 from feeder_common.messages import (CycleSigner, joint_state, MAX_SEQ_JUMP, parse_cycle_status,
                                     predicted_state, proximity, time_msg)
-from feeder_common.node import clock_note, FeederLifecycleNode, run_node, StartupError
+from feeder_common.node import (clock_note, FeederLifecycleNode, RateTimer, run_node,
+                                StartupError)
 from feeder_common.parameters import ParameterGate
 from geometry_msgs.msg import PoseStamped
 from rclpy.lifecycle import TransitionCallbackReturn
@@ -75,7 +76,7 @@ class SimNode(FeederLifecycleNode):
         self._pubs = {}
         self._sub = None
         self._cycle_timer = None
-        self._joint_timer = None        # hardware mode: joint_states at joint_states_rate
+        self._joint_timer = RateTimer(self, self._joint_tick)  # hardware mode
         self._motion = ArmMotion(wind=0.0)
         self._last_throw = None
         self._lost_seq = None           # cycle that lost the part off the arm's end
@@ -136,7 +137,7 @@ class SimNode(FeederLifecycleNode):
         if 'diagnostic_updater.period' in changes:
             self._diagnostics.set_period(changes['diagnostic_updater.period'])
         if 'joint_states_rate' in changes and 'joint_states' in self._pubs:
-            self._start_joint_timer()
+            self._joint_timer.start(self._param('joint_states_rate'))
         if self._predictor is None:
             return
         if 'start_edge' in changes or 'start_radius' in changes:
@@ -216,7 +217,7 @@ class SimNode(FeederLifecycleNode):
                 'cycle_fired': pub(DiagnosticStatus, 'cycle_fired', qos.CYCLE_FIRED),
                 'joint_states': pub(JointState, 'joint_states', qos.JOINT_STATES),
             }
-            self._start_joint_timer()
+            self._joint_timer.start(self._param('joint_states_rate'))
         else:
             self._pubs = {
                 'pose': pub(PoseStamped, 'predicted/part_pose', qos.PREDICTION),
@@ -257,7 +258,7 @@ class SimNode(FeederLifecycleNode):
         return TransitionCallbackReturn.SUCCESS
 
     def _release(self):
-        self._stop_joint_timer()
+        self._joint_timer.stop()
         for p in self._pubs.values():
             self.destroy_lifecycle_publisher(p)
         self._pubs = {}
@@ -361,18 +362,6 @@ class SimNode(FeederLifecycleNode):
             self._seq, True, 'completed', throw.detected, stamp, HARDWARE_ID))
         pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
         return self._seq, None
-
-    def _start_joint_timer(self):
-        """(Re)start the steady joint_states (none with joint_states_rate 0)."""
-        self._stop_joint_timer()
-        rate = self._param('joint_states_rate')
-        if rate > 0:
-            self._joint_timer = self.create_timer(1.0 / rate, self._joint_tick)
-
-    def _stop_joint_timer(self):
-        if self._joint_timer is not None:
-            self.destroy_timer(self._joint_timer)
-            self._joint_timer = None
 
     def _joint_tick(self):
         """Publish the arm's angle now (the follow-through after a cycle), while active."""
