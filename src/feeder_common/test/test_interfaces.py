@@ -161,12 +161,14 @@ def test_an_analysis_survives_the_wire_with_its_nested_lists():
 def test_the_feed_action_has_goal_result_feedback():
     from feeder_interfaces.action import FeedPart
     goal = FeedPart.Goal.get_fields_and_field_types()
-    assert goal == {'max_cycles': 'uint32', 'timeout': 'builtin_interfaces/Duration'}
+    assert goal == {'max_cycles': 'uint32', 'timeout': 'builtin_interfaces/Duration',
+                    'new_part': 'boolean'}
     result = FeedPart.Result
     assert {'success', 'reason', 'detail', 'seq', 'stamp', 'cycles'} == set(
         result.get_fields_and_field_types())
     reasons = {getattr(result, n) for n in dir(result) if n.startswith('REASON_')}
     assert {'ready', 'budget spent', 'timeout', 'serial fault', 'anomaly', 'part lost',
-            'canceled', 'preempted'} == reasons
+            'canceled', 'refused'} == reasons
     assert {'seq', 'predicted_edge', 'predicted_r', 'monitor_state', 'cycles'} == set(
         FeedPart.Feedback.get_fields_and_field_types())
+    assert FeedPart.Feedback.EDGE_UNKNOWN == -2
