@@ -137,7 +137,10 @@ class FeedGoal:
         self._outcome = None
         self._cancel = False
         self._predictions = {}          # seq -> (edge, r), the newest few
-        self._failed = {}               # seq -> reason, of this goal's failed cycles
+        # What came for a seq before the driver's reply named it (a fast stand-in's verdict
+        # can overtake the reply to the trigger that fired it): seq -> the event's arguments.
+        self._early_verdicts = {}
+        self._early_failures = {}
         self._anomaly = None            # (seq, text, until): an anomaly verdict, report due
         self.feedback = []              # Feedback not yet sent (the node drains it)
 
@@ -163,6 +166,13 @@ class FeedGoal:
             self.in_flight = int(m.group(1))
             self.fired_at = now
             self.cycles += 1
+            seq = self.in_flight
+            if seq in self._early_failures:
+                self.cycle_report(seq, False, self._early_failures[seq])
+            if seq in self._early_verdicts:
+                self.verdict(seq, *self._early_verdicts[seq])
+            self._early_verdicts.clear()
+            self._early_failures.clear()
         elif message.startswith(_BUSY):
             self._retry_at = now + RETRY_BUSY_S
         else:
@@ -178,14 +188,14 @@ class FeedGoal:
         """Take an authentic ``cycle_status``: a failed cycle of this goal ends it."""
         if completed or self._outcome:
             return
+        if self.calling:
+            _keep(self._early_failures, seq, reason)
         if seq == self.in_flight or (self._anomaly and self._anomaly[0] == seq):
             self._end(False, SERIAL_FAULT, f'cycle seq {seq} failed: {reason}')
 
     def prediction(self, seq, edge, r):
         """Take the predictor's state after cycle ``seq`` (``edge`` -1: the part left the arm)."""
-        self._predictions[seq] = (edge, r)
-        while len(self._predictions) > 8:
-            del self._predictions[min(self._predictions)]
+        _keep(self._predictions, seq, (edge, r))
         if edge < 0 and seq == self.in_flight and not self._outcome:
             self._end(False, PART_LOST, f'the part left the arm at cycle seq {seq}')
 
@@ -195,6 +205,8 @@ class FeedGoal:
 
         Only the verdict on this goal's newest cycle counts; older ones are late news.
         """
+        if self.calling and not self._outcome:
+            _keep(self._early_verdicts, seq, (ready_now, state, anomaly, stamp_ns, now))
         if seq != self.in_flight or self._outcome:
             return
         edge, r = self._predictions.get(seq, (None, math.nan))
@@ -247,3 +259,10 @@ class FeedGoal:
 
     def _end(self, success, reason, detail, seq=0, stamp_ns=None):
         self._outcome = Outcome(success, reason, detail, seq, stamp_ns, self.cycles)
+
+
+def _keep(table, seq, value, size=8):
+    """Keep ``value`` for ``seq`` in ``table``, with at most ``size`` newest seqs."""
+    table[seq] = value
+    while len(table) > size:
+        del table[min(table)]

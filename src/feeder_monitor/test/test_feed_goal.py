@@ -163,3 +163,25 @@ def test_the_feed_logic_speaks_the_action_s_reasons():
     result = FeedPart.Result
     assert {getattr(result, n) for n in dir(result) if n.startswith('REASON_')} == set(
         feed.REASONS)
+
+
+def test_a_verdict_that_overtakes_the_trigger_reply_still_counts():
+    # The stand-in fires inside its service callback: the cycle's report and verdict can
+    # arrive before the reply that names the seq (seen on the graph: every goal timed out).
+    g = FeedGoal(Budget(5, 0.0), 0.0, 5.0)
+    assert isinstance(g.step(0.0), Fire)
+    g.trigger_sent()
+    g.prediction(9, 1, 0.26)
+    g.verdict(9, True, 'ready', '', 123, 0.0)
+    g.trigger_reply(True, 'fired cycle seq 9', 0.01)
+    out = g.step(0.02).outcome
+    assert (out.success, out.seq, out.cycles) == (True, 9, 1)
+    assert [(f.seq, f.predicted_edge) for f in g.feedback] == [(9, 1)]
+
+    g = FeedGoal(Budget(5, 0.0), 0.0, 5.0)
+    g.step(0.0)
+    g.trigger_sent()
+    g.cycle_report(3, False, 'no ACK')
+    g.verdict(2, True, 'ready', '', 1, 0.0)        # an older cycle's: not this goal's
+    g.trigger_reply(True, 'fired cycle seq 3', 0.01)
+    assert g.step(0.02).outcome.reason == feed.SERIAL_FAULT
