@@ -68,6 +68,6 @@ FEED_PARAMS = (
     ParamSpec('max_report_age', 1.0, 'a cycle report sampled longer ago than this is ignored, s',
               minimum=0.01, maximum=60.0),
     ParamSpec('verdict_timeout', 10.0, 'a fired cycle without its verdict this long ends the goal '
-              'as a serial fault, s (more than the driver\'s cycle_timeout_s)', minimum=0.1,
+              "as a serial fault, s (more than the driver's cycle_timeout_s)", minimum=0.1,
               maximum=3600.0),
 )
