@@ -51,6 +51,9 @@ RETRY_BUSY_S = 0.05
 # A verdict and its cycle's report travel on two topics: an anomaly verdict waits this long for
 # the report that may say the cycle failed (a serial fault, not an anomaly of the part).
 REPORT_GRACE_S = 0.5
+# The predictor's state of a cycle comes about when its verdict does: with a predictor on the
+# graph the next cycle waits this long for it, so that each feedback carries the prediction.
+PREDICTION_GRACE_S = 0.2
 
 
 @dataclass(frozen=True)
@@ -142,6 +145,7 @@ class FeedGoal:
         self._early_verdicts = {}
         self._early_failures = {}
         self._anomaly = None            # (seq, text, until): an anomaly verdict, report due
+        self._feedback_due = None       # (seq, monitor state, until): prediction due
         self.feedback = []              # Feedback not yet sent (the node drains it)
 
     # ---------------------------------------------------------------- events
@@ -196,7 +200,10 @@ class FeedGoal:
     def prediction(self, seq, edge, r):
         """Take the predictor's state after cycle ``seq`` (``edge`` -1: the part left the arm)."""
         _keep(self._predictions, seq, (edge, r))
-        if edge < 0 and seq == self.in_flight and not self._outcome:
+        due = self._feedback_due
+        if due and due[0] == seq:
+            self._send_feedback()
+        if edge < 0 and seq in (self.in_flight, due and due[0]) and not self._outcome:
             self._end(False, PART_LOST, f'the part left the arm at cycle seq {seq}')
 
     def verdict(self, seq, ready_now, state, anomaly, stamp_ns, now):
@@ -210,7 +217,9 @@ class FeedGoal:
         if seq != self.in_flight or self._outcome:
             return
         edge, r = self._predictions.get(seq, (None, math.nan))
-        self.feedback.append(Feedback(seq, edge, r, state, self.cycles))
+        self._feedback_due = (seq, state, now + PREDICTION_GRACE_S)
+        if edge is not None or not self._predictions:
+            self._send_feedback()       # no predictor on the graph: nothing to wait for
         self.in_flight = None
         if ready_now:
             self._end(True, READY, f'ready at cycle seq {seq} after {self.cycles} cycles',
@@ -230,7 +239,12 @@ class FeedGoal:
         if self._outcome is None:
             self._check_limits(now)
         if self._outcome is not None:
+            self._send_feedback()
             return Done(self._outcome)
+        if self._feedback_due is not None:
+            if now < self._feedback_due[2]:
+                return Wait(self._feedback_due[2])
+            self._send_feedback()
         if self.calling:
             return Wait(now + self.verdict_timeout_s)
         if self.in_flight is not None:
@@ -256,6 +270,14 @@ class FeedGoal:
             elif self.budget.timeout_s and now - self.started >= self.budget.timeout_s:
                 self._end(False, TIMEOUT, f'{now - self.started:.1f} s and {self.cycles} '
                           'cycles, none proven ready')
+
+    def _send_feedback(self):
+        if self._feedback_due is None:
+            return
+        seq, state, _ = self._feedback_due
+        edge, r = self._predictions.get(seq, (None, math.nan))
+        self.feedback.append(Feedback(seq, edge, r, state, self.cycles))
+        self._feedback_due = None
 
     def _end(self, success, reason, detail, seq=0, stamp_ns=None):
         self._outcome = Outcome(success, reason, detail, seq, stamp_ns, self.cycles)

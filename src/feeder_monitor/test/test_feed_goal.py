@@ -185,3 +185,27 @@ def test_a_verdict_that_overtakes_the_trigger_reply_still_counts():
     g.verdict(2, True, 'ready', '', 1, 0.0)        # an older cycle's: not this goal's
     g.trigger_reply(True, 'fired cycle seq 3', 0.01)
     assert g.step(0.02).outcome.reason == feed.SERIAL_FAULT
+
+
+def test_with_a_predictor_each_feedback_waits_briefly_for_its_prediction():
+    g = FeedGoal(Budget(5, 0.0), 0.0, 5.0)
+    fire(g, 1, 0.0)
+    g.prediction(1, 1, 0.1)                       # a predictor is on the graph
+    g.verdict(1, False, 'tracking', '', 1, 0.0)
+    fire(g, 2, 0.0)
+    g.verdict(2, False, 'tracking', '', 2, 0.01)  # its prediction is late
+    assert isinstance(g.step(0.02), Wait) and not [f for f in g.feedback if f.seq == 2]
+    g.prediction(2, 0, 0.15)
+    assert isinstance(g.step(0.03), Fire)
+    assert [(f.seq, f.predicted_edge, f.predicted_r) for f in g.feedback] == [
+        (1, 1, 0.1), (2, 0, 0.15)]
+    fire(g, 3, 0.03)
+    g.verdict(3, False, 'tracking', '', 3, 0.04)  # no prediction ever comes
+    assert isinstance(g.step(0.04 + feed.PREDICTION_GRACE_S / 2), Wait)
+    assert isinstance(g.step(0.04 + feed.PREDICTION_GRACE_S), Fire)
+    assert g.feedback[-1].seq == 3 and g.feedback[-1].predicted_edge is None
+    g.trigger_sent()
+    g.trigger_reply(True, 'fired cycle seq 4', 0.3)
+    g.verdict(4, False, 'tracking', '', 4, 0.31)
+    g.prediction(4, -1, math.nan)                 # after its verdict: the part is gone
+    assert g.step(0.32).outcome.reason == feed.PART_LOST
