@@ -17,6 +17,8 @@
 from feeder_common.params import DIAGNOSTIC_PERIOD, KEY_FILE, ParamSpec, REALTIME_PRIORITY
 
 MONITOR_PARAMS = (
+    ParamSpec('autostart', True, 'configure and activate at start-up; false: wait for '
+              '~/change_state (ros2 lifecycle set)', read_only=True),
     ParamSpec('scene', '', "scene YAML the feeder runs (the same file as the sim's); must load",
               read_only=True, constraints='a file throwmap.load_scene accepts'),
     REALTIME_PRIORITY,
