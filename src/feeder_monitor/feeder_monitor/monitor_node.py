@@ -39,6 +39,7 @@ from lifecycle_msgs.msg import TransitionEvent
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.lifecycle import TransitionCallbackReturn
 from sensor_msgs.msg import Range
+from std_srvs.srv import Trigger
 from throwmap import analyse, load_scene, scene_analysis, ThrowmapError
 
 from .params import MONITOR_PARAMS
@@ -127,6 +128,9 @@ class MonitorNode(FeederLifecycleNode):
                                     self._scene.name)
         self._diagnostics.add('readiness', self._diag_readiness)
         self._diagnostics.add('inputs', self._diag_inputs)
+        # In every state, so that a refusal can say why. Unsigned: a call can only lower the
+        # statement and cost readies, never make one.
+        self.create_service(Trigger, '~/new_part', self._on_new_part)
 
     # ------------------------------------------------------------------ lifecycle
     def on_configure(self, state):
@@ -498,6 +502,22 @@ class MonitorNode(FeederLifecycleNode):
             return
         if msg.goal_state.label != 'active' and msg.start_state.label == 'active':
             self._interrupt(f'{self._driver} left its active state ({msg.transition.label})')
+
+    def _on_new_part(self, request, response):
+        if not self._active:
+            response.success = False
+            response.message = (f'refused: the monitor is {self.lifecycle_state}, not active '
+                                '(it judges nothing: a part placed now is judged from its '
+                                'activation)')
+            return response
+        self._monitor.new_part()
+        seq, stamp_ns = self._statement[:2]
+        self._set_statement(seq, stamp_ns, False, self._monitor.state)
+        response.success = True
+        response.message = (f'new part: edge1_ready false; warm-up and settling start again '
+                            f'({self._monitor.throws_to_go} throws before a ready can come)')
+        self.get_logger().info(response.message)
+        return response
 
     def _interrupt(self, reason):
         """No cycle can be judged (the driver left, stopped or is unproven): false, warm up."""

@@ -312,3 +312,33 @@ def test_a_parameter_file_costs_one_analysis(make, monkeypatch):
     h.spin(0.3)
     assert calls.n['scene_analysis'] == 1
     assert h.node._monitor.rules.warmup_cycles == 2
+
+
+def test_new_part_lowers_the_ready_and_the_next_one_waits_for_the_settling(make):
+    from std_srvs.srv import Trigger
+    h = make()
+    client = h.test.create_client(Trigger, f'{MONITOR}/new_part')
+    h.spin_until(client.service_is_ready, 10.0, 'the new_part service')
+
+    def new_part():
+        future = client.call_async(Trigger.Request())
+        h.spin_until(future.done, 10.0, 'new_part')
+        return future.result()
+
+    assert 'unconfigured, not active' in new_part().message
+    assert h.node.trigger_configure() == SUCCESS and h.node.trigger_activate() == SUCCESS
+    h.spin_until(lambda: h.ready, 5.0, 'the first statement')
+    first = h.cycle_until_ready()
+    assert h.ready[-1].ready
+    reply = new_part()
+    assert reply.success and 'start again' in reply.message
+    h.spin_until(lambda: not h.ready[-1].ready, 5.0, 'the ready to drop')
+    assert h.ready[-1].state == Verdict.STATE_WARMING_UP and not h.ready[-1].anomaly
+    assert h.checked()[-1].authentic
+    # The part is the same here, so only the settling stands between it and the next ready.
+    rules = h.node._monitor.rules
+    assert h.cycle_until_ready() > rules.settle_cycles >= 1 and first > rules.settle_cycles
+
+    assert h.node.trigger_deactivate() == SUCCESS
+    reply = new_part()
+    assert not reply.success and 'inactive, not active' in reply.message
