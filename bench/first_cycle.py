@@ -20,12 +20,13 @@ For each scene the stand-in (the sim as hardware), the predictor and the monitor
 as processes (a shared key file, a ROS domain of their own, loopback DDS), as a launch starts
 them; the bench calls ``/feeder/feeder_driver/enable`` until it answers success and prints the
 seconds from the start to that, to the first ``cycle_status`` and to the first
-``edge1_verdict``. Cache modes: ``cold`` (an empty THROWMAP_CACHE_DIR), ``warm`` (the same
-directory again), ``off`` (THROWMAP_CACHE=off: every process analyses, as before issue 21).
+``edge1_verdict`` (with the cycle's seq). Cache modes: ``cold`` (an empty THROWMAP_CACHE_DIR),
+``warm`` (the same directory again), ``off`` (THROWMAP_CACHE=off: every process analyses, as
+before issue 21).
 The numba cache is whatever it is (run once beforehand to have it warm). Asserts nothing.
 
     python bench/first_cycle.py [scenes/triangle.yaml ...] [--modes cold,warm,off]
-        [--period 1.0] [--timeout 240] [--design]
+        [--period 1.0] [--timeout 240] [--repeat 1] [--design]
 
 ``--design`` first runs ``throwmap design --json --quiet SCENE``, as the launch does to write
 the URDF, and counts it in the time. Usage after ``. scripts/setup.sh``.
@@ -67,6 +68,7 @@ def parse_args():
                    help='comma-separated: cold, warm, off (default: cold,warm)')
     p.add_argument('--period', type=float, default=1.0, help='cycle_period, s (launch default)')
     p.add_argument('--timeout', type=float, default=240.0, help='s per run')
+    p.add_argument('--repeat', type=int, default=1, help='runs of each scene and mode')
     p.add_argument('--design', action='store_true',
                    help='run `throwmap design` first, as the launch does')
     return p.parse_args()
@@ -87,13 +89,13 @@ class Probe:
         qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         self.first = {}
         self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
-                                      lambda m: self._seen('cycle_status'), qos)
+                                      lambda m: self._seen('cycle_status', _seq(m)), qos)
         self.node.create_subscription(Verdict, '/feeder/edge1_verdict',
-                                      lambda m: self._seen('edge1_verdict'), qos)
+                                      lambda m: self._seen('edge1_verdict', m.seq), qos)
         self.client = self.node.create_client(SetBool, '/feeder/feeder_driver/enable')
 
-    def _seen(self, what):
-        self.first.setdefault(what, time.monotonic())
+    def _seen(self, what, seq):
+        self.first.setdefault(what, (time.monotonic(), seq))
 
     def spin(self, seconds):
         self.rclpy.spin_once(self.node, timeout_sec=seconds)
@@ -112,6 +114,10 @@ class Probe:
         self.node.destroy_node()
 
 
+def _seq(msg):
+    return next((int(kv.value) for kv in msg.values if kv.key == 'seq'), None)
+
+
 def stop(procs):
     for p in procs.values():
         if p.poll() is None:
@@ -127,7 +133,12 @@ def stop(procs):
 
 
 def run(args, scene, env, key, log_dir):
-    """One start of the graph; return {event: seconds after the start} (None: not seen)."""
+    """
+    One start of the graph; return {event: (seconds after the start, seq)} (None: not seen).
+
+    It waits for both: a probe that matched the stand-in late misses its first cycle_status
+    (its seq then says so).
+    """
     probe = Probe()
     procs = {}
     t0 = time.monotonic()
@@ -146,7 +157,8 @@ def run(args, scene, env, key, log_dir):
                                            cwd=REPO, start_new_session=True)
             log.close()
         end = t0 + args.timeout
-        while time.monotonic() < end and times['edge1_verdict'] is None:
+        waiting = ('cycle_status', 'edge1_verdict')
+        while time.monotonic() < end and any(times[w] is None for w in waiting):
             for name, p in procs.items():
                 if p.poll() is not None:
                     tail = (log_dir / f'{scene.stem}-{name}.log').read_text()[-1500:]
@@ -156,7 +168,8 @@ def run(args, scene, env, key, log_dir):
             probe.spin(0.05)
             for what in ('cycle_status', 'edge1_verdict'):
                 if times[what] is None and what in probe.first:
-                    times[what] = probe.first[what] - t0
+                    at, seq = probe.first[what]
+                    times[what] = (at - t0, seq)
     finally:
         stop(procs)
         probe.close()
@@ -179,12 +192,13 @@ def main():
     print(f'first_cycle: ROS_DOMAIN_ID={domain}, cycle_period {args.period} s, logs in {work}',
           flush=True)
     print(f'{"scene":<12} {"cache":<6} {"enable ok":>10} {"cycle_status":>13} '
-          f'{"edge1_verdict":>14}  (s from the start of the processes)', flush=True)
+          f'{"edge1_verdict":>14}  (s from the start of the processes; #: the cycle seq)',
+          flush=True)
     try:
         for scene in args.scenes:
             scene = scene.resolve()
             cache = work / f'cache-{scene.stem}'
-            for mode in modes:
+            for mode in [m for m in modes for _ in range(args.repeat)]:
                 env = install_env(INSTALL, dds_env(domain))
                 env['THROWMAP_CACHE_DIR'] = str(cache)
                 if mode == 'cold':
@@ -196,7 +210,9 @@ def main():
                 times = run(args, scene, env, key, work)
 
                 def fmt(v):
-                    return f'{v:.1f}' if v is not None else 'none'
+                    if v is None:
+                        return 'none'
+                    return f'{v[0]:.1f} (#{v[1]})' if isinstance(v, tuple) else f'{v:.1f}'
 
                 print(f'{scene.stem:<12} {mode:<6} {fmt(times["enable"]):>10} '
                       f'{fmt(times["cycle_status"]):>13} {fmt(times["edge1_verdict"]):>14}',
