@@ -17,6 +17,21 @@ from throwmap import load_scene, Part, ThrowModel
 from throwmap_testing import PAPER_W, SCENES, TRIANGLE_VERTICES
 
 
+@pytest.fixture(scope='session', autouse=True)
+def analysis_cache_dir(tmp_path_factory):
+    """
+    Point throwmap's analysis cache at one directory of this test session, never the user's.
+
+    Shared by the session's tests (each scene is analysed once, as in a launch); the tests of
+    the cache itself give each test a directory of its own.
+    """
+    path = tmp_path_factory.mktemp('throwmap-analysis-cache')
+    path.chmod(0o700)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv('THROWMAP_CACHE_DIR', str(path))
+        yield path
+
+
 @pytest.fixture(scope='session')
 def triangle_scene():
     return load_scene(str(SCENES / 'triangle.yaml'))

@@ -48,6 +48,7 @@ LAYERS = [
     ('orbits',),
     ('basins',),
     ('stochastic',),
+    ('analysis_cache',),
     ('analysis',),
     ('scene',),
     ('part_on_arm',),
@@ -63,7 +64,8 @@ LAZY_OK = {'throwmap.plots', 'matplotlib', 'matplotlib.pyplot',   # heavy, optio
            'distributed'}
 # The simulator core and the models: they run effects through hooks, never by name.
 CORE = ('ballistic', 'catch', 'base_map', 'event_sim', 'pipeline', 'compose', 'model',
-        'effect_model', 'scene', 'orbits', 'basins', 'sensor', 'analysis', 'part_on_arm')
+        'effect_model', 'scene', 'orbits', 'basins', 'sensor', 'analysis_cache', 'analysis',
+        'part_on_arm')
 
 
 def modules():

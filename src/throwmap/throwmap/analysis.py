@@ -32,6 +32,7 @@ import math
 
 import numpy as np
 
+from . import analysis_cache
 from .basins import Basin, basin, default_grid, design_radii
 from .errors import ThrowmapError
 from .orbits import limit_set, LimitSet, pull_share
@@ -77,8 +78,32 @@ def analyse(scene, throws=10_000, grid_radii=50, grid_throws=200, progress=None)
     Limit set from the scene's start, R_flip/R_max, a basin grid and the sensor design.
 
     The goal edge is the scene's ``sensor.goal_edge``, else the edge that reaches furthest
-    out in the limit set (the only one a far sensor can prove).
+    out in the limit set (the only one a far sensor can prove). The result is cached on disk
+    by scene content and code version (throwmap.analysis_cache; docs/physics.md): a hit is
+    the computation's result bit for bit, and leaves a noisy model's generator as it does.
     """
+    digest = analysis_cache.key(scene, throws=throws, grid_radii=grid_radii,
+                                grid_throws=grid_throws)
+    fields = analysis_cache.cached(
+        digest, scene, lambda: _analyse(scene, throws, grid_radii, grid_throws, progress),
+        lambda ls, bas: _sensor(scene, ls, bas))
+    if scene.model.stochastic:
+        scene.model.reseed(scene.seed)      # where the computation leaves it
+    return Analysis(**fields)
+
+
+def _sensor(scene, ls, bas):
+    """Return the sensor design of ``analyse`` for the limit set ``ls`` and the basin."""
+    goal = scene.goal_edge
+    if goal is None:
+        u_max = scene.model.part.U.max(axis=1)
+        goal = max(ls.bands, key=lambda k: ls.bands[k][1] + u_max[k])
+    return sensor_design(scene.model, ls, goal, scene.sensor_footprint, scene.sensor_radius,
+                         bas)
+
+
+def _analyse(scene, throws, grid_radii, grid_throws, progress):
+    """Compute the fields of :func:`analyse`'s Analysis."""
     model = scene.model
     start = scene.default_start()
     noisy = model.stochastic
@@ -89,16 +114,13 @@ def analyse(scene, throws=10_000, grid_radii=50, grid_throws=200, progress=None)
     radii = design_radii(model.nominal())
     e, r = default_grid(model, grid_radii, radii['R_max_all'])
     bas = basin(model, e, r, grid_throws, reference=ls, progress=progress)
-    goal = scene.goal_edge
-    if goal is None:
-        u_max = model.part.U.max(axis=1)
-        goal = max(ls.bands, key=lambda k: ls.bands[k][1] + u_max[k])
-    sensor = sensor_design(model, ls, goal, scene.sensor_footprint, scene.sensor_radius, bas)
+    sensor = _sensor(scene, ls, bas)
     stoch = None
     if noisy:
         stoch = stochastic_summary(model, sensor, start, (e, r), throws=min(throws, 2000),
                                    grid_throws=grid_throws, seeds=8, reference=ls)
-    return Analysis(start, ls, radii, bas, sensor, stoch, pull_share(model, ls))
+    return {'start': start, 'limit_set': ls, 'radii': radii, 'basin': bas, 'sensor': sensor,
+            'stochastic': stoch, 'pull': pull_share(model, ls)}
 
 
 def scene_analysis(scene, sensor_radius=0.0, analysis=None):
