@@ -84,11 +84,11 @@ def key_path(out):
 def start(procs, bag, key):
     ns = ['-r', '__ns:=/feeder']
     k = ['-p', f'key_file:={key}']
-    procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-r',
-                '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p', f'scene:={SCENE}',
+    procs.start('sim', 'feeder_sim', 'standin_node', '--ros-args', *ns, '-r',
+                '__node:=feeder_driver', '-p', f'scene:={SCENE}',
                 '-p', f'cycle_period:={PERIOD}', *k)
-    procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-p',
-                f'scene:={SCENE}', *k)
+    procs.start('predictor', 'feeder_sim', 'predictor_node', '--ros-args', *ns, '-p',
+                f'scene:={SCENE}')
     procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
                 f'scene:={SCENE}', *k)
     procs.start('recorder', 'feeder_monitor', 'bag_recorder', bag, '--topics', *TOPICS,
