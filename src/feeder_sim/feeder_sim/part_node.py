@@ -18,9 +18,10 @@ The lifecycle skeleton of feeder_sim's two nodes: a node that follows a part on 
 
 :class:`PartNode` holds what the hardware stand-in (``standin_node``) and the predictor
 (``predictor_node``) share: the scene (loaded once), the parameter gate over the node's own
-table (feeder_sim.params), the analysis at the sensor in use, the part's state
-(throwmap.PartOnArm), the lifecycle transitions, the part lost off the arm's end, and the
-``lifecycle`` and ``prediction`` diagnostics. Each node adds its interface in the hooks
+table (feeder_sim.params), the analysis at the sensor in use (redone only when its input,
+``sensor_radius``, changes), the part's state (throwmap.PartOnArm), the lifecycle
+transitions, the part lost off the arm's end, and the ``lifecycle`` and ``prediction``
+diagnostics. Each node adds its interface in the hooks
 :meth:`_part_options`, :meth:`_configure_own`, :meth:`_create_interface`, :meth:`_apply_own`,
 :meth:`_analysis_changed`, :meth:`_part_placed`, :meth:`_place_hint` and :meth:`_release_own`.
 """
@@ -59,6 +60,7 @@ class PartNode(FeederLifecycleNode):
         self._active = False
         self._base_analysis = None
         self._analysis = None
+        self._analysis_radius = None    # the sensor_radius self._analysis was made for
         self._predictor = None          # throwmap.PartOnArm while configured
         self._pubs = {}
         self._last_throw = None
@@ -126,8 +128,7 @@ class PartNode(FeederLifecycleNode):
             return
         if 'start_edge' in changes or 'start_radius' in changes:
             self._place_part()
-        if 'sensor_radius' in changes:
-            self._set_analysis(changes['sensor_radius'])
+        if 'sensor_radius' in changes and self._set_analysis(changes['sensor_radius']):
             self._predictor.sensor_radius = self._analysis.sensor.radius
             self.get_logger().info(f'sensor at {self._analysis.sensor.radius:.4f} m')
             self._analysis_changed()
@@ -136,8 +137,19 @@ class PartNode(FeederLifecycleNode):
         return self._params.values[name]
 
     def _set_analysis(self, sensor_radius):
-        """Make the analysis at ``sensor_radius`` (0: the analysis's choice) the one in use."""
+        """
+        Make the analysis at ``sensor_radius`` (0: the analysis's choice) the one in use.
+
+        Returns whether it changed. The analysis depends on the scene (fixed while configured)
+        and ``sensor_radius`` alone, so it is kept by that input: ``ros2 param load`` sets a
+        file's parameters one at a time (one post-set callback each), and a file loaded again,
+        or one that gives the radius in use, costs no analysis and republishes nothing.
+        """
+        if self._analysis is not None and sensor_radius == self._analysis_radius:
+            return False
         self._analysis = scene_analysis(self._scene, sensor_radius, self._base_analysis)
+        self._analysis_radius = sensor_radius
+        return True
 
     def _place_part(self):
         """Restart the part (or the prediction) at (start_edge, start_radius)."""
@@ -200,6 +212,7 @@ class PartNode(FeederLifecycleNode):
         self._pubs = {}
         self._predictor = None
         self._analysis = None
+        self._analysis_radius = None
 
     # ------------------------------------------------------------------ throws
     def _throw_lost(self, seq, throw):
