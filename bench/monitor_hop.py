@@ -116,7 +116,7 @@ def main():
     os.environ['ROS_DOMAIN_ID'] = str(domain)
     import rclpy
     from rclpy.parameter import Parameter
-    from feeder_common.node import make_executor
+    from feeder_common.node import autostart, make_executor
     from std_srvs.srv import SetBool
     times = {}
     node_cls = instrument(times)
@@ -133,6 +133,7 @@ def main():
         node = node_cls(namespace='/feeder',
                         parameter_overrides=[Parameter('scene', value=SCENE),
                                              Parameter('key_file', value=key_file)])
+        autostart(node)     # configure + activate (a lifecycle node), as the run helper does
         executor.add_node(node)
         client = node.create_client(SetBool, '/feeder/feeder_driver/enable')
 

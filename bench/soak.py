@@ -17,7 +17,7 @@
 Soak: the sim as hardware, the predictor, the monitor and the bag recorder, N cycles at the
 fastest period, then every cycle reconciled from the bag (issue 10). Not in CI.
 
-The sim (hardware mode, triangle, ``cycle_period`` 0.005 s, its minimum) cycles until it has
+The stand-in (standin_node, triangle, ``cycle_period`` 0.005 s, its minimum) cycles until it has
 fired N cycles; the recorder records ``cycle_status``, ``proximity``, ``edge1_verdict``,
 ``edge1_ready`` and the predictor's ``predicted/state``. The bag is
 read with the mcap reader (not the recorder's code) and every cycle is checked:

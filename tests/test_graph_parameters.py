@@ -15,11 +15,12 @@
 """(d) Bad parameters are rejected with a reason, through the parameter services."""
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_nodes import (Collector, monitor, PredictedStates, predictor, sim_as_hardware,
-                          Statements, status_values, TRIANGLE, wait_for_monitor,
-                          wait_for_publishers)
+from feeder_nodes import (Collector, Diagnostics, monitor, PredictedStates, predictor, REPO,
+                          sim_as_hardware, Statements, status_values, TRIANGLE,
+                          wait_for_monitor, wait_for_publishers)
 from std_srvs.srv import Trigger
 from throwmap import analyse, load_scene, sees
+import yaml
 
 SIM = '/feeder/feeder_driver'
 PRED = '/feeder/feeder_sim'
@@ -123,3 +124,30 @@ def test_the_old_mode_switch_is_an_unknown_parameter_of_both_nodes(graph, ros):
             line = f'parameter {name} is not a parameter of {prog}; ignored'
             ros.spin_until(lambda line=line, proc=proc: line in graph.log(proc), 30.0, line)
     assert hw.poll() is None and pred.poll() is None
+
+
+def test_a_parameter_file_costs_the_monitor_one_analysis(graph, ros):
+    """
+    ros2 param load sends the file in one SetParameters request; rclpy sets it one at a time.
+
+    The monitor checks each value, but analyses the scene once for the new sensor radius (the
+    readiness diagnostics count the analyses: the configure's, then this one).
+    """
+    monitor(graph)
+    ready = Statements(ros)
+    diags = Diagnostics(ros)
+    wait_for_monitor(ros, ready)
+    config = REPO / 'src' / 'feeder_monitor' / 'config' / 'monitor.yaml'
+    values = yaml.safe_load(config.read_text())['/**']['ros__parameters']
+    values.update(sensor_radius=0.28, warmup_cycles=3)
+    results = ros.set_parameters(MON, values)
+    assert all(r.successful for r in results.values()), results
+    name = 'feeder_monitor: readiness'
+
+    def latest():
+        return Diagnostics.values(diags.by_name[name][-1]) if diags.by_name.get(name) else {}
+
+    ros.spin_until(lambda: latest().get('sensor_radius') == '0.28', 10.0, 'the new rules')
+    ros.spin_for(1.5)
+    values = latest()
+    assert (values['analyses'], values['warmup_cycles']) == ('2', '3'), values

@@ -38,5 +38,6 @@ setup(
         'monitor_node = feeder_monitor.monitor_node:main',
         'bag_recorder = feeder_monitor.bag_recorder:main',
         'bag_reindex = feeder_monitor.bag:reindex_main',
+        'feed_node = feeder_monitor.feed_node:main',
     ]},
 )

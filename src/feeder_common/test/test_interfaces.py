@@ -117,3 +117,58 @@ def test_verdict_goes_from_a_publisher_to_a_subscriber_on_loopback(verdict_cls, 
         executor.shutdown()
     finally:
         rclpy.shutdown(context=ctx)
+
+
+# Issue 22: the typed cycle, prediction and analysis messages and the FeedPart action.
+CONTRACT = {
+    'CycleStatus': {'seq': 'uint64', 'stamp': 'builtin_interfaces/Time', 'outcome': 'string',
+                    'sensor': 'int8', 'reason': 'string', 'hardware_id': 'string',
+                    'session': 'string', 'mac': 'sequence<uint8>'},
+    'PredictedState': {'seq': 'uint64', 'stamp': 'builtin_interfaces/Time', 'edge': 'int32',
+                       'r': 'double', 'throw_kind': 'string'},
+    'LimitSet': {'pattern': 'sequence<int32>', 'bands': 'sequence<feeder_interfaces/EdgeBand>',
+                 'periodic': 'boolean', 'transient': 'int32', 'cycle_length_min': 'double',
+                 'cycle_length_mean': 'double', 'cycle_length_max': 'double'},
+}
+
+
+def test_typed_messages_have_the_fields_of_the_contract():
+    import feeder_interfaces.msg as msgs
+    for name, fields in CONTRACT.items():
+        assert getattr(msgs, name).get_fields_and_field_types() == fields, name
+    assert (msgs.CycleStatus.OUTCOME_FIRED, msgs.CycleStatus.OUTCOME_COMPLETED,
+            msgs.CycleStatus.OUTCOME_FAILED) == ('fired', 'completed', 'failed')
+    assert (msgs.CycleStatus.SENSOR_NONE, msgs.CycleStatus.SENSOR_CLEAR,
+            msgs.CycleStatus.SENSOR_DETECTED) == (-1, 0, 1)
+    assert msgs.PredictedState.EDGE_LOST == -1
+
+
+def test_an_analysis_survives_the_wire_with_its_nested_lists():
+    from feeder_interfaces.msg import Analysis, BasinOutcome, EdgeBand, EdgeDesign, LimitSet
+    from rclpy.serialization import deserialize_message, serialize_message
+    a = Analysis(scene='triangle', scene_hash=2**64 - 1, goal_edge=1, sensor_radius=0.267,
+                 limit_set=LimitSet(pattern=[0, 2, 1], periodic=True, bands=[
+                     EdgeBand(edge=e, r_min=0.1 * e, r_max=0.1 * e + 0.05, jogs_min=e,
+                              jogs_max=2 * e) for e in (0, 2, 1)]),
+                 edges=[EdgeDesign(edge=e, r_grasp=0.016, r_min=0.02, r_flip=0.14, r_max=0.2)
+                        for e in range(3)],
+                 basin=[BasinOutcome(pattern='0-2-1', starts=150)])
+    back = deserialize_message(serialize_message(a), Analysis)
+    assert back == a
+    assert [b.edge for b in back.limit_set.bands] == [0, 2, 1]
+
+
+def test_the_feed_action_has_goal_result_feedback():
+    from feeder_interfaces.action import FeedPart
+    goal = FeedPart.Goal.get_fields_and_field_types()
+    assert goal == {'max_cycles': 'uint32', 'timeout': 'builtin_interfaces/Duration',
+                    'new_part': 'boolean'}
+    result = FeedPart.Result
+    assert {'success', 'reason', 'detail', 'seq', 'stamp', 'cycles'} == set(
+        result.get_fields_and_field_types())
+    reasons = {getattr(result, n) for n in dir(result) if n.startswith('REASON_')}
+    assert {'ready', 'budget spent', 'timeout', 'serial fault', 'anomaly', 'part lost',
+            'canceled', 'refused'} == reasons
+    assert {'seq', 'predicted_edge', 'predicted_r', 'monitor_state', 'cycles'} == set(
+        FeedPart.Feedback.get_fields_and_field_types())
+    assert FeedPart.Feedback.EDGE_UNKNOWN == -2

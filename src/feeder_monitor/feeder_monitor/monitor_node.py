@@ -31,14 +31,15 @@ from feeder_common import auth, qos
 from feeder_common.diagnostics import Updater
 from feeder_common.messages import (parse_cycle_fired, parse_cycle_status, proximity_detected,
                                     signed_verdict, time_ns)
-from feeder_common.node import flush, run_node, StartupError, watch_clock
+from feeder_common.node import FeederLifecycleNode, flush, run_node
 from feeder_common.parameters import ParameterGate
 from feeder_common.params import check_scene
 from feeder_interfaces.msg import Verdict
 from lifecycle_msgs.msg import TransitionEvent
 from rclpy.event_handler import SubscriptionEventCallbacks
-from rclpy.node import Node
+from rclpy.lifecycle import TransitionCallbackReturn
 from sensor_msgs.msg import Range
+from std_srvs.srv import Trigger
 from throwmap import analyse, load_scene, scene_analysis, ThrowmapError
 
 from .params import MONITOR_PARAMS
@@ -52,11 +53,19 @@ RULE_PARAMS = ('sensor_radius', 'warmup_cycles', 'settle_cycles', 'silence_margi
 CROSS_CHECK_DEPTH = 256
 # A heartbeat later than this many periods means the monitor itself stalled.
 STALL_PERIODS = 3
+# Analyses (by sensor radius) and rule sets (by the rule parameters) kept per configuration.
+ANALYSIS_CACHE = 16
 
 
-class MonitorNode(Node):
+class MonitorNode(FeederLifecycleNode):
     """
     Consumes cycle_status, cycle_fired, proximity; publishes edge1_ready, edge1_verdict.
+
+    A lifecycle node. Configure loads the key and runs the analysis (limit set, sensor design,
+    limit-set orbit, rules; a failure is a failed configure with the reason) and creates the
+    subscriptions and the (lifecycle) publishers; activate starts judging afresh (warm-up and
+    settling) with the statement false; deactivate, cleanup and shutdown leave a final false
+    statement. edge1_ready is never true unless the node is active and judged the cycle ready.
 
     It judges only reports that prove themselves (feeder_monitor.trust: signed by ``driver_node``
     under ``key_file``, fresh, of the driver's current run, next in seq). Its statement about
@@ -67,39 +76,42 @@ class MonitorNode(Node):
     """
 
     def __init__(self, **kwargs):
+        # Set before Node.__init__: a context shutdown may destroy a half-built node.
+        self._active = False
+        self._ready_pub = self._verdict_pub = None
+        self._beat_timer = None
         super().__init__('feeder_monitor', **kwargs)
-        watch_clock(self)       # a warning if use_sim_time is on and no /clock comes
         # Scenes by path, loaded once (the parameter checks load them too).
         self._load_scene = functools.lru_cache(maxsize=None)(load_scene)
         self._scene = None
+        # Configured (on_configure .. cleanup): the key, the analysis, the rules, the gate.
+        self._key = None
         self._base = None
         self._orbit = None
+        self._rules_now = None
+        self._gate = None
+        self._session = None
+        # scene_analysis by sensor_radius and rules by the rule parameters, for this
+        # configuration: a parameter file sets its parameters one at a time (the validate and
+        # the apply of each), and all of them share one analysis.
+        self._analyses = collections.OrderedDict()
+        self._rule_sets = collections.OrderedDict()
+        self._work = {'analyses': 0, 'rule_builds': 0}
+        self._rules_pending = False     # rule parameters changed, rules not rebuilt yet
+        self._rebuild_queued = False
+        # Active (on_activate .. deactivate): the judging.
         self._monitor = None
+        self._subs = []
         self._params = ParameterGate(self, MONITOR_PARAMS, self._validate, self._apply)
         p = self._params
-        self._scene = self._load_scene(p.declare('scene'))
-        try:
-            self._key = auth.node_key(p.declare('key_file'))
-        except auth.KeyFileError as exc:
-            raise StartupError(f'key_file: {exc}') from None
-        orbit_throws = p.declare('orbit_throws')
-        try:
-            self._base = analyse(self._scene)
-            self._orbit = limit_set_orbit(self._scene, self._base, orbit_throws)
-            p.declare_all()
-            rules = self._rules({})
-        except ThrowmapError as exc:
-            raise StartupError(f'scene {self._scene.source}: {exc}') from None
-        except ValueError as exc:       # a rule parameter the analysis rejects
-            raise StartupError(str(exc)) from None
+        p.declare_all(names=('autostart', 'scene'))
+        self._scene = self._load_scene(p.values['scene'])
+        p.declare_all()
         for name in p.unknown_given():
             self.get_logger().warning(f'parameter {name} is not a parameter of monitor_node; '
                                       'ignored (docs/nodes.md lists them)')
-        self._monitor = ReadinessMonitor(rules)
         self._driver = self.resolve_topic_name(self._param('driver_node'))
-        self._gate = ReportGate(self._key, self._driver, self._param('max_report_age'))
         self._fqn = self.get_fully_qualified_name()
-        self._session = auth.new_session()
         self._anomaly_in_period = None
         self._bad_input = 0
         self._bad_mark = 0
@@ -107,54 +119,173 @@ class MonitorNode(Node):
                         'liveliness_lost': 0}
         self._recent_bits = collections.OrderedDict()       # stamp_ns -> (seq, bit)
         self._recent_proximity = collections.OrderedDict()  # stamp_ns -> bit
-
         # The statement on edge1_ready: (seq, stamp_ns, ready, state, anomaly).
         self._statement = (0, None, False, WARMING_UP, '')
-        self._ready_pub = self.create_publisher(
-            Verdict, 'edge1_ready', qos.edge1_ready(self._param('ready_deadline')))
-        self._verdict_pub = self.create_publisher(Verdict, 'edge1_verdict', qos.EDGE1_VERDICT)
-        self.create_subscription(TransitionEvent, f'{self._driver}/transition_event',
-                                 self._on_driver_transition, qos.DEFAULT)
         self._beat_period = self._param('ready_deadline') / 4
-        self._last_beat = time.monotonic()
-        self.create_timer(self._beat_period, self._on_heartbeat)
-        self.create_subscription(Range, 'proximity', self._on_proximity,
-                                 qos.PROXIMITY_SUBSCRIPTION)
-        self.create_subscription(
-            DiagnosticStatus, 'cycle_status', self._on_cycle_status, qos.CYCLE_STATUS,
-            event_callbacks=SubscriptionEventCallbacks(liveliness=self._on_driver_liveliness))
-        self.create_subscription(DiagnosticStatus, 'cycle_fired', self._on_cycle_fired,
-                                 qos.CYCLE_FIRED)
+        self._last_beat = self._last_sent = time.monotonic()
+        # Diagnostics exist in every lifecycle state (an unconfigured monitor says so).
         self._diagnostics = Updater(self, self._param('diagnostic_updater.period'),
                                     self._scene.name)
         self._diagnostics.add('readiness', self._diag_readiness)
         self._diagnostics.add('inputs', self._diag_inputs)
-        self._publish_statement()
+        # In every state, so that a refusal can say why. Unsigned: a call can only lower the
+        # statement and cost readies, never make one.
+        self.create_service(Trigger, '~/new_part', self._on_new_part)
+
+    # ------------------------------------------------------------------ lifecycle
+    def on_configure(self, state):
+        scene = self._scene
+        try:
+            key = auth.node_key(self._param('key_file'))
+        except auth.KeyFileError as exc:
+            return self._configure_failed(f'key_file: {exc}')
+        try:
+            self._base = analyse(scene)
+            self._orbit = limit_set_orbit(scene, self._base, self._param('orbit_throws'))
+            rules = self._rules({})
+        except ThrowmapError as exc:
+            return self._configure_failed(f'scene {scene.source}: {exc}')
+        except ValueError as exc:       # a rule parameter the analysis rejects
+            return self._configure_failed(str(exc))
+        self._key = key
+        self._rules_now = rules
+        self._rules_pending = False
+        self._gate = ReportGate(key, self._driver, self._param('max_report_age'))
+        self._session = auth.new_session()
+        self._statement = (0, None, False, WARMING_UP, '')
+        pub = self.create_lifecycle_publisher
+        self._ready_pub = pub(Verdict, 'edge1_ready',
+                              qos.edge1_ready(self._param('ready_deadline')))
+        self._verdict_pub = pub(Verdict, 'edge1_verdict', qos.EDGE1_VERDICT)
+        sub = self.create_subscription
+        self._subs = [
+            sub(TransitionEvent, f'{self._driver}/transition_event',
+                self._on_driver_transition, qos.DEFAULT),
+            sub(Range, 'proximity', self._on_proximity, qos.PROXIMITY_SUBSCRIPTION),
+            sub(DiagnosticStatus, 'cycle_status', self._on_cycle_status, qos.CYCLE_STATUS,
+                event_callbacks=SubscriptionEventCallbacks(
+                    liveliness=self._on_driver_liveliness)),
+            sub(DiagnosticStatus, 'cycle_fired', self._on_cycle_fired, qos.CYCLE_FIRED),
+        ]
         self._log_rules(rules)
         self.get_logger().info(f'judging reports of {self._driver} signed with key id '
                                f'{auth.key_id(self._key)}; verdicts signed as {self._fqn}')
+        return super().on_configure(state)
+
+    def _configure_failed(self, reason):
+        self._forget_analysis()
+        self.configure_error = reason
+        self.get_logger().error(f'configure failed: {reason}')
+        return TransitionCallbackReturn.FAILURE
+
+    def on_activate(self, state):
+        self._flush_rules()
+        # Judging starts afresh: cycles may have fired while inactive.
+        self._monitor = ReadinessMonitor(self._rules_now)
+        result = super().on_activate(state)     # the publishers send from here on
+        self._active = True
+        self._statement = (0, None, False, WARMING_UP, '')
+        self._publish_statement()
+        self._last_beat = time.monotonic()
+        self._beat_timer = self.create_timer(self._beat_period, self._on_heartbeat)
+        return result
+
+    def on_deactivate(self, state):
+        self._stop_judging('monitor deactivated: not judging')
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state):
+        self._release()
+        return super().on_cleanup(state)
+
+    def on_shutdown(self, state):
+        self._stop_judging('monitor stopped')
+        self._release()
+        return super().on_shutdown(state)
+
+    def on_error(self, state):
+        self._stop_judging('monitor error')
+        self._release()
+        return TransitionCallbackReturn.SUCCESS
+
+    def _stop_judging(self, why):
+        """Stop judging; say false while the publisher can still send, and wait for readers."""
+        self._active = False
+        if self._beat_timer is not None:
+            self.destroy_timer(self._beat_timer)
+            self._beat_timer = None
+        pub = self._ready_pub
+        if pub is None or not pub.is_activated:
+            return      # the last statement sent was already false (or none was sent)
+        seq, stamp_ns = self._statement[:2]
+        self._statement = (seq, stamp_ns, False, ANOMALY, why)
+        try:
+            self._publish_statement()
+            flush(pub)
+        except Exception:   # noqa: B902 - context already gone: nothing can be said
+            pass
+
+    def _release(self):
+        self._stop_judging('monitor stopped')
+        for s in self._subs:
+            self.destroy_subscription(s)
+        self._subs = []
+        for pub in (self._ready_pub, self._verdict_pub):
+            if pub is not None:
+                self.destroy_lifecycle_publisher(pub)
+        self._ready_pub = self._verdict_pub = None
+        self._monitor = self._gate = self._key = None
+        self._recent_bits.clear()
+        self._recent_proximity.clear()
+        self._forget_analysis()
+
+    def _forget_analysis(self):
+        self._base = self._orbit = self._rules_now = None
+        self._analyses.clear()
+        self._rule_sets.clear()
+        self._rules_pending = False
+
+    def destroy_node(self):
+        # A clean exit says false, and waits (briefly) until the readers have it.
+        self._stop_judging('monitor stopped')
+        return super().destroy_node()
 
     # ------------------------------------------------------------------ parameters
     def _param(self, name):
         return self._params.values[name]
 
+    def _analysis_at(self, sensor_radius):
+        """Return throwmap.scene_analysis at ``sensor_radius``, computed once per configure."""
+        an = self._analyses.get(sensor_radius)
+        if an is None:
+            an = scene_analysis(self._scene, sensor_radius, self._base)
+            self._work['analyses'] += 1
+            self._analyses[sensor_radius] = an
+            while len(self._analyses) > ANALYSIS_CACHE:
+                self._analyses.popitem(last=False)
+        return an
+
     def _rules(self, changes):
         """Rules from the current parameters overridden by ``changes``; ValueError if invalid."""
-        def value(name):
-            return changes[name] if name in changes else self._param(name)
-
-        an = scene_analysis(self._scene, value('sensor_radius'), self._base)
-        return rules_from_analysis(self._scene, an, self._orbit, value('warmup_cycles'),
-                                   value('settle_cycles'), value('silence_margin'),
-                                   value('early_margin_cycles'), value('run_margin_cycles'))
+        values = tuple(changes[n] if n in changes else self._param(n) for n in RULE_PARAMS)
+        rules = self._rule_sets.get(values)
+        if rules is None:
+            radius, *rest = values
+            rules = rules_from_analysis(self._scene, self._analysis_at(radius), self._orbit,
+                                        *rest)
+            self._work['rule_builds'] += 1
+            self._rule_sets[values] = rules
+            while len(self._rule_sets) > ANALYSIS_CACHE:
+                self._rule_sets.popitem(last=False)
+        return rules
 
     def _validate(self, changes, current):
         if 'scene' in changes:
             reason = check_scene(changes['scene'], self._load_scene)
             if reason:
                 return reason
-        # At start-up (no monitor yet) the rules are checked once all are declared.
-        if self._monitor is not None and any(n in changes for n in RULE_PARAMS):
+        # Unconfigured (no analysis yet) the rules are checked at configure.
+        if self._base is not None and any(n in changes for n in RULE_PARAMS):
             try:
                 self._rules(changes)
             except ValueError as exc:
@@ -162,18 +293,48 @@ class MonitorNode(Node):
         return None
 
     def _apply(self, changes):
-        if self._monitor is None:
-            return
         if 'diagnostic_updater.period' in changes:
             self._diagnostics.set_period(changes['diagnostic_updater.period'])
-        if 'max_report_age' in changes:
+        if 'max_report_age' in changes and self._gate is not None:
             self._gate.max_age_ns = int(round(changes['max_report_age'] * 1e9))
-        if any(n in changes for n in RULE_PARAMS):
-            rules = self._rules({})
+        if self._base is not None and any(n in changes for n in RULE_PARAMS):
+            # New rules: no ready holds from now on (the rebuild restarts the warm-up). The
+            # rebuild waits until the parameter service call is done (``ros2 param load`` sets
+            # one parameter at a time): one rebuild, log and statement per file. Any cycle
+            # judged meanwhile rebuilds first.
+            self._rules_pending = True
+            seq, stamp_ns, ready = self._statement[:3]
+            if ready:
+                self._set_statement(seq, stamp_ns, False, WARMING_UP)
+            self._queue_rebuild()
+
+    def _queue_rebuild(self):
+        if self._rebuild_queued:
+            return
+        executor = self.executor
+        if executor is None:        # not spun: nothing to wait for
+            self._flush_rules()
+            return
+        self._rebuild_queued = True
+        executor.create_task(self._on_rebuild)
+
+    def _on_rebuild(self):
+        self._rebuild_queued = False
+        self._flush_rules()
+
+    def _flush_rules(self):
+        """Take the rules of the current parameters if they changed since the last time."""
+        if not self._rules_pending or self._base is None:
+            return
+        self._rules_pending = False
+        rules = self._rules({})
+        self._rules_now = rules
+        self._log_rules(rules)
+        if self._monitor is not None:
             self._monitor.set_rules(rules)
-            self._log_rules(rules)
-            self._set_statement(self._statement[0], self._statement[1], False,
-                                self._monitor.state)
+            if self._active:
+                seq, stamp_ns = self._statement[:2]
+                self._set_statement(seq, stamp_ns, False, self._monitor.state)
 
     def _log_rules(self, r):
         self.get_logger().info(
@@ -198,6 +359,9 @@ class MonitorNode(Node):
         return self.get_clock().now().nanoseconds
 
     def _on_cycle_status(self, msg):
+        if not self._active:
+            return      # not judging: the statement is false
+        self._flush_rules()     # rule parameters set just now apply to this cycle
         try:
             status = parse_cycle_status(msg)
         except ValueError as exc:
@@ -227,6 +391,8 @@ class MonitorNode(Node):
         # Any notice lowers a ready (a forged one can only cost a ready, never make one); only
         # a signed one of the current run moves the monitor's idea of the newest cycle, so a
         # forged huge seq cannot make every later verdict look superseded.
+        if not self._active:
+            return
         try:
             notice = parse_cycle_fired(msg)
         except ValueError:
@@ -241,6 +407,8 @@ class MonitorNode(Node):
             self._set_statement(seq, stamp_ns, False, Verdict.STATE_CYCLING)
 
     def _on_proximity(self, msg):
+        if not self._active:
+            return
         try:
             detected = proximity_detected(msg)
             stamp_ns = time_ns(msg.header.stamp)
@@ -286,10 +454,13 @@ class MonitorNode(Node):
     def _set_statement(self, seq, stamp_ns, ready, state, anomaly='', verdict=False):
         self._statement = (int(seq), stamp_ns, bool(ready), state, anomaly)
         msg = self._publish_statement()
-        if verdict:
+        if verdict and msg is not None:
             self._verdict_pub.publish(msg)
 
     def _publish_statement(self):
+        """Sign and publish the statement (a lifecycle publisher: sent only while active)."""
+        if self._ready_pub is None:
+            return None
         seq, stamp_ns, ready, state, anomaly = self._statement
         msg = signed_verdict(self._key, self._fqn, self._session, seq, stamp_ns, ready, state,
                              anomaly, self._now_ns())
@@ -315,6 +486,8 @@ class MonitorNode(Node):
             self._publish_statement()
 
     def _on_driver_liveliness(self, info):
+        if not self._active:
+            return
         # Any writer of cycle_status that lost its liveliness: the event does not say which
         # one, and another live writer (a forger's) must not hide a dead or stopped driver, so
         # every loss counts (a forger can only cost a ready this way).
@@ -325,8 +498,26 @@ class MonitorNode(Node):
                             f'{qos.DRIVER_LEASE_S:g} s: it died or hangs)')
 
     def _on_driver_transition(self, msg):
+        if not self._active:
+            return
         if msg.goal_state.label != 'active' and msg.start_state.label == 'active':
             self._interrupt(f'{self._driver} left its active state ({msg.transition.label})')
+
+    def _on_new_part(self, request, response):
+        if not self._active:
+            response.success = False
+            response.message = (f'refused: the monitor is {self.lifecycle_state}, not active '
+                                '(it judges nothing: a part placed now is judged from its '
+                                'activation)')
+            return response
+        self._monitor.new_part()
+        seq, stamp_ns = self._statement[:2]
+        self._set_statement(seq, stamp_ns, False, self._monitor.state)
+        response.success = True
+        response.message = (f'new part: edge1_ready false; warm-up and settling start again '
+                            f'({self._monitor.throws_to_go} throws before a ready can come)')
+        self.get_logger().info(response.message)
+        return response
 
     def _interrupt(self, reason):
         """No cycle can be judged (the driver left, stopped or is unproven): false, warm up."""
@@ -339,19 +530,19 @@ class MonitorNode(Node):
         seq, stamp_ns = self._statement[:2]
         self._set_statement(seq, stamp_ns, False, ANOMALY, reason)
 
-    def destroy_node(self):
-        # A clean exit says false, and waits (briefly) until the readers have it.
-        try:
-            seq, stamp_ns = self._statement[:2]
-            self._statement = (seq, stamp_ns, False, ANOMALY, 'monitor stopped')
-            self._publish_statement()
-            flush(self._ready_pub)
-        except Exception:   # noqa: B902 - context already gone: nothing can be said
-            pass
-        return super().destroy_node()
-
     # ------------------------------------------------------------------ diagnostics
     def _diag_readiness(self, stat):
+        lifecycle = self.lifecycle_state
+        common = {'lifecycle': lifecycle, 'trusted_driver': self._driver,
+                  'key_id': auth.key_id(self._key) if self._key else 'none', **self._work}
+        if not self._active:
+            # Not judging: edge1_ready is false (or was never sent); the rules, once analysed.
+            r = self._rules_now
+            stat.summary('warn', f'{lifecycle}: not judging, edge1_ready false' +
+                         ('' if r is not None else ' (not configured: no analysis)'))
+            stat.update({'state': lifecycle, **common, **(r.as_dict() if r else {}),
+                         'namespace': self.get_namespace()})
+            return
         m = self._monitor
         r = m.rules
         anomaly = self._anomaly_in_period
@@ -371,15 +562,15 @@ class MonitorNode(Node):
         if level != 'error' and r.provable and r.noisy_sensor:
             message = f'{message} (noisy sensor: {self._noise_note(r)})'
         stat.summary(level, message)
-        stat.update({'state': m.state, 'last_seq': m.last_seq, **m.counts,
-                     'trusted_driver': self._driver, 'key_id': auth.key_id(self._key),
+        stat.update({'state': m.state, 'last_seq': m.last_seq, **m.counts, **common,
                      'driver_session': self._gate.session or 'none',
                      'since_restart': m.since_restart, 'cycles_since_detection': m.gap,
                      'last_anomaly': m.last_anomaly, **r.as_dict(),
                      'namespace': self.get_namespace()})
 
     def _diag_inputs(self, stat):
-        refused = {k: v for k, v in self._gate.counts.items() if k != 'admitted'}
+        gate_counts = self._gate.counts if self._gate is not None else {}
+        refused = {k: v for k, v in gate_counts.items() if k != 'admitted'}
         bad = self._bad_input + sum(refused.values()) + self._counts['disagreements'] + \
             self._counts['unsigned_fired']
         level = 'warn' if bad > self._bad_mark else 'ok'
@@ -387,7 +578,7 @@ class MonitorNode(Node):
         stat.summary(level, 'every cycle report signed, fresh and in order' if level == 'ok'
                      else 'refused reports, malformed input or a contradicting proximity')
         # Informative only: who is on the graph decides nothing (docs/security.md).
-        stat.update({**self._gate.counts, **self._counts, 'bad_input': self._bad_input,
+        stat.update({**gate_counts, **self._counts, 'bad_input': self._bad_input,
                      'cycle_status_publishers':
                          self.count_publishers(self.resolve_topic_name('cycle_status'))})
 

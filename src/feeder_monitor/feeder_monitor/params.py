@@ -12,11 +12,13 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Parameter table of monitor_node (ROS-free; the spec type is feeder_common's)."""
+"""Parameter tables of monitor_node and feed_node (ROS-free; specs of feeder_common)."""
 
 from feeder_common.params import DIAGNOSTIC_PERIOD, KEY_FILE, ParamSpec, REALTIME_PRIORITY
 
 MONITOR_PARAMS = (
+    ParamSpec('autostart', True, 'configure and activate at start-up; false: wait for '
+              '~/change_state (ros2 lifecycle set)', read_only=True),
     ParamSpec('scene', '', "scene YAML the feeder runs (the same file as the sim's); must load",
               read_only=True, constraints='a file throwmap.load_scene accepts'),
     REALTIME_PRIORITY,
@@ -51,4 +53,23 @@ MONITOR_PARAMS = (
               'lapse, or a sent time older than this, must take the statement as false',
               minimum=0.02, maximum=60.0, read_only=True),
     DIAGNOSTIC_PERIOD,
+)
+
+FEED_PARAMS = (
+    ParamSpec('driver_node', 'feeder_driver', 'the node whose ~/trigger_cycle fires the cycles '
+              "and whose signed cycle reports say a cycle failed (relative to this node's "
+              'namespace, or absolute)', read_only=True, constraints='not empty',
+              max_length=256),
+    ParamSpec('monitor_node', 'feeder_monitor', 'the monitor whose signed verdicts prove a part '
+              "ready (relative to this node's namespace, or absolute)", read_only=True,
+              constraints='not empty', max_length=256),
+    KEY_FILE,
+    ParamSpec('max_statement_age', 1.0, 'a verdict or statement of the monitor sent longer ago '
+              'than this is not taken as proof, s; with no statement this fresh a goal is '
+              'refused (the monitor is not tracking)', minimum=0.05, maximum=60.0),
+    ParamSpec('max_report_age', 1.0, 'a cycle report sampled longer ago than this is ignored, s',
+              minimum=0.01, maximum=60.0),
+    ParamSpec('verdict_timeout', 10.0, 'a fired cycle without its verdict this long ends the goal '
+              "as a serial fault, s (more than the driver's cycle_timeout_s)", minimum=0.1,
+              maximum=3600.0),
 )

@@ -495,6 +495,10 @@ class ReadinessMonitor:
     def set_rules(self, rules):
         """Take new rules (e.g. the sensor moved): the warm-up starts again; no anomaly."""
         self.rules = rules
+        self.new_part()
+
+    def new_part(self):
+        """Take a part put on the arm: warm-up and settling start again; no anomaly."""
         self._restart_all()
         self.ready_seq = None
         self.state = WARMING_UP

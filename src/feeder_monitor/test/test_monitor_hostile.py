@@ -63,6 +63,7 @@ class Harness:
     """The monitor in its own context: its callbacks by topic, what it publishes."""
 
     def __init__(self, key_file):
+        from feeder_common.node import autostart
         from feeder_monitor.monitor_node import MonitorNode
         self.ctx = Context()
         rclpy.init(context=self.ctx, domain_id=reserve_domain_id())
@@ -70,6 +71,7 @@ class Harness:
             Parameter('scene', value=TRIANGLE), Parameter('orbit_throws', value=1000),
             Parameter('diagnostic_updater.period', value=0.1),
             Parameter('key_file', value=str(key_file))])
+        autostart(self.node)        # configure + activate, as the run helper does
         self.signer = messages.CycleSigner(auth.load_key(key_file), f'{NS}/feeder_driver')
         self.seq = 0
         self.on = {sub.topic_name: sub.callback for sub in self.node.subscriptions}
