@@ -106,12 +106,11 @@ def run_one(rclpy, design_path, floor, args, out):
     key = auth.ensure_key(key_file)
     k = ['-p', f'key_file:={key_file}']
     try:
-        procs.start('sim_hw', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-r',
-                    '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p',
-                    f'scene:={noisy}', '-p', f'cycle_period:={args.period}', '-p',
-                    f'truth_log:={truth_path}', *k)
-        procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-p',
-                    f'scene:={design_path}', *k)
+        procs.start('sim_hw', 'feeder_sim', 'standin_node', '--ros-args', *ns, '-r',
+                    '__node:=feeder_driver', '-p', f'scene:={noisy}', '-p',
+                    f'cycle_period:={args.period}', '-p', f'truth_log:={truth_path}', *k)
+        procs.start('predictor', 'feeder_sim', 'predictor_node', '--ros-args', *ns, '-p',
+                    f'scene:={design_path}')
         procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
                     f'scene:={design_path}', *k)
         lis.spin_until(lambda: lis.node.count_subscribers('/feeder/cycle_status') >= 3, 120,

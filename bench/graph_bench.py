@@ -176,16 +176,16 @@ def run_key(log_dir):
 
 def start(procs, which, period):
     rt = ('-p', f'realtime_priority:={REALTIME_PRIORITY}') if REALTIME_PRIORITY else ()
-    rt += run_key(procs.log_dir)
+    key = run_key(procs.log_dir)     # the stand-in signs, the monitor checks (not the predictor)
     if 'sim' in which:
-        procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
-                    '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p',
-                    f'scene:={SCENE}', '-p', f'cycle_period:={period}', *rt)
+        procs.start('sim', 'feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder',
+                    '-r', '__node:=feeder_driver', '-p', f'scene:={SCENE}', '-p',
+                    f'cycle_period:={period}', *rt, *key)
     if 'monitor' in which:
         procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', '-r',
-                    '__ns:=/feeder', '-p', f'scene:={SCENE}', *rt)
+                    '__ns:=/feeder', '-p', f'scene:={SCENE}', *rt, *key)
     if 'predictor' in which:
-        procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', '-r',
+        procs.start('predictor', 'feeder_sim', 'predictor_node', '--ros-args', '-r',
                     '__ns:=/feeder/predictor', '-r', 'cycle_status:=/feeder/cycle_status',
                     '-p', f'scene:={SCENE}', *rt)
     if 'recorder' in which:

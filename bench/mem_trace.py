@@ -19,7 +19,7 @@ What a node's memory grows by while cycling: tracemalloc in-process (issue 10's 
     python bench/mem_trace.py --node predictor|recorder [--seconds 120] [--period 0.005]
 
 The sim runs as the hardware (a process, as in bench/soak.py); the traced node (the predictor:
-feeder_sim's SimNode; or the bag recorder, recording the soak's topics) runs in this process
+feeder_sim's PredictorNode; or the bag recorder, recording the soak's topics) runs in this process
 under tracemalloc, started after a warm-up. Prints the Python allocations still alive at the
 end that were made after the warm-up, by line, per 1000 cycles, beside the process's RSS
 growth: Python objects that grow are a leak or an index; RSS growth without them is C-level
@@ -48,9 +48,9 @@ def make_node(which, context, out):
     from rclpy.parameter import Parameter
     if which == 'predictor':
         from feeder_common.node import autostart
-        from feeder_sim.sim_node import SimNode
-        node = SimNode(context=context, namespace='/feeder',
-                       parameter_overrides=[Parameter('scene', value=SCENE)])
+        from feeder_sim.predictor_node import PredictorNode
+        node = PredictorNode(context=context, namespace='/feeder',
+                             parameter_overrides=[Parameter('scene', value=SCENE)])
         autostart(node)
         return node, None
     from feeder_monitor.bag import BagWriter
@@ -76,8 +76,8 @@ def main():
     from rclpy.executors import SingleThreadedExecutor
     from std_srvs.srv import SetBool
     procs = Processes(out)
-    procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
-                '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p', f'scene:={SCENE}',
+    procs.start('sim', 'feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
+                '__node:=feeder_driver', '-p', f'scene:={SCENE}',
                 '-p', f'cycle_period:={args.period}')
     context = Context()
     rclpy.init(context=context)

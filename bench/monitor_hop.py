@@ -126,10 +126,9 @@ def main():
     auth.ensure_key(key_file)
     rclpy.init()
     try:
-        procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
-                    '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p',
-                    f'scene:={SCENE}', '-p', f'cycle_period:={args.period}',
-                    '-p', f'key_file:={key_file}')
+        procs.start('sim', 'feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder',
+                    '-r', '__node:=feeder_driver', '-p', f'scene:={SCENE}',
+                    '-p', f'cycle_period:={args.period}', '-p', f'key_file:={key_file}')
         executor = make_executor(args.executor)
         node = node_cls(namespace='/feeder',
                         parameter_overrides=[Parameter('scene', value=SCENE),

@@ -17,7 +17,7 @@
 Soak: the sim as hardware, the predictor, the monitor and the bag recorder, N cycles at the
 fastest period, then every cycle reconciled from the bag (issue 10). Not in CI.
 
-The sim (hardware mode, triangle, ``cycle_period`` 0.005 s, its minimum) cycles until it has
+The stand-in (standin_node, triangle, ``cycle_period`` 0.005 s, its minimum) cycles until it has
 fired N cycles; the recorder records ``cycle_status``, ``proximity``, ``edge1_verdict``,
 ``edge1_ready`` and the predictor's ``predicted/state``. The bag is
 read with the mcap reader (not the recorder's code) and every cycle is checked:
@@ -84,11 +84,11 @@ def key_path(out):
 def start(procs, bag, key):
     ns = ['-r', '__ns:=/feeder']
     k = ['-p', f'key_file:={key}']
-    procs.start('sim', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-r',
-                '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p', f'scene:={SCENE}',
+    procs.start('sim', 'feeder_sim', 'standin_node', '--ros-args', *ns, '-r',
+                '__node:=feeder_driver', '-p', f'scene:={SCENE}',
                 '-p', f'cycle_period:={PERIOD}', *k)
-    procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', *ns, '-p',
-                f'scene:={SCENE}', *k)
+    procs.start('predictor', 'feeder_sim', 'predictor_node', '--ros-args', *ns, '-p',
+                f'scene:={SCENE}')
     procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
                 f'scene:={SCENE}', *k)
     procs.start('recorder', 'feeder_monitor', 'bag_recorder', bag, '--topics', *TOPICS,

@@ -144,11 +144,11 @@ def main():
     try:
         scene = str(args.scene.resolve())
         key = f'key_file:={key_file}'
-        procs.start('sim_hw', 'feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder',
-                    '-r', '__node:=feeder_driver', '-p', 'hardware_mode:=true',
+        procs.start('sim_hw', 'feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder',
+                    '-r', '__node:=feeder_driver',
                     '-p', f'scene:={scene}', '-p', f'cycle_period:={args.period}', '-p', key)
-        procs.start('predictor', 'feeder_sim', 'sim_node', '--ros-args', '-r',
-                    '__ns:=/feeder', '-p', f'scene:={scene}', '-p', key)
+        procs.start('predictor', 'feeder_sim', 'predictor_node', '--ros-args', '-r',
+                    '__ns:=/feeder', '-p', f'scene:={scene}')
         procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', '-r',
                     '__ns:=/feeder', '-p', f'scene:={scene}', '-p', key)
         procs.start('recorder', 'feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',

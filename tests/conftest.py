@@ -26,8 +26,8 @@ machine never share a graph. Fixtures for the tests:
 * ``graph``: starts colcon-installed executables (ros2_ws/install/<pkg>/lib/<pkg>/<exe>) as
   processes with that environment; every one is stopped (SIGINT, then SIGTERM, then SIGKILL)
   when the test ends; ``graph.log(proc)`` returns what a process printed. Every driver_node,
-  sim_node and monitor_node it starts gets ``-p key_file:=<the test's key file>`` (unless the
-  test gives a key_file of its own, or ``key_file=None``).
+  standin_node and monitor_node it starts gets ``-p key_file:=<the test's key file>`` (unless
+  the test gives a key_file of its own, or ``key_file=None``).
 * ``ros``: a test node in its own rclpy context, with ``spin_until(predicate, timeout)``,
   ``call(srv_type, name, request)`` and ``set_parameters(node_name, {name: value})``; ``key``
   is the test's key (for ``feeder_common.messages.check_verdict``).
@@ -54,7 +54,7 @@ from feeder_testing import claim_domain_id, install_env  # noqa: E402, I100, I20
 
 
 # The executables that sign or check with the HMAC key (parameter key_file).
-SIGNING = {('feeder_driver', 'driver_node'), ('feeder_sim', 'sim_node'),
+SIGNING = {('feeder_driver', 'driver_node'), ('feeder_sim', 'standin_node'),
            ('feeder_monitor', 'monitor_node')}
 
 

@@ -46,20 +46,20 @@ FRESH_S = 1.0
 
 
 def sim_as_hardware(graph, *params, scene=TRIANGLE, ns='/feeder', wrapper=()):
-    """sim_node in place of the driver: /feeder/feeder_driver with hardware_mode."""
+    """standin_node in place of the driver: /feeder/feeder_driver, the driver's interface."""
     args = ['--ros-args', '-r', f'__ns:={ns}', '-r', '__node:=feeder_driver',
-            '-p', 'hardware_mode:=true', '-p', f'scene:={scene}']
+            '-p', f'scene:={scene}']
     for p in params:
         args += ['-p', p]
-    return graph.start('feeder_sim', 'sim_node', *args, name='sim_hw', wrapper=wrapper)
+    return graph.start('feeder_sim', 'standin_node', *args, name='sim_hw', wrapper=wrapper)
 
 
 def predictor(graph, *params, scene=TRIANGLE, ns='/feeder'):
-    """sim_node in predictor mode (/feeder/feeder_sim) beside the hardware, same namespace."""
+    """predictor_node (/feeder/feeder_sim) beside the hardware, in the same namespace."""
     args = ['--ros-args', '-r', f'__ns:={ns}', '-p', f'scene:={scene}']
     for p in params:
         args += ['-p', p]
-    return graph.start('feeder_sim', 'sim_node', *args, name='predictor')
+    return graph.start('feeder_sim', 'predictor_node', *args, name='predictor')
 
 
 def monitor(graph, *params, scene=TRIANGLE, ns='/feeder', wrapper=()):

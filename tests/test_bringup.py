@@ -106,10 +106,11 @@ def test_every_plan_names_only_installed_things(support, planner, given):
 def test_the_plans_start_what_the_issue_asks(support):
     sim = support.plan_sim({})
     names = [(s.executable, s.name, s.namespace) for s in sim if s.package not in OPTIONAL]
-    assert names == [('sim_node', 'feeder_driver', '/feeder'),
-                     ('sim_node', 'feeder_sim', '/feeder'),
+    assert names == [('standin_node', 'feeder_driver', '/feeder'),
+                     ('predictor_node', 'feeder_sim', '/feeder'),
                      ('monitor_node', 'feeder_monitor', '/feeder')]
-    assert sim[0].parameters[1]['hardware_mode'] is True
+    assert sim[0].parameters[0].endswith('/feeder_sim/config/standin.yaml')
+    assert sim[1].parameters[0].endswith('/feeder_sim/config/predictor.yaml')
     assert sim[0].parameters[1]['cycle_period'] == 1.0
     recorded = support.plan_sim({'record': f'{NEW}/bag1'})
     assert any(s.executable == 'bag_recorder' and s.arguments == [f'{NEW}/bag1']

@@ -27,7 +27,8 @@ The long run: bench/design_graph.py.
 
 from feeder_common.messages import parse_cycle_status
 from feeder_monitor.feed_check import design_prediction, judge_feed
-from feeder_nodes import monitor, REPO, run_cycles, sim_as_hardware, watch_monitor
+from feeder_nodes import (monitor, predictor, REPO, run_cycles, sim_as_hardware,
+                          watch_monitor)
 from feeder_sim.truth import read_truth_log
 from throwmap import load_scene
 from throwmap.search import noisy_design_scene, write_scene
@@ -80,13 +81,14 @@ def test_the_chosen_design_feeds_as_predicted_with_no_false_ready(graph, ros, tm
     assert report.consistent, report.line()
 
 
-def test_a_truth_log_needs_hardware_mode_and_a_writable_path(graph, tmp_path):
-    pred = graph.start('feeder_sim', 'sim_node', '--ros-args', '-p', f'scene:={DESIGN}', '-p',
-                       f'truth_log:={tmp_path / "truth.jsonl"}')
+def test_a_truth_log_is_the_stand_ins_and_needs_a_writable_path(graph, ros, tmp_path):
+    # The predictor has no true part: truth_log is not one of its parameters.
+    pred = predictor(graph, f'truth_log:={tmp_path / "truth.jsonl"}', scene=str(DESIGN))
     hw = sim_as_hardware(graph, f'truth_log:={tmp_path / "missing" / "truth.jsonl"}',
                          scene=str(DESIGN))
-    assert pred.wait(timeout=60) == 2
-    assert 'only hardware mode has a true part' in graph.log(pred)
+    line = 'parameter truth_log is not a parameter of predictor_node; ignored'
+    ros.spin_until(lambda: line in graph.log(pred), 60.0, line)
+    assert pred.poll() is None
     assert hw.wait(timeout=60) == 2
     assert 'cannot open it for writing' in graph.log(hw)
     assert not (tmp_path / 'truth.jsonl').exists()

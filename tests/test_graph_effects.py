@@ -163,7 +163,9 @@ def test_scenes_the_nodes_cannot_run_stop_them_with_the_reason(graph, tmp_path):
     }
     procs = []
     for scene, text in cases.items():
-        procs.append((graph.start('feeder_sim', 'sim_node', '--ros-args', '-p',
+        procs.append((graph.start('feeder_sim', 'predictor_node', '--ros-args', '-p',
+                                  f'scene:={scene}'), text))
+        procs.append((graph.start('feeder_sim', 'standin_node', '--ros-args', '-p',
                                   f'scene:={scene}'), text))
         procs.append((graph.start('feeder_monitor', 'monitor_node', '--ros-args', '-p',
                                   f'scene:={scene}'), text))

@@ -18,7 +18,7 @@ Issue 20, attack 3 on real DDS: one message killed the monitor (and the predicto
 A ``cycle_status`` whose ``stamp`` is ``'1'`` and 400 zeros raised OverflowError in the
 monitor (exit status 1) and AssertionError in the predictor (a Time of 10**391 s). Here this
 test's own process publishes it, and more garbage on ``cycle_status`` and ``proximity``, to the
-installed monitor_node and sim_node processes: both stay up, count the bad input in
+installed monitor_node and predictor_node processes: both stay up, count the bad input in
 /diagnostics, and judge and predict the next real cycle.
 """
 

@@ -41,8 +41,8 @@ def change(ros, transition_id, node=NODE):
 
 
 def test_services_follow_the_lifecycle(graph, ros):
-    graph.start('feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
-                '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p', 'autostart:=false',
+    graph.start('feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
+                '__node:=feeder_driver', '-p', 'autostart:=false',
                 '-p', f'scene:={TRIANGLE}', '-p', 'cycle_period:=0.05')
     edges = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     prox = Collector(ros, Range, '/feeder/proximity')

@@ -46,14 +46,17 @@ def test_bad_values_are_rejected_and_good_ones_applied(graph, ros):
 
     # sim: domain of f, ranges, read-only, types
     r = ros.set_parameters(SIM, {'start_radius': 0.001, 'start_edge': 7, 'cycle_period': 0.001,
-                                 'sensor_radius': -1.0, 'scene': 'scenes/bracket.yaml',
-                                 'hardware_mode': False})
+                                 'sensor_radius': -1.0, 'scene': 'scenes/bracket.yaml'})
     rejected(r['start_radius'], 'no dynamic grasp on edge 1', 'R >= 0.016')
     rejected(r['start_edge'], 'edge 7 does not exist')
     rejected(r['cycle_period'])
     rejected(r['sensor_radius'])
     rejected(r['scene'], 'read-only')
-    rejected(r['hardware_mode'], 'read-only')
+    # One node per executable (issue 23 item 7a): the stand-in has none of the predictor's
+    # parameters, the predictor none of the driver's, and neither has a mode switch.
+    for name, node in (('hardware_mode', SIM), ('hardware_mode', PRED),
+                       ('markers_period', SIM), ('cycle_period', PRED), ('key_file', PRED)):
+        rejected(ros.set_parameters(node, {name: 0.5})[name])
     rejected(ros.set_parameters(SIM, {'start_radius': 'far'})['start_radius'])
     assert ros.get_parameters(SIM, ['start_edge', 'start_radius', 'cycle_period']) == \
         {'start_edge': 1, 'start_radius': 0.12, 'cycle_period': 1.0}
@@ -97,10 +100,10 @@ def test_bad_values_are_rejected_and_good_ones_applied(graph, ros):
 def test_a_scene_that_does_not_load_stops_the_node_with_throwmaps_message(graph, tmp_path):
     bad = tmp_path / 'bad.yaml'
     bad.write_text(open(TRIANGLE).read() + 'bogus_key: 1\n')
-    sim = graph.start('feeder_sim', 'sim_node', '--ros-args', '-p', f'scene:={bad}')
+    sim = graph.start('feeder_sim', 'standin_node', '--ros-args', '-p', f'scene:={bad}')
     mon = graph.start('feeder_monitor', 'monitor_node', '--ros-args', '-p',
                       f'scene:={tmp_path / "missing.yaml"}')
-    unset = graph.start('feeder_sim', 'sim_node')
+    unset = graph.start('feeder_sim', 'predictor_node')
     assert sim.wait(timeout=60) == 2
     assert 'bogus_key: unknown key' in graph.log(sim)
     assert 'allowed here' in graph.log(sim)
@@ -108,6 +111,19 @@ def test_a_scene_that_does_not_load_stops_the_node_with_throwmaps_message(graph,
     assert 'no such file' in graph.log(mon)
     assert unset.wait(timeout=60) == 2
     assert 'scene: not set' in graph.log(unset)
+
+
+def test_the_old_mode_switch_is_an_unknown_parameter_of_both_nodes(graph, ros):
+    """hardware_mode is gone: each node warns as for any parameter it does not take."""
+    hw = sim_as_hardware(graph, 'hardware_mode:=true', 'markers_period:=0.2')
+    pred = predictor(graph, 'hardware_mode:=false', 'cycle_period:=0.5')
+    wait_for_publishers(ros, '/feeder/predicted/state', 1)
+    for proc, prog, names in ((hw, 'standin_node', ('hardware_mode', 'markers_period')),
+                              (pred, 'predictor_node', ('hardware_mode', 'cycle_period'))):
+        for name in names:
+            line = f'parameter {name} is not a parameter of {prog}; ignored'
+            ros.spin_until(lambda line=line, proc=proc: line in graph.log(proc), 30.0, line)
+    assert hw.poll() is None and pred.poll() is None
 
 
 def test_a_parameter_file_costs_the_monitor_one_analysis(graph, ros):

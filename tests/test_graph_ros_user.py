@@ -42,10 +42,11 @@ def driver(graph, *params, ns='/feeder', name=None, extra=()):
 
 
 def sim(graph, *params, ns='/feeder', hardware=False, extra=()):
+    """predictor_node (node feeder_sim), or with ``hardware`` standin_node (feeder_driver)."""
     args = ['--ros-args', '-r', f'__ns:={ns}', '-p', f'scene:={TRIANGLE}', *extra]
     if hardware:
-        args += ['-r', '__node:=feeder_driver', '-p', 'hardware_mode:=true']
-    return graph.start('feeder_sim', 'sim_node', *args,
+        args += ['-r', '__node:=feeder_driver']
+    return graph.start('feeder_sim', 'standin_node' if hardware else 'predictor_node', *args,
                        *[a for p in params for a in ('-p', p)],
                        name='sim_hw' if hardware else 'predictor')
 
@@ -70,14 +71,17 @@ def wait_for_node(ros, fqn, timeout=STARTUP_TIMEOUT):
 
 START = {       # node: (start function, fully qualified name)
     'driver': (driver, '/feeder/feeder_driver'),
-    'sim': (sim, '/feeder/feeder_sim'),
+    'standin': (lambda graph, *params: sim(graph, *params, hardware=True),
+                '/feeder/feeder_driver'),
+    'predictor': (sim, '/feeder/feeder_sim'),
     'monitor': (monitor, '/feeder/feeder_monitor'),
 }
 
 
 @pytest.mark.parametrize('node, param, given, expected', [
     ('driver', 'cycle_period', '1', 1.0),
-    ('sim', 'cycle_period', '2', 2.0),
+    ('standin', 'cycle_period', '2', 2.0),
+    ('predictor', 'markers_period', '1', 1.0),
     ('monitor', 'silence_margin', '2', 2.0),
 ])
 def test_an_integer_for_a_double_is_that_double(graph, ros, node, param, given, expected):
@@ -93,9 +97,11 @@ BAD = [
     ('driver', 'cycle_period:=abc', "cycle_period must be a double, got string 'abc'"),
     ('driver', 'baud_rate:=1.5', 'baud_rate must be an integer, got double 1.5'),
     ('driver', 'frame_id:=5', 'frame_id must be a string, got integer 5'),
-    ('sim', 'cycle_period:=abc', "cycle_period must be a double, got string 'abc'"),
-    ('sim', 'start_edge:=1.5', 'start_edge must be an integer, got double 1.5'),
-    ('sim', 'scene:=5', 'scene must be a string, got integer 5'),
+    ('standin', 'cycle_period:=abc', "cycle_period must be a double, got string 'abc'"),
+    ('standin', 'start_edge:=1.5', 'start_edge must be an integer, got double 1.5'),
+    ('predictor', 'markers_period:=abc', "markers_period must be a double, got string 'abc'"),
+    ('predictor', 'start_edge:=1.5', 'start_edge must be an integer, got double 1.5'),
+    ('predictor', 'scene:=5', 'scene must be a string, got integer 5'),
     ('monitor', 'warmup_cycles:=1.5', 'warmup_cycles must be an integer, got double 1.5'),
     ('monitor', 'scene:=5', 'scene must be a string, got integer 5'),
     ('monitor', 'silence_margin:=true', 'silence_margin must be a double, got bool True'),
@@ -116,7 +122,8 @@ def test_every_other_type_error_is_one_line_and_exit_2(graph):
 
 CONFIGS = {
     'driver': REPO / 'src' / 'feeder_driver' / 'config' / 'driver.yaml',
-    'sim': REPO / 'src' / 'feeder_sim' / 'config' / 'sim.yaml',
+    'standin': REPO / 'src' / 'feeder_sim' / 'config' / 'standin.yaml',
+    'predictor': REPO / 'src' / 'feeder_sim' / 'config' / 'predictor.yaml',
     'monitor': REPO / 'src' / 'feeder_monitor' / 'config' / 'monitor.yaml',
 }
 
@@ -131,17 +138,20 @@ def test_every_shipped_config_loads_at_start_up_and_at_run_time(graph, ros):
     """--params-file at start-up; then the file's values set through the parameter services."""
     started = {
         '/feeder/feeder_driver': (CONFIGS['driver'], driver(graph)),
-        '/feeder/feeder_sim': (CONFIGS['sim'], sim(graph)),
-        '/other/feeder_driver': (CONFIGS['sim'], sim(graph, ns='/other', hardware=True)),
+        '/feeder/feeder_sim': (CONFIGS['predictor'], sim(graph)),
+        '/other/feeder_driver': (CONFIGS['standin'], sim(graph, ns='/other', hardware=True)),
         '/feeder/feeder_monitor': (CONFIGS['monitor'], monitor(graph)),
     }
     with_file = {
         '/f/feeder_driver': (CONFIGS['driver'], driver(
             graph, ns='/f', name='driver_file', extra=('--params-file', CONFIGS['driver']))),
-        '/f/feeder_sim': (CONFIGS['sim'], graph.start(
-            'feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/f', '--params-file',
-            CONFIGS['sim'], '-p', f'scene:={TRIANGLE}', '-p', 'cycle_period:=3',
-            name='sim_file')),
+        '/f/feeder_sim': (CONFIGS['predictor'], graph.start(
+            'feeder_sim', 'predictor_node', '--ros-args', '-r', '__ns:=/f', '--params-file',
+            CONFIGS['predictor'], '-p', f'scene:={TRIANGLE}', '-p', 'markers_period:=3',
+            name='predictor_file')),
+        '/g/feeder_driver': (CONFIGS['standin'], sim(
+            graph, 'cycle_period:=3', ns='/g', hardware=True,
+            extra=('--params-file', CONFIGS['standin']))),
         '/f/feeder_monitor': (CONFIGS['monitor'], graph.start(
             'feeder_monitor', 'monitor_node', '--ros-args', '-r', '__ns:=/f', '--params-file',
             CONFIGS['monitor'], '-p', f'scene:={TRIANGLE}', name='monitor_file')),
@@ -152,7 +162,9 @@ def test_every_shipped_config_loads_at_start_up_and_at_run_time(graph, ros):
         values = config_values(path, fqn)
         assert values, f'{path} has no parameters for {fqn}'
         got = ros.get_parameters(fqn, list(values))
-        expected = dict(values, **({'cycle_period': 3.0} if 'sim' in fqn else {}))
+        # A -p after the file wins.
+        expected = dict(values, **{'/f/feeder_sim': {'markers_period': 3.0},
+                                   '/g/feeder_driver': {'cycle_period': 3.0}}.get(fqn, {}))
         assert got == expected, fqn
     for fqn, (path, proc) in started.items():
         values = config_values(path, fqn)
@@ -275,7 +287,8 @@ def test_the_hardware_stand_in_offers_exactly_the_drivers_interface(graph, ros):
 def test_the_configs_are_the_installed_ones():
     """Check that the files tested above are the installed ones (share/<pkg>/config)."""
     install = REPO / 'ros2_ws' / 'install'
-    for pkg, path in (('feeder_driver', CONFIGS['driver']), ('feeder_sim', CONFIGS['sim']),
+    for pkg, path in (('feeder_driver', CONFIGS['driver']), ('feeder_sim', CONFIGS['standin']),
+                      ('feeder_sim', CONFIGS['predictor']),
                       ('feeder_monitor', CONFIGS['monitor'])):
         installed = install / pkg / 'share' / pkg / 'config' / path.name
         assert installed.read_text() == pathlib.Path(path).read_text(), installed

@@ -60,10 +60,12 @@ def session_processes(sid):
 
 
 @pytest.mark.parametrize('launch_file, shown', [
-    ('sim.launch.py', ["pkg='feeder_sim', exec='sim_node'", "exec='monitor_node'",
+    ('sim.launch.py', ["pkg='feeder_sim', exec='standin_node'",
+                       "pkg='feeder_sim', exec='predictor_node'", "exec='monitor_node'",
                        "exec='bag_recorder'", "exec='robot_state_publisher'", "exec='rviz2'"]),
     ('hardware.launch.py', ["exec='controller_emulator'", "exec='driver_node'",
-                            "exec='sim_node'", "exec='monitor_node'", "exec='bag_recorder'"]),
+                            "exec='predictor_node'", "exec='monitor_node'",
+                            "exec='bag_recorder'"]),
 ])
 def test_print_shows_the_nodes(cli, launch_file, shown):
     status, out = ros_cli.run([*LAUNCH[:1], '-p', *LAUNCH[1:], launch_file], cli)

@@ -20,7 +20,7 @@ import re
 from feeder_driver import params as driver_params
 from feeder_driver import protocol
 from feeder_monitor.params import MONITOR_PARAMS
-from feeder_sim.params import SIM_PARAMS
+from feeder_sim.params import PREDICTOR_PARAMS, STANDIN_PARAMS
 import pytest
 from throwmap.cli import build_parser
 
@@ -47,7 +47,8 @@ def table_after(marker):
 
 @pytest.mark.parametrize('marker, specs', [
     ('**driver_node** (`feeder_driver`)', [s.name for s in driver_params.SPECS]),
-    ('**sim_node** (`feeder_sim`)', [s.name for s in SIM_PARAMS]),
+    ('**standin_node** (`feeder_sim`', [s.name for s in STANDIN_PARAMS]),
+    ('**predictor_node** (`feeder_sim`', [s.name for s in PREDICTOR_PARAMS]),
     ('**monitor_node** (`feeder_monitor`)', [s.name for s in MONITOR_PARAMS]),
 ])
 def test_parameter_tables_list_exactly_the_declared_parameters(marker, specs):
@@ -56,7 +57,7 @@ def test_parameter_tables_list_exactly_the_declared_parameters(marker, specs):
 
 def test_driver_defaults_in_readme_are_the_declared_ones():
     start = README.index('**driver_node** (`feeder_driver`)')
-    block = README[start:README.index('**sim_node**')]
+    block = README[start:README.index('**standin_node**')]
     for spec in driver_params.SPECS:
         row = next(line for line in block.split('\n') if line.startswith(f'| `{spec.name}` |'))
         default = row.split('|')[3].strip().strip('`')

@@ -110,8 +110,8 @@ def test_sim_launch_param_load_lifecycle_and_ctrl_c(cli, ros, tmp_path, launches
 
     share = {pkg: SHARE / pkg / 'share' / pkg / 'config' for pkg in
              ('feeder_sim', 'feeder_monitor', 'feeder_driver')}
-    param_load(cli, '/feeder/feeder_driver', share['feeder_sim'] / 'sim.yaml')
-    param_load(cli, '/feeder/feeder_sim', share['feeder_sim'] / 'sim.yaml')
+    param_load(cli, '/feeder/feeder_driver', share['feeder_sim'] / 'standin.yaml')
+    param_load(cli, '/feeder/feeder_sim', share['feeder_sim'] / 'predictor.yaml')
     param_load(cli, '/feeder/feeder_monitor', share['feeder_monitor'] / 'monitor.yaml')
 
     status, out = ros_cli.run(['lifecycle', 'set', '--no-daemon', '--spin-time', '3',
@@ -119,11 +119,11 @@ def test_sim_launch_param_load_lifecycle_and_ctrl_c(cli, ros, tmp_path, launches
     assert status == 0 and 'Transitioning successful' in out, out
     ros.spin_until(lambda: '/feeder/feeder_sim' not in nodes_on_graph(ros), 5.0,
                    'the predictor off the graph')
-    ros.spin_until(lambda: '[sim_node-2]: process has finished cleanly' in launch.log, 10.0,
+    ros.spin_until(lambda: '[predictor_node-2]: process has finished cleanly' in launch.log, 10.0,
                    'the predictor process to end')
     assert launch.stop() == 0, launch.log
     log = launch.log
-    for exe in ('sim_node-1', 'sim_node-2', 'monitor_node-3', 'bag_recorder-4'):
+    for exe in ('standin_node-1', 'predictor_node-2', 'monitor_node-3', 'bag_recorder-4'):
         assert f'[INFO] [{exe}]: process has finished cleanly' in log, log
     assert 'Traceback' not in log and 'process has died' not in log, log
     ros.spin_until(lambda: not set(names) & nodes_on_graph(ros), 3.0, 'every node gone')
@@ -154,9 +154,8 @@ def test_hardware_launch_with_the_emulator(cli, ros, tmp_path, launches):
 def test_an_integer_for_a_double_in_launch_xml(cli, ros, tmp_path, launches):
     xml = tmp_path / 'one.launch.xml'
     xml.write_text(f"""<launch>
-  <node pkg="feeder_sim" exec="sim_node" name="feeder_driver" namespace="/xml">
+  <node pkg="feeder_sim" exec="standin_node" name="feeder_driver" namespace="/xml">
     <param name="scene" value="{TRIANGLE}"/>
-    <param name="hardware_mode" value="true"/>
     <param name="cycle_period" value="1"/>
   </node>
 </launch>
@@ -185,7 +184,7 @@ def test_realtime_priority_through_ros2_launch(cli, ros, tmp_path, launches):
             for line in launch.log.splitlines() if 'process started with pid' in line}
     nodes = {pid: exe for pid, exe in pids.items() if not exe.startswith('controller_emulator')}
     assert sorted(exe.rsplit('-', 1)[0] for exe in nodes.values()) == \
-        ['driver_node', 'monitor_node', 'sim_node'], launch.log
+        ['driver_node', 'monitor_node', 'predictor_node'], launch.log
     for pid, exe in nodes.items():
         assert set(threads(pid).values()) == {(os.SCHED_FIFO, 5)}, exe
     emulator = next(pid for pid, exe in pids.items() if exe.startswith('controller_emulator'))

@@ -23,7 +23,7 @@ its stand-in share cycle_period's range, the stand-in takes the driver's config/
 from feeder_driver import params as driver_params
 from feeder_monitor.params import MONITOR_PARAMS
 from feeder_nodes import sim_as_hardware, STARTUP_TIMEOUT, TRIANGLE
-from feeder_sim.params import SIM_PARAMS
+from feeder_sim.params import PREDICTOR_PARAMS, STANDIN_PARAMS
 from feeder_testing import INSTALL
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.srv import SetParametersAtomically
@@ -35,7 +35,8 @@ DRIVER_YAML = INSTALL / 'feeder_driver' / 'share' / 'feeder_driver' / 'config' /
 
 
 def test_shared_parameters_have_one_name_and_one_spec():
-    tables = {'driver': driver_params.SPECS, 'sim': SIM_PARAMS, 'monitor': MONITOR_PARAMS}
+    tables = {'driver': driver_params.SPECS, 'standin': STANDIN_PARAMS,
+              'predictor': PREDICTOR_PARAMS, 'monitor': MONITOR_PARAMS}
     specs = {}
     for node, table in tables.items():
         for spec in table:
@@ -49,20 +50,20 @@ def test_shared_parameters_have_one_name_and_one_spec():
     assert set(specs['diagnostic_updater.period']) == set(tables)
     # Every run-time parameter of the driver's file is the stand-in's too.
     driver_file = yaml.safe_load(DRIVER_YAML.read_text())['/**']['ros__parameters']
-    assert set(driver_file) <= {s.name for s in SIM_PARAMS}
+    assert set(driver_file) <= {s.name for s in STANDIN_PARAMS}
 
 
 def test_the_stand_in_takes_the_drivers_file(graph, ros):
-    proc = graph.start('feeder_sim', 'sim_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
-                       '__node:=feeder_driver', '-p', 'hardware_mode:=true', '-p',
-                       f'scene:={TRIANGLE}', '--params-file', DRIVER_YAML, name='stand_in')
+    proc = graph.start('feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
+                       '__node:=feeder_driver', '-p', f'scene:={TRIANGLE}',
+                       '--params-file', DRIVER_YAML, name='stand_in')
     values = ros.get_parameters('/feeder/feeder_driver',
                                 ['cycle_period', 'ack_timeout_s', 'diagnostic_updater.period'],
                                 timeout=STARTUP_TIMEOUT)
     assert values == {'cycle_period': 1.0, 'ack_timeout_s': 0.5,
                       'diagnostic_updater.period': 1.0}, values
     log = graph.log(proc)
-    assert 'is not a parameter of sim_node' not in log, log
+    assert 'is not a parameter of standin_node' not in log, log
     # As one batch (ros2 param load): every key of the file, set atomically.
     driver_file = yaml.safe_load(DRIVER_YAML.read_text())['/**']['ros__parameters']
     request = SetParametersAtomically.Request(parameters=[
@@ -86,7 +87,7 @@ def test_the_old_name_still_sets_the_one_name_with_a_warning(graph, ros):
     assert values == {'diagnostic_updater.period': 0.5}
     log = graph.log(proc)
     assert 'diagnostics_period is now called diagnostic_updater.period' in log, log
-    assert 'is not a parameter of sim_node' not in log, log
+    assert 'is not a parameter of standin_node' not in log, log
 
 
 def test_enable_on_sim_time_without_clock_says_why_nothing_fires(graph, ros):

@@ -31,8 +31,11 @@ setup(
     zip_safe=True,
     maintainer='feeder team',
     maintainer_email='feeder@example.com',
-    description='Feeder simulator node: predicted part states; can stand in for the hardware',
+    description='Feeder simulator nodes: the hardware stand-in and the predictor of part states',
     license='Apache-2.0',
     extras_require={'test': ['pytest']},
-    entry_points={'console_scripts': ['sim_node = feeder_sim.sim_node:main']},
+    entry_points={'console_scripts': [
+        'standin_node = feeder_sim.standin_node:main',
+        'predictor_node = feeder_sim.predictor_node:main',
+    ]},
 )

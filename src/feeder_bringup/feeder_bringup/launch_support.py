@@ -116,8 +116,8 @@ class Slot:
 SLOTS = {
     'emulator': Slot('feeder_driver', 'controller_emulator', arguments=6),
     'driver': Slot('feeder_driver', 'driver_node', 'feeder_driver', parameters=2),
-    'hardware': Slot('feeder_sim', 'sim_node', 'feeder_driver', parameters=2),
-    'predictor': Slot('feeder_sim', 'sim_node', 'feeder_sim', parameters=2),
+    'hardware': Slot('feeder_sim', 'standin_node', 'feeder_driver', parameters=2),
+    'predictor': Slot('feeder_sim', 'predictor_node', 'feeder_sim', parameters=2),
     'monitor': Slot('feeder_monitor', 'monitor_node', 'feeder_monitor', parameters=2),
     'recorder': Slot('feeder_monitor', 'bag_recorder', 'feeder_bag_recorder', arguments=1),
     'robot_state_publisher': Slot('robot_state_publisher', 'robot_state_publisher',
@@ -383,7 +383,7 @@ def _common_nodes(args, ns, scene):
     want_rviz = _optional(args, 'rviz', 'rviz2')
     arm_length = number(args, 'arm_length', minimum=0.01)
     nodes = [
-        _spec('predictor', ns, [str(share('feeder_sim') / 'config' / 'sim.yaml'),
+        _spec('predictor', ns, [str(share('feeder_sim') / 'config' / 'predictor.yaml'),
                                 {'scene': scene, **sensor, **rt}]),
         _spec('monitor', ns, [str(share('feeder_monitor') / 'config' / 'monitor.yaml'),
                               {'scene': scene, **sensor, **rt, **_key_parameter(args)}]),
@@ -402,12 +402,12 @@ def _common_nodes(args, ns, scene):
 
 
 def plan_sim(given):
-    """Plan the simulated feeder: the sim as hardware, the predictor, the monitor (+ options)."""
+    """Plan the simulated feeder: the hardware stand-in, predictor, monitor (+ options)."""
     args = given if isinstance(given, Arguments) else Arguments(SIM_ARGUMENTS, given)
     ns = namespace(args['namespace'])
     scene = resolve_scene(args['scene'])
-    hardware = _spec('hardware', ns, [str(share('feeder_sim') / 'config' / 'sim.yaml'),
-                                      {'scene': scene, 'hardware_mode': True,
+    hardware = _spec('hardware', ns, [str(share('feeder_sim') / 'config' / 'standin.yaml'),
+                                      {'scene': scene,
                                        'cycle_period': number(args, 'cycle_period', 0.005),
                                        **_sensor_parameter(args), **_realtime_parameter(args),
                                        **_key_parameter(args)}])

@@ -13,10 +13,13 @@
 # limitations under the License.
 
 """
-feeder_sim: the feeder's simulator node (the predictor, or the hardware's stand-in).
+feeder_sim: the feeder's simulator nodes, one per executable.
 
-ROS-free modules: ``analysis`` (scene analysis at a chosen sensor radius), ``predictor`` (the
-part's state, throw by throw), ``markers`` (RViz geometry in the library's plane), ``params``
-(the parameter table and the checks that need the scene). ROS glue: ``marker_msgs`` (Marker
-messages in feeder_base) and ``sim_node``; the shared contract is feeder_common's.
+``standin_node`` (class StandInNode) stands in for the hardware with exactly the driver's
+interface; ``predictor_node`` (class PredictorNode) predicts the part's state from the
+driver's cycle reports. ROS-free modules: ``markers`` (RViz geometry in the library's plane),
+``params`` (both nodes' parameter tables and the checks that need the scene), ``truth`` (the
+stand-in's truth log). ROS glue: ``part_node`` (the lifecycle skeleton both nodes share),
+``marker_msgs`` (Marker messages in feeder_base) and the two node modules; the shared
+contract is feeder_common's.
 """

@@ -13,11 +13,13 @@
 # limitations under the License.
 
 """
-Parameter table of sim_node (ROS-free) and the checks a range cannot express.
+Parameter tables of feeder_sim's two nodes (ROS-free) and the checks a range cannot express.
 
-The spec type, the type coercion and the range checks are feeder_common's; here are the sim's
-parameters and the checks that need the scene: a scene that must load, a start state inside
-the domain of f. Each check returns the reason of a rejection, or None.
+The spec type, the type coercion and the range checks are feeder_common's; here are the
+parameters of ``standin_node`` (the hardware's stand-in) and ``predictor_node`` (the
+predictor), each declaring only its own, and the checks that need the scene: a scene that
+must load, a start state inside the domain of f. Each check returns the reason of a
+rejection, or None.
 """
 
 import math
@@ -27,18 +29,16 @@ from feeder_common.params import (check_link, check_scene, CYCLE_PERIOD, DIAGNOS
                                   ParamSpec, REALTIME_PRIORITY, SENSOR_RANGE)
 
 
-SIM_PARAMS = (
+# What both nodes take: the lifecycle, the scene, the part's start state and the sensor.
+SHARED_PARAMS = (
     ParamSpec('autostart', True, 'configure and activate at start-up; false: wait for '
               '~/change_state (ros2 lifecycle set)', read_only=True),
     REALTIME_PRIORITY,
     ParamSpec('scene', '', 'scene YAML (throwmap format, e.g. scenes/triangle.yaml); must load',
               read_only=True, constraints='a file throwmap.load_scene accepts'),
-    ParamSpec('hardware_mode', False, 'true: stand in for the driver, with exactly its '
-              'interface (services ~/trigger_cycle, ~/enable; topics proximity, cycle_status, '
-              'joint_states), sensor bits from the simulated part; false: the predictor, '
-              "following the driver's cycle_status", read_only=True),
     ParamSpec('start_edge', 0, 'edge the part rests on before the first throw (default: the '
-              "scene's start); setting it (or start_radius) restarts the prediction there",
+              "scene's start); setting it (or start_radius) restarts the part (stand-in) or "
+              'the prediction (predictor) there',
               minimum=0, maximum=1023,
               constraints='a stable edge; (start_edge, start_radius) in the domain of f'),
     ParamSpec('start_radius', 0.0, "R before the first throw, m (default: the scene's start)",
@@ -46,25 +46,33 @@ SIM_PARAMS = (
               constraints='(start_edge, start_radius) in the domain of f'),
     ParamSpec('sensor_radius', 0.0, 'arm coordinate x of the proximity sensor, m; 0: the '
               "analysis's choice (throwmap sensor design)", minimum=0.0, maximum=10.0),
+    DIAGNOSTIC_PERIOD,
+)
+
+# standin_node: exactly the driver's interface, so it takes the driver's cycle parameters (one
+# file, the driver's config/driver.yaml, serves both): sensor_range_m and frame_id of
+# proximity, cycle_period, key_file, joint_states_rate; the serial link's timing is checked as
+# the driver checks it and changes nothing (there is no link).
+STANDIN_PARAMS = SHARED_PARAMS + (
     ParamSpec('seed', -1, "seed of the scene's random effects (release_noise, sensor_noise) for "
-              "the throws and readings of hardware mode; -1: the scene's noise.seed",
+              "the stand-in's throws and readings; -1: the scene's noise.seed",
               minimum=-1, maximum=2 ** 31 - 1, read_only=True),
-    ParamSpec('truth_log', '', 'hardware mode: file for one JSON line per cycle with the '
-              "part's true state (feeder_sim/truth.py), to count false readies against; '': "
-              'none', read_only=True, constraints='a writable path; hardware mode only'),
-    # Hardware mode takes the driver's cycle parameters (one file, config/driver.yaml, serves
-    # both): sensor_range_m and frame_id of proximity, cycle_period; the serial link's timing
-    # is checked as the driver checks it and changes nothing (there is no link).
+    ParamSpec('truth_log', '', "file for one JSON line per cycle with the part's true state "
+              "(feeder_sim/truth.py), to count false readies against; '': none",
+              read_only=True, constraints='a writable path'),
     SENSOR_RANGE,
     FRAME_ID,
     CYCLE_PERIOD,
     *LINK_SPECS,
-    ParamSpec('markers_period', 0.1, 'predictor mode: at most one markers message per this many '
-              'seconds (the last state always follows within it); 0: one after every throw',
+    KEY_FILE,               # signs the cycle reports as the driver does
+    JOINT_STATES_RATE,      # the arm's swing after each (instantaneous) cycle
+)
+
+# predictor_node: follows the driver's cycle_status; publishes predicted/* and markers.
+PREDICTOR_PARAMS = SHARED_PARAMS + (
+    ParamSpec('markers_period', 0.1, 'at most one markers message per this many seconds (the '
+              'last state always follows within it); 0: one after every throw',
               minimum=0.0, maximum=10.0),
-    DIAGNOSTIC_PERIOD,
-    KEY_FILE,       # hardware mode: signs the cycle reports as the driver does
-    JOINT_STATES_RATE,      # hardware mode: the arm's swing after each (instantaneous) cycle
 )
 
 

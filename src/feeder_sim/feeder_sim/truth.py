@@ -15,9 +15,10 @@
 """
 The hardware stand-in's truth log (ROS-free): one JSON line per fired cycle.
 
-The real feeder cannot say where the part lies; the sim in hardware mode can. Its ROS interface
-stays exactly the driver's, so the true state goes to a file (parameter ``truth_log``, off by
-default) for a run to count false readies against: a header line, then per cycle its ``seq``,
+The real feeder cannot say where the part lies; the hardware stand-in (standin_node) can.
+Its ROS interface stays exactly the driver's, so the true state goes to a file (parameter
+``truth_log``, off by default) for a run to count false readies against: a header line, then
+per cycle its ``seq``,
 the state before and after the throw (``edge0``, ``R0``, ``edge``, ``R``; edge -1 and R null:
 no part on the arm), the throw's ``kind``, the reported sensor bit ``detected`` and the
 geometric ``seen`` (differs from ``detected`` only with sensor_noise), or ``error`` for a

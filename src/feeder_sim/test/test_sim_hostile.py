@@ -15,7 +15,7 @@
 """
 Issue 20 (deliverable 5): no ``cycle_status`` crashes the predictor; a refused one counts.
 
-The real SimNode in predictor mode runs in-process (own context, own domain), configured and
+The real PredictorNode runs in-process (own context, own domain), configured and
 active; its one subscription callback (``cycle_status``, found by topic) is called with
 hypothesis-generated statuses as a subscriber receives them (tests/hostile_messages.py). No
 exception may escape, its count of bad statuses (/diagnostics) is exactly the number the
@@ -63,10 +63,10 @@ class Predictor:
 
     def __init__(self):
         from feeder_common.node import autostart
-        from feeder_sim.sim_node import SimNode
+        from feeder_sim.predictor_node import PredictorNode
         self.ctx = Context()
         rclpy.init(context=self.ctx, domain_id=reserve_domain_id())
-        self.node = SimNode(context=self.ctx, namespace=NS, parameter_overrides=[
+        self.node = PredictorNode(context=self.ctx, namespace=NS, parameter_overrides=[
             Parameter('scene', value=TRIANGLE), Parameter('diagnostic_updater.period', value=0.1)])
         autostart(self.node)
         self.on = {sub.topic_name: sub.callback for sub in self.node.subscriptions}

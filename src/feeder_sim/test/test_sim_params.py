@@ -15,7 +15,8 @@
 import pathlib
 
 from feeder_common.params import check_scene
-from feeder_sim.params import check_start, SIM_PARAMS
+from feeder_sim.params import check_start, PREDICTOR_PARAMS, SHARED_PARAMS, STANDIN_PARAMS
+import pytest
 from throwmap import load_scene as load
 
 
@@ -44,11 +45,12 @@ def test_start_checks_use_the_domain_of_f(triangle):
     assert 'finite' in check_start(triangle.model, 1, float('nan'))
 
 
-def test_specs_are_typed_ranged_and_documented():
-    names = [s.name for s in SIM_PARAMS]
+@pytest.mark.parametrize('table', [STANDIN_PARAMS, PREDICTOR_PARAMS])
+def test_specs_are_typed_ranged_and_documented(table):
+    names = [s.name for s in table]
     assert len(names) == len(set(names))
     text = DOCS.read_text()
-    for s in SIM_PARAMS:
+    for s in table:
         assert type(s.default) in (bool, int, float, str)
         assert s.description
         if s.minimum is not None:
@@ -57,19 +59,33 @@ def test_specs_are_typed_ranged_and_documented():
         assert f'`{s.name}`' in text, f'{s.name} missing from docs/nodes.md'
 
 
-def test_config_yaml_matches_the_table():
-    """One '/**' section for both roles; every run-time parameter without a scene default."""
+@pytest.mark.parametrize('file, table', [('standin.yaml', STANDIN_PARAMS),
+                                         ('predictor.yaml', PREDICTOR_PARAMS)])
+def test_config_yaml_matches_the_table(file, table):
+    """One '/**' section per node; every run-time parameter without a scene default."""
     import yaml
-    path = pathlib.Path(__file__).resolve().parents[1] / 'config' / 'sim.yaml'
+    path = pathlib.Path(__file__).resolve().parents[1] / 'config' / file
     data = yaml.safe_load(path.read_text())
-    specs = {s.name: s for s in SIM_PARAMS}
+    specs = {s.name: s for s in table}
     assert list(data) == ['/**']
     params = data['/**']['ros__parameters']
-    assert set(params) == {s.name for s in SIM_PARAMS if not s.read_only} - \
+    assert set(params) == {s.name for s in table if not s.read_only} - \
         {'start_edge', 'start_radius'}
     for name, value in params.items():
         assert value == specs[name].default, name
         assert type(value) is type(specs[name].default), name
+
+
+def test_each_node_declares_only_its_own_parameters():
+    """The stand-in takes the driver's cycle parameters, the predictor its markers' period."""
+    standin = {s.name for s in STANDIN_PARAMS}
+    predictor = {s.name for s in PREDICTOR_PARAMS}
+    assert standin & predictor == {s.name for s in SHARED_PARAMS}
+    assert 'markers_period' not in standin
+    assert {'cycle_period', 'key_file', 'truth_log', 'seed', 'joint_states_rate'} <= standin
+    assert not {'cycle_period', 'key_file', 'truth_log', 'seed', 'joint_states_rate',
+                'sensor_range_m', 'frame_id', 'ack_timeout_s'} & predictor
+    assert 'hardware_mode' not in standin | predictor
 
 
 def test_a_start_beyond_a_finite_arm_is_rejected(short_arm):

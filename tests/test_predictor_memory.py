@@ -36,11 +36,11 @@ MARKERS_PERIOD = 0.02
 @pytest.mark.parametrize('kind', ['events', 'single'])
 def test_markers_that_wait_reuse_one_timer(kind):
     from feeder_common.node import autostart
-    from feeder_sim.sim_node import SimNode
+    from feeder_sim.predictor_node import PredictorNode
     context = Context()
     rclpy.init(context=context)
     try:
-        node = SimNode(context=context, namespace='/memtest', parameter_overrides=[
+        node = PredictorNode(context=context, namespace='/memtest', parameter_overrides=[
             Parameter('scene', value=TRIANGLE),
             Parameter('markers_period', value=MARKERS_PERIOD)])
         autostart(node)
