@@ -19,7 +19,7 @@ import re
 
 from feeder_driver import params as driver_params
 from feeder_driver import protocol
-from feeder_monitor.params import MONITOR_PARAMS
+from feeder_monitor.params import FEED_PARAMS, MONITOR_PARAMS
 from feeder_sim.params import PREDICTOR_PARAMS, STANDIN_PARAMS
 import pytest
 from throwmap.cli import build_parser
@@ -50,6 +50,7 @@ def table_after(marker):
     ('**standin_node** (`feeder_sim`', [s.name for s in STANDIN_PARAMS]),
     ('**predictor_node** (`feeder_sim`', [s.name for s in PREDICTOR_PARAMS]),
     ('**monitor_node** (`feeder_monitor`)', [s.name for s in MONITOR_PARAMS]),
+    ('**feed_node** (`feeder_monitor`', [s.name for s in FEED_PARAMS]),
 ])
 def test_parameter_tables_list_exactly_the_declared_parameters(marker, specs):
     assert sorted(table_after(marker)) == sorted(specs)
