@@ -87,3 +87,8 @@ EDGE1_VERDICT = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
 DIAGNOSTICS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                          reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.VOLATILE)
+
+# feed_node's action feedback (one per cycle; a client should read it with the same profile).
+FEED_FEEDBACK = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
+                           reliability=ReliabilityPolicy.RELIABLE,
+                           durability=DurabilityPolicy.VOLATILE)

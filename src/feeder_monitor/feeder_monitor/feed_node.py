@@ -81,9 +81,12 @@ class FeedNode(Node):
                                  qos.CYCLE_STATUS)
         self.create_subscription(DiagnosticStatus, 'predicted/state', self._on_prediction,
                                  qos.PREDICTED_STATE)
+        # Feedback comes once per cycle, up to about 1000 a second with the stand-in: a deep
+        # reliable history, so that a client that reads in bursts still gets every cycle's.
         self._server = ActionServer(self, FeedPart, '~/feed_part', self._execute,
                                     goal_callback=lambda goal: GoalResponse.ACCEPT,
-                                    cancel_callback=self._on_cancel)
+                                    cancel_callback=self._on_cancel,
+                                    feedback_pub_qos_profile=qos.FEED_FEEDBACK)
         self.get_logger().info(
             f'serving {self.resolve_topic_name("~/feed_part")}: cycles {self._driver}, '
             f'proof by {self._monitor} (key id {auth.key_id(self._key)})')
