@@ -147,10 +147,9 @@ class Statements(Collector):
     def any_ready(self, start=0):
         return any(c.ready_now for c in self.checked[start:])
 
-    def wait_matched(self):
+    def wait_matched(self, n=1):
         """Wait until the monitor's writer matched this reader (edge1_verdict is volatile)."""
-        self.ros.spin_until(lambda: self.sub.get_publisher_count() >= 1, STARTUP_TIMEOUT,
-                            f'the monitor to match the {self.sub.topic_name} reader')
+        self.ros.wait_matched(self.sub, n, STARTUP_TIMEOUT)
 
 
 class Verdicts(Statements):
@@ -208,13 +207,41 @@ def wait_for_monitor(ros, ready):
 
 
 def wait_for_readers(ros, topic, count):
+    """
+    Wait until ``count`` readers of ``topic`` are on the graph (ours included).
+
+    On the graph is not matched: a writer may not reach them yet. For our own endpoints use
+    ``ros.wait_matched``; for the monitor's readers of the driver's reports,
+    :func:`wait_monitor_matched`.
+    """
     ros.spin_until(lambda: ros.node.count_subscribers(topic) >= count, STARTUP_TIMEOUT,
-                   f'{count} readers of {topic}')
+                   f'{count} readers of {topic} on the graph')
 
 
 def wait_for_publishers(ros, topic, count):
+    """Wait until ``count`` writers of ``topic`` are on the graph (see wait_for_readers)."""
     ros.spin_until(lambda: ros.node.count_publishers(topic) >= count, STARTUP_TIMEOUT,
-                   f'{count} publishers of {topic}')
+                   f'{count} publishers of {topic} on the graph')
+
+
+def wait_monitor_matched(ros, diags, topics=('cycle_status', 'cycle_fired', 'proximity')):
+    """
+    Wait until the monitor's readers of the driver's reports matched the driver's writers.
+
+    From the monitor's own account (its 'inputs' diagnostics: matched writer counts), so that
+    the first cycles' volatile reports reach it once cycling starts.
+    """
+    name = 'feeder_monitor: inputs'
+
+    def matched():
+        statuses = diags.by_name.get(name)
+        if not statuses:
+            return False
+        values = diags.values(statuses[-1])
+        return all(int(values.get(f'{t}_writers_matched', 0)) >= 1 for t in topics)
+
+    ros.spin_until(matched, STARTUP_TIMEOUT,
+                   f"the monitor's readers of {', '.join(topics)} matched with the driver")
 
 
 def watch_monitor(ros):
@@ -227,16 +254,18 @@ def watch_monitor(ros):
     ready = Statements(ros)
     verdicts = Verdicts(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
     verdicts.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 2)    # the monitor's and ours
-    wait_for_readers(ros, '/feeder/proximity', 1)
-    ros.spin_for(0.5)
+    ros.wait_matched(statuses.sub)                      # the stand-in's writer
+    wait_monitor_matched(ros, diags)
+    ros.wait_active('/feeder/feeder_driver')
     return ready, verdicts, statuses
 
 
 def run_cycles(ros, cycles, statuses, period):
     """Enable cycling until ``statuses`` holds ``cycles`` messages, then disable it."""
+    ros.wait_active('/feeder/feeder_driver')
     res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True))
     assert res.success, res.message
     ros.spin_until(lambda: len(statuses) >= cycles, 20 + 3 * cycles * period,
@@ -332,13 +361,17 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready, comple
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
     verdict_stream.wait_matched()
+    for collector in (statuses, prox):                  # the stand-in's writers
+        ros.wait_matched(collector.sub)
+    ros.wait_matched(states.sub)                        # the predictor's writer
+    wait_monitor_matched(ros, diags)
+    # The predictor follows cycle_status: its reader must be on the graph (its own matching
+    # shows in predicted/state, which must then follow every cycle).
     wait_for_readers(ros, '/feeder/cycle_status', 3)     # the monitor's, the predictor's, ours
-    wait_for_readers(ros, '/feeder/proximity', 2)        # the monitor's and ours
-    wait_for_publishers(ros, '/feeder/predicted/state', 1)
     warmup, settle = monitor_rules(ros, diags)
     assert warmup >= an.sensor.warmup_throws
     first_ready = max(warmup, settle + 1)       # judged throws before a detection can count
-    ros.spin_for(0.5)
+    ros.spin_for(0.5)       # the predictor's matching shows nowhere: a grace for it
 
     run_cycles(ros, first_ready + cycles, statuses, period)
     ros.spin_until(lambda: len(states) >= len(statuses), 10.0, 'the predictor')

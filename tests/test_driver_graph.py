@@ -33,7 +33,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_interfaces.msg import Verdict
 from feeder_nodes import (check_statements, Collector, Diagnostics, monitor, monitor_rules,
                           STARTUP_TIMEOUT, Statements, status_values, TRIANGLE, Verdicts,
-                          wait_for_monitor, wait_for_readers)
+                          wait_for_monitor, wait_monitor_matched)
 from sensor_msgs.msg import Range
 from std_srvs.srv import SetBool
 
@@ -98,9 +98,12 @@ def run_driver_graph(graph, ros, tmp_path, emulator_faults, cycles, faults):
     prox = Collector(ros, Range, '/feeder/proximity')
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
+    # Every volatile stream matched before the first cycle: ours with the monitor's and the
+    # driver's writers, the monitor's readers with the driver's writers.
     verdict_stream.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 2)    # the monitor's and ours
-    wait_for_readers(ros, '/feeder/proximity', 2)
+    ros.wait_matched(statuses.sub)
+    ros.wait_matched(prox.sub)
+    wait_monitor_matched(ros, diags)
     warmup_cycles, settle = monitor_rules(ros, diags)
     if not faults:
         cycles += max(warmup_cycles, settle + 1)
