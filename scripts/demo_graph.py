@@ -121,14 +121,17 @@ def run(args, scene_path, out, procs, t0, key):
     def keep(key):
         return got[key].append
 
+    actuator = []       # the stand-in's actuator statuses, in arrival order
+
     def on_diag(msg):
         for s in msg.status:
             diags[local_name(s.name)] = s
+            if local_name(s.name) == 'feeder_driver: actuator':
+                actuator.append(s)
 
-    statuses = node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
-                                        keep('status'), reliable)
-    predicted = node.create_subscription(DiagnosticStatus, '/feeder/predicted/state',
-                                         keep('predicted'), reliable)
+    node.create_subscription(DiagnosticStatus, '/feeder/cycle_status', keep('status'), reliable)
+    node.create_subscription(DiagnosticStatus, '/feeder/predicted/state', keep('predicted'),
+                             reliable)
     monitor = '/feeder/feeder_monitor'
 
     def on_ready(msg):
@@ -139,8 +142,7 @@ def run(args, scene_path, out, procs, t0, key):
     node.create_subscription(Verdict, '/feeder/edge1_ready', on_ready, latched)
     # One verdict per judged cycle, with its seq (edge1_ready is the current statement, which
     # the monitor also republishes while idle: it cannot be matched to cycles by counting).
-    verdicts = node.create_subscription(Verdict, '/feeder/edge1_verdict', keep('verdict'),
-                                        reliable)
+    node.create_subscription(Verdict, '/feeder/edge1_verdict', keep('verdict'), reliable)
     node.create_subscription(DiagnosticArray, '/diagnostics', on_diag, reliable)
     spin_until = probe.spin_until
 
@@ -148,30 +150,21 @@ def run(args, scene_path, out, procs, t0, key):
         return any(i.node_name == 'feeder_bag_recorder'
                    for i in node.get_subscriptions_info_by_topic(topic))
 
-    def monitor_matched():
-        """The monitor's readers matched the stand-in's writers (its 'inputs' diagnostics)."""
-        inputs = diags.get('feeder_monitor: inputs')
-        values = {kv.key: kv.value for kv in inputs.values} if inputs else {}
-        return all(int(values.get(f'{t}_writers_matched', 0)) >= 1
-                   for t in ('cycle_status', 'cycle_fired', 'proximity'))
-
     spin_until(lambda: got['ready'], STARTUP_TIMEOUT, 'the monitor')
     spin_until(lambda: 'feeder_monitor: readiness' in diags, STARTUP_TIMEOUT,
                'the monitor diagnostics')
-    # Our readers matched the writers of the stand-in, the predictor and the monitor; the
-    # monitor's, those of the stand-in; the predictor's and the recorder's matching shows
-    # nowhere: they must be on the graph.
-    for sub in (statuses, predicted, verdicts):
-        probe.wait_matched(sub)
-    spin_until(monitor_matched, STARTUP_TIMEOUT, "the monitor's readers to match the stand-in")
-    spin_until(lambda: node.count_subscribers('/feeder/cycle_status') >= 4 and
-               node.count_subscribers('/feeder/proximity') >= 2, STARTUP_TIMEOUT,
-               'the predictor, the monitor and the recorder')
     spin_until(lambda: all(recording(t) for t in ('/feeder/proximity', '/feeder/edge1_ready',
                                                   '/feeder/predicted/state')),
                STARTUP_TIMEOUT, 'the recorder')
+    # Every writer matched its readers, by the writers' own accounts (each node's endpoints
+    # status): the stand-in's cycle_status the predictor, the monitor, the recorder and us;
+    # its proximity and cycle_fired the monitor and the recorder; the predictor's state and
+    # the monitor's verdicts the recorder and us.
+    probe.wait_remote_matched('/feeder/feeder_driver', readers={
+        '/feeder/cycle_status': 4, '/feeder/proximity': 2, '/feeder/cycle_fired': 2})
+    probe.wait_remote_matched('/feeder/feeder_sim', readers={'/feeder/predicted/state': 2})
+    probe.wait_remote_matched('/feeder/feeder_monitor', readers={'/feeder/edge1_verdict': 2})
     probe.wait_active('/feeder/feeder_driver')
-    probe.spin_for(0.5)
     print(f'demo_graph: graph up after {time.monotonic() - t0:.1f} s; goal edge {goal}, sensor '
           f'at {100 * radius:.2f} cm (guarantee {100 * an.sensor.guarantee_radius:.2f} cm), '
           f'warm-up {an.sensor.warmup_throws} throw(s)', flush=True)
@@ -181,8 +174,11 @@ def run(args, scene_path, out, procs, t0, key):
 
     printed = {'next': 0, 'seqs': set()}
 
+    def status_value(msg, key):
+        return {kv.key: kv.value for kv in msg.values}.get(key)
+
     def seq_of(msg):
-        return int({kv.key: kv.value for kv in msg.values}['seq'])
+        return int(status_value(msg, 'seq'))
 
     def signed(msg):
         return check_verdict(msg, key, monitor, 0, max_age_s=float('inf')).authentic
@@ -220,8 +216,25 @@ def run(args, scene_path, out, procs, t0, key):
         report()
     enable(False)
     t_cycles = time.monotonic() - t_run
-    settle = time.monotonic() + 1.5
-    while time.monotonic() < settle:
+    # Until the last cycle's status, prediction and verdict are in: the stand-in's last seq
+    # from an actuator status sent after the disable (the first one after it may have been
+    # on its way), and the predictor's account of the cycles it followed.
+    seen_before = len(actuator)
+
+    def last_fired():
+        later = actuator[seen_before + 1:]
+        return int(status_value(later[-1], 'seq')) if later else None
+
+    def all_in():
+        last = last_fired()
+        agreement = diags.get('feeder_sim: sensor agreement')
+        return last is not None and bool(got['status']) and \
+            seq_of(got['status'][-1]) >= last and last in states() and \
+            any(int(m.seq) == last for m in got['verdict']) and agreement is not None and \
+            status_value(agreement, 'followed') == str(len(got['status']))
+
+    settle = time.monotonic() + 30.0
+    while not all_in() and time.monotonic() < settle:
         probe.executor.spin_once(timeout_sec=0.05)
         report()
     rc = procs.stop('recorder')

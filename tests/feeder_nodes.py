@@ -39,7 +39,10 @@ REPO = pathlib.Path(__file__).resolve().parents[1]
 TRIANGLE = str(REPO / 'scenes' / 'triangle.yaml')
 EXPERIMENT = str(REPO / 'scenes' / 'experiment.yaml')
 SHORT_ARM = str(REPO / 'tests' / 'scenes' / 'short_arm.yaml')
+NS = '/feeder'
 MONITOR = '/feeder/feeder_monitor'      # the monitor whose signature the consumers check
+DRIVER = '/feeder/feeder_driver'        # the driver, or the stand-in in its place
+PREDICTOR = '/feeder/feeder_sim'        # the predictor beside them (predictor())
 # A statement on edge1_ready counts as ready now only if the monitor sent it at most this long
 # before it arrived (its idle republish is every ready_deadline / 4 = 0.25 s by default).
 FRESH_S = 1.0
@@ -224,24 +227,21 @@ def wait_for_publishers(ros, topic, count):
                    f'{count} publishers of {topic} on the graph')
 
 
-def wait_monitor_matched(ros, diags, topics=('cycle_status', 'cycle_fired', 'proximity')):
+def wait_reports_matched(ros, status_readers, proximity_readers, fired_readers=1,
+                         verdict_readers=1, driver=DRIVER, monitor=MONITOR):
     """
-    Wait until the monitor's readers of the driver's reports matched the driver's writers.
+    Wait until the driver's (stand-in's) and the monitor's writers matched their readers.
 
-    From the monitor's own account (its 'inputs' diagnostics: matched writer counts), so that
-    the first cycles' volatile reports reach it once cycling starts.
+    Their own accounts (each node's ``endpoints`` status, feeder_common.diagnostics): the
+    driver's cycle_status, proximity and cycle_fired writers matched at least so many readers
+    (the monitor's, ours, a predictor's...), the monitor's edge1_verdict writer
+    ``verdict_readers``. Only then do the first cycles' volatile reports reach every reader.
     """
-    name = 'feeder_monitor: inputs'
-
-    def matched():
-        statuses = diags.by_name.get(name)
-        if not statuses:
-            return False
-        values = diags.values(statuses[-1])
-        return all(int(values.get(f'{t}_writers_matched', 0)) >= 1 for t in topics)
-
-    ros.spin_until(matched, STARTUP_TIMEOUT,
-                   f"the monitor's readers of {', '.join(topics)} matched with the driver")
+    ros.wait_remote_matched(driver, readers={
+        f'{NS}/cycle_status': status_readers, f'{NS}/proximity': proximity_readers,
+        f'{NS}/cycle_fired': fired_readers})
+    if verdict_readers:
+        ros.wait_remote_matched(monitor, readers={f'{NS}/edge1_verdict': verdict_readers})
 
 
 def watch_monitor(ros):
@@ -254,18 +254,16 @@ def watch_monitor(ros):
     ready = Statements(ros)
     verdicts = Verdicts(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
-    diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
-    verdicts.wait_matched()
-    ros.wait_matched(statuses.sub)                      # the stand-in's writer
-    wait_monitor_matched(ros, diags)
-    ros.wait_active('/feeder/feeder_driver')
+    # cycle_status: the monitor's reader and ours; proximity, cycle_fired: the monitor's.
+    wait_reports_matched(ros, status_readers=2, proximity_readers=1)
+    ros.wait_active(DRIVER)
     return ready, verdicts, statuses
 
 
 def run_cycles(ros, cycles, statuses, period):
     """Enable cycling until ``statuses`` holds ``cycles`` messages, then disable it."""
-    ros.wait_active('/feeder/feeder_driver')
+    ros.wait_active(DRIVER)
     res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True))
     assert res.success, res.message
     ros.spin_until(lambda: len(statuses) >= cycles, 20 + 3 * cycles * period,
@@ -360,18 +358,13 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready, comple
     states = PredictedStates(ros)
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
-    verdict_stream.wait_matched()
-    for collector in (statuses, prox):                  # the stand-in's writers
-        ros.wait_matched(collector.sub)
-    ros.wait_matched(states.sub)                        # the predictor's writer
-    wait_monitor_matched(ros, diags)
-    # The predictor follows cycle_status: its reader must be on the graph (its own matching
-    # shows in predicted/state, which must then follow every cycle).
-    wait_for_readers(ros, '/feeder/cycle_status', 3)     # the monitor's, the predictor's, ours
+    # cycle_status: the monitor's, the predictor's and our readers; proximity: the monitor's
+    # and ours; the predictor's predicted/state: ours.
+    wait_reports_matched(ros, status_readers=3, proximity_readers=2)
+    ros.wait_remote_matched(PREDICTOR, readers={f'{NS}/predicted/state': 1})
     warmup, settle = monitor_rules(ros, diags)
     assert warmup >= an.sensor.warmup_throws
     first_ready = max(warmup, settle + 1)       # judged throws before a detection can count
-    ros.spin_for(0.5)       # the predictor's matching shows nowhere: a grace for it
 
     run_cycles(ros, first_ready + cycles, statuses, period)
     ros.spin_until(lambda: len(states) >= len(statuses), 10.0, 'the predictor')

@@ -312,11 +312,13 @@ class Probe:
         return self.error(message)
 
     def spin_until(self, predicate, timeout, what='condition'):
+        """Spin until ``predicate()``; fail after ``timeout`` s naming ``what`` (or what())."""
         end = time.monotonic() + timeout
         while not predicate():
             if self.watch and self.procs is not None:
                 self.procs.check()
             if time.monotonic() > end:
+                what = what() if callable(what) else what
                 raise self.failure(f'timed out after {timeout} s waiting for {what}')
             self.executor.spin_once(timeout_sec=0.05)
 
@@ -332,6 +334,55 @@ class Probe:
             count, kind = endpoint.get_subscription_count, 'readers'
         self.spin_until(lambda: count() >= n, timeout,
                         what or f'{n} {kind} matched with our {endpoint.topic_name}')
+
+    def _endpoint_reports(self):
+        """{status name: {key: value}} of the latest ``<node>: endpoints`` statuses."""
+        if getattr(self, '_endpoints', None) is None:
+            from diagnostic_msgs.msg import DiagnosticArray
+            from rclpy.qos import QoSProfile, ReliabilityPolicy
+            self._endpoints = {}
+
+            def on_diagnostics(msg):
+                for st in msg.status:
+                    if st.name.endswith(': endpoints'):
+                        self._endpoints[st.name] = {kv.key: kv.value for kv in st.values}
+
+            self._endpoints_sub = self.node.create_subscription(
+                DiagnosticArray, '/diagnostics', on_diagnostics,
+                QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+        return self._endpoints
+
+    def remote_matched(self, node_name, role, topic):
+        """What the node ``node_name`` last said its writers (readers) of ``topic`` matched."""
+        from feeder_common.diagnostics import status_prefix
+        ns, _, name = node_name.rpartition('/')
+        report = self._endpoint_reports().get(f'{status_prefix(ns or "/", name)}: endpoints')
+        return None if report is None else int(report.get(f'matched {role} of {topic}', 0))
+
+    def wait_remote_matched(self, node_name, readers=None, writers=None,
+                            timeout=STARTUP_TIMEOUT):
+        """
+        Wait until a feeder node reports its writers (readers) of topics matched enough peers.
+
+        ``readers``: {topic: n}, the node's writer of ``topic`` has matched at least ``n``
+        readers (the one condition under which its volatile messages reach them all);
+        ``writers``: {topic: n} for its readers. From the node's ``<node>: endpoints`` status
+        on /diagnostics (feeder_common.diagnostics; every update, 1 s by default).
+        """
+        want = [('readers', t, n) for t, n in (readers or {}).items()] + \
+            [('writers', t, n) for t, n in (writers or {}).items()]
+        self._endpoint_reports()
+
+        def matched():
+            return all((self.remote_matched(node_name, role, t) or 0) >= n
+                       for role, t, n in want)
+
+        def what():
+            return ', '.join(f'{n} {role} of {t} (it reported '
+                             f'{self.remote_matched(node_name, role, t)})'
+                             for role, t, n in want)
+
+        self.spin_until(matched, timeout, lambda: f'{node_name} to match {what()}')
 
     def call(self, srv_type, name, request, timeout=10.0, what=None,
              startup_timeout=STARTUP_TIMEOUT):

@@ -118,16 +118,13 @@ class MonitorNode(Node):
         self._beat_period = self._param('ready_deadline') / 4
         self._last_beat = time.monotonic()
         self.create_timer(self._beat_period, self._on_heartbeat)
-        # The readers of the driver's reports, kept for their matched writer counts.
-        self._inputs = {
-            'proximity': self.create_subscription(Range, 'proximity', self._on_proximity,
-                                                  qos.PROXIMITY_SUBSCRIPTION),
-            'cycle_status': self.create_subscription(
-                DiagnosticStatus, 'cycle_status', self._on_cycle_status, qos.CYCLE_STATUS,
-                event_callbacks=SubscriptionEventCallbacks(
-                    liveliness=self._on_driver_liveliness)),
-            'cycle_fired': self.create_subscription(DiagnosticStatus, 'cycle_fired',
-                                                    self._on_cycle_fired, qos.CYCLE_FIRED)}
+        self.create_subscription(Range, 'proximity', self._on_proximity,
+                                 qos.PROXIMITY_SUBSCRIPTION)
+        self.create_subscription(
+            DiagnosticStatus, 'cycle_status', self._on_cycle_status, qos.CYCLE_STATUS,
+            event_callbacks=SubscriptionEventCallbacks(liveliness=self._on_driver_liveliness))
+        self.create_subscription(DiagnosticStatus, 'cycle_fired', self._on_cycle_fired,
+                                 qos.CYCLE_FIRED)
         self._diagnostics = Updater(self, self._param('diagnostic_updater.period'),
                                     self._scene.name)
         self._diagnostics.add('readiness', self._diag_readiness)
@@ -390,14 +387,9 @@ class MonitorNode(Node):
         stat.summary(level, 'every cycle report signed, fresh and in order' if level == 'ok'
                      else 'refused reports, malformed input or a contradicting proximity')
         # Informative only: who is on the graph decides nothing (docs/security.md).
-        # The writers that matched this monitor's readers: whose reports can reach it (a test
-        # waits for them before it starts cycling).
-        matched = {f'{topic}_writers_matched': sub.get_publisher_count()
-                   for topic, sub in self._inputs.items()}
         stat.update({**self._gate.counts, **self._counts, 'bad_input': self._bad_input,
                      'cycle_status_publishers':
-                         self.count_publishers(self.resolve_topic_name('cycle_status')),
-                     **matched})
+                         self.count_publishers(self.resolve_topic_name('cycle_status'))})
 
 
 def main(args=None):
