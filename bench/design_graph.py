@@ -50,7 +50,7 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'tests'))
 from feeder_testing import Processes, REPO, use_domain  # noqa: E402
-from graph_bench import BenchNode, monitor_matched, watch_inputs  # noqa: E402
+from graph_bench import BenchNode  # noqa: E402
 
 DEFAULT_RUNS = (f'{REPO}/docs/design/triangle_design.yaml:0.005',
                 f'{REPO}/docs/design/house_base_design.yaml:0.0005')
@@ -72,7 +72,6 @@ class Listener(BenchNode):
                                                         self.statuses.append, qos)
         self.verdict_sub = self.node.create_subscription(Verdict, '/feeder/edge1_verdict',
                                                          self.verdicts.append, qos)
-        self.diags = watch_inputs(self)
 
 
 def kernel_prediction(scene):
@@ -113,14 +112,13 @@ def run_one(design_path, floor, args, out):
                     f'scene:={design_path}', *k, name='predictor')
         procs.start('feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
                     f'scene:={design_path}', *k, name='monitor')
-        # Matched where it shows: ours with the stand-in's and the monitor's writers, the
-        # monitor's readers with the stand-in's; the predictor's reader on the graph.
-        lis.wait_matched(lis.status_sub, timeout=120)
-        lis.wait_matched(lis.verdict_sub, timeout=120)
-        lis.spin_until(lambda: monitor_matched(lis.diags), 120,
-                       "the monitor's readers to match the stand-in")
-        lis.spin_until(lambda: lis.node.count_subscribers('/feeder/cycle_status') >= 3, 120,
-                       'the readers of cycle_status')
+        # The writers matched their readers, by their own accounts: the stand-in's
+        # cycle_status the monitor's, the predictor's and ours; the monitor's verdicts ours.
+        lis.wait_remote_matched('/feeder/feeder_driver', readers={
+            '/feeder/cycle_status': 3, '/feeder/proximity': 1, '/feeder/cycle_fired': 1},
+            timeout=120)
+        lis.wait_remote_matched('/feeder/feeder_monitor', readers={'/feeder/edge1_verdict': 1},
+                                timeout=120)
         t0 = time.monotonic()
         lis.enable(True)
         lis.spin_until(lambda: len(lis.statuses) >= args.cycles,

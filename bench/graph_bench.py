@@ -176,15 +176,8 @@ def start(procs, which, period):
                     '__ns:=/feeder', name='recorder')
 
 
-def monitor_matched(diags, topics=('cycle_status', 'cycle_fired', 'proximity')):
-    """Whether the monitor's readers of the stand-in's reports matched its writers."""
-    inputs = diags.get('feeder_monitor: inputs')
-    values = {kv.key: kv.value for kv in inputs.values} if inputs else {}
-    return all(int(values.get(f'{t}_writers_matched', 0)) >= 1 for t in topics)
-
-
-def watch_inputs(probe):
-    """The monitor's latest 'inputs' diagnostics, by local name (a dict kept up to date)."""
+def watch_diagnostics(probe):
+    """The latest status of each name on /diagnostics, by local name (a dict kept up to date)."""
     from diagnostic_msgs.msg import DiagnosticArray
     from feeder_common.diagnostics import local_name
     diags = {}
@@ -197,26 +190,22 @@ def watch_inputs(probe):
     return diags
 
 
-def wait_graph(probe, which, diags=None):
+def wait_graph(probe, which):
     """
-    Wait until the graph is there: matched where anyone can see it, on the graph elsewhere.
+    Wait until every writer matched its readers, by the writers' own accounts.
 
-    Our readers matched the stand-in's (and the monitor's) writers; the monitor's readers the
-    stand-in's writers (its 'inputs' diagnostics, ``diags`` from :func:`watch_inputs`); the
-    predictor's and the recorder's readers must be on the graph (their matching shows
-    nowhere).
+    Each feeder node reports its matched endpoints on /diagnostics (feeder_common.diagnostics):
+    the stand-in's cycle_status and proximity writers matched the probe and the other nodes'
+    readers, the monitor's edge1_verdict the probe's; then the stand-in is active.
     """
-    readers = 1 + ('monitor' in which) + ('predictor' in which) + ('recorder' in which)
-    for topic in ('proximity', 'cycle_status'):
-        probe.wait_matched(probe.subs[topic])
+    status = 1 + ('monitor' in which) + ('predictor' in which) + ('recorder' in which)
+    prox = 1 + ('monitor' in which) + ('recorder' in which)
+    probe.wait_remote_matched('/feeder/feeder_driver', readers={
+        '/feeder/cycle_status': status, '/feeder/proximity': prox})
     if 'monitor' in which:
         probe.spin_until(lambda: probe.ready, 90, 'the monitor')
-        probe.wait_matched(probe.subs['edge1_verdict'])
-        if diags is not None:
-            probe.spin_until(lambda: monitor_matched(diags), 90,
-                             "the monitor's readers to match the stand-in")
-    probe.spin_until(lambda: probe.node.count_subscribers('/feeder/cycle_status') >= readers,
-                     90, 'the readers of cycle_status')
+        probe.wait_remote_matched('/feeder/feeder_monitor',
+                                  readers={'/feeder/edge1_verdict': 1})
     probe.wait_active('/feeder/feeder_driver')
 
 
@@ -232,11 +221,10 @@ INSTALL = feeder_testing.INSTALL
 def latency(log_dir, cycles, period=0.01):
     procs = bench_processes(log_dir)
     probe = Probe(procs)
-    diags = watch_inputs(probe)
     probe_realtime()
     try:
         start(procs, ('sim', 'monitor'), period)
-        wait_graph(probe, ('sim', 'monitor'), diags)
+        wait_graph(probe, ('sim', 'monitor'))
         probe.clear()
         probe.enable(True)
         probe.spin_until(lambda: len(probe.status) >= cycles, 30 + 3 * cycles * period,
@@ -326,10 +314,9 @@ def echo_baseline(log_dir, cycles, period):
 def rate(log_dir, seconds, which, period=0.005):
     procs = bench_processes(log_dir)
     probe = Probe(procs)
-    diags = watch_inputs(probe)
     try:
         start(procs, which, period)
-        wait_graph(probe, which, diags)
+        wait_graph(probe, which)
         probe.enable(True)
         probe.spin_for(1.0)             # steady state
         probe.clear()
@@ -347,11 +334,10 @@ def rate(log_dir, seconds, which, period=0.005):
 def cpu(log_dir, seconds, period):
     procs = bench_processes(log_dir)
     probe = Probe(procs)
-    diags = watch_inputs(probe)
     which = ('sim', 'monitor', 'predictor', 'recorder')
     try:
         start(procs, which, period)
-        wait_graph(probe, which, diags)
+        wait_graph(probe, which)
         probe.enable(True)
         probe.spin_for(2.0)
         before = {name: cpu_seconds(p.pid) for name, p in procs.procs.items()}

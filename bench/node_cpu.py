@@ -41,7 +41,7 @@ import time
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'tests'))
 from feeder_testing import use_domain  # noqa: E402
 import graph_bench  # noqa: E402
-from graph_bench import bench_processes, Probe, start, wait_graph, watch_inputs  # noqa: E402
+from graph_bench import bench_processes, Probe, start, wait_graph  # noqa: E402
 
 NODES = ('sim', 'monitor', 'predictor', 'recorder')
 
@@ -91,11 +91,10 @@ def main():
     log_dir = pathlib.Path(tempfile.mkdtemp(prefix='feeder-node-cpu-'))
     procs = bench_processes(log_dir)
     probe = Probe(procs)
-    diags = watch_inputs(probe)
     spies = []
     try:
         start(procs, NODES, args.period)
-        wait_graph(probe, NODES, diags)
+        wait_graph(probe, NODES)
         probe.enable(True)
         probe.spin_for(2.0)
         if args.py_spy is not None:

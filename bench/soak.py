@@ -56,7 +56,7 @@ import time
 # The harness (tests/feeder_testing.py: processes, domain, probe node; through graph_bench)
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'tests'))
 from feeder_testing import Processes, REPO, use_domain  # noqa: E402
-from graph_bench import BenchNode, monitor_matched, watch_inputs  # noqa: E402
+from graph_bench import BenchNode, watch_diagnostics  # noqa: E402
 
 SCENE = str(REPO / 'scenes' / 'triangle.yaml')
 PERIOD = 0.005
@@ -100,7 +100,7 @@ class Driver(BenchNode):
 
     def __init__(self, procs):
         super().__init__('feeder_soak', procs)
-        self.diags = watch_inputs(self)
+        self.diags = watch_diagnostics(self)
 
     @property
     def seq(self):
@@ -353,19 +353,16 @@ def main():
     samples = {}
     try:
         start(procs, bag, key_path(out))
-        # The monitor's readers matched the stand-in's writers (its 'inputs' diagnostics);
-        # the predictor's and the recorder's readers are on the graph and the recorder
-        # subscribed to every topic (their matching shows nowhere).
-        drv.spin_until(lambda: monitor_matched(drv.diags), 120,
-                       "the monitor's readers to match the stand-in")
-        drv.spin_until(lambda: drv.node.count_subscribers('/feeder/cycle_status') >= 3, 120,
-                       'the readers of cycle_status')
-        drv.spin_until(lambda: drv.node.count_publishers('/feeder/predicted/state') >= 1, 120,
-                       'the predictor')
-        drv.spin_until(lambda: all(any(i.node_name == 'feeder_bag_recorder' for i in
-                                       drv.node.get_subscriptions_info_by_topic(f'/feeder/{t}'))
-                                   for t in TOPICS), 120, 'the recorder')
-        drv.spin_for(1.0)       # the recorder's matching shows nowhere
+        # Every writer matched its readers, by its own account (the nodes' endpoints
+        # statuses): the stand-in's cycle_status the monitor, the predictor and the recorder;
+        # its proximity the monitor and the recorder; the monitor's and the predictor's
+        # outputs the recorder.
+        drv.wait_remote_matched('/feeder/feeder_driver', readers={
+            '/feeder/cycle_status': 3, '/feeder/proximity': 2}, timeout=120)
+        drv.wait_remote_matched('/feeder/feeder_monitor', readers={
+            '/feeder/edge1_verdict': 1, '/feeder/edge1_ready': 1}, timeout=120)
+        drv.wait_remote_matched('/feeder/feeder_sim', readers={'/feeder/predicted/state': 1},
+                                timeout=120)
         t0 = time.monotonic()
         drv.enable(True)
         next_sample = 0.0
