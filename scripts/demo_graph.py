@@ -134,10 +134,14 @@ def run(args, scene_path, out, procs, t0, key):
                              reliable)
     monitor = '/feeder/feeder_monitor'
 
+    stale_ready = set()     # cycles of signed ready statements that came too old to act on
+
     def on_ready(msg):
         # What a consumer does with each statement: check it when it arrives.
-        got['ready'].append(check_verdict(msg, key, monitor,
-                                          node.get_clock().now().nanoseconds))
+        c = check_verdict(msg, key, monitor, node.get_clock().now().nanoseconds)
+        got['ready'].append(c)
+        if msg.ready and c.authentic and not c.ready_now:
+            stale_ready.add(c.seq)
 
     node.create_subscription(Verdict, '/feeder/edge1_ready', on_ready, latched)
     # One verdict per judged cycle, with its seq (edge1_ready is the current statement, which
@@ -287,11 +291,16 @@ def run(args, scene_path, out, procs, t0, key):
     must_agree = not scene.stochastic
     plot(rows, an, scene.part, out / 'ready.png', scene.name)
     ready_n = sum(1 for r in rows if r[5] == 1)
+    # Ready cycles whose every statement came older than check_verdict's limit (1 s): a
+    # consumer must not act on them; it happens when this process is starved (load).
+    late = len(stale_ready - printed['seqs'])
     print(f'demo_graph: {n} cycles in {t_cycles:.1f} s ({n / t_cycles:.0f}/s); sensor fired '
           f'{sum(r[4] for r in rows)} times, {goal_seen} on the goal edge after the warm-up; '
           f'edge1_ready {ready_n} times, {false_ready} false, {missed} missed' +
           (f'; {unpredicted} cycles without a prediction' if unpredicted else '') +
-          (f'; {unsigned} statements NOT signed by {monitor}' if unsigned else ''), flush=True)
+          (f'; {unsigned} statements NOT signed by {monitor}' if unsigned else '') +
+          (f'; {late} ready statements came too late to act on (sent more than 1 s before '
+           'they arrived: this process was starved)' if late else ''), flush=True)
     print(f'demo_graph: first cycle that could be ready: {first_ready} (warm-up '
           f'{mon_vals.get("warmup_cycles", "?")}, settling {mon_vals.get("settle_cycles", "?")} '
           'throws); every statement checked with the run\'s key', flush=True)

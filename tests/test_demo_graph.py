@@ -44,7 +44,11 @@ def test_the_demo_graph_runs_and_every_ready_is_proven(tmp_path):
     assert 'NOT signed' not in text
     printed = re.findall(r'cycle +(\d+): edge1_ready true \(signed, sent [0-9.]+ ms before it '
                          r'came\), stamp (\d+)\.(\d{9});', text)
-    assert len(printed) == int(m.group(1)), text[-3000:]
+    # Every ready verdict was printed as it came, or its statements came too old to act on
+    # (check_verdict's 1 s: a starved process under load) and the demo says how many.
+    late = re.search(r'; (\d+) ready statements came too late to act on', text)
+    assert printed and len(printed) + (int(late.group(1)) if late else 0) == int(m.group(1)), \
+        text[-3000:]
     seqs = [int(seq) for seq, _, _ in printed]
     assert seqs == sorted(set(seqs)) and min(seqs) > 87
     stamps = [int(sec) * 10 ** 9 + int(nsec) for _, sec, nsec in printed]
