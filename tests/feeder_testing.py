@@ -45,9 +45,11 @@ What it offers:
   ``Publisher.get_subscription_count()`` are ``rmw_subscription_count_matched_publishers``
   and ``rmw_publisher_count_matched_subscriptions``, unlike ``Node.count_subscribers``, which
   counts endpoints on the graph that may not have matched yet, so volatile messages sent in
-  between go nowhere), :meth:`Probe.wait_active` (a lifecycle node answers ``~/get_state``
-  with ``active``: the stand-in analyses its scene in on_configure, before its executor
-  answers any service), ``call`` (a timeout that says what it waited for and what the node
+  between go nowhere), :meth:`Probe.wait_remote_matched` (another process's writers or
+  readers matched, by that node's own account: the ``<node>: endpoints`` status every feeder
+  node ends its /diagnostics with), :meth:`Probe.wait_active` (a lifecycle node answers
+  ``~/get_state`` with ``active``: the stand-in analyses its scene in on_configure, before its
+  executor answers any service), ``call`` (a timeout that says what it waited for and what the node
   processes logged), ``set_parameters`` / ``get_parameters`` of remote nodes, ``enable``.
 * :class:`EmulatorThread`: the controller emulator served from a thread.
 """
