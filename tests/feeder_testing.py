@@ -415,13 +415,34 @@ class Probe:
         return any(n == f'{node_name}/get_state'
                    for n, _ in self.node.get_service_names_and_types())
 
-    def lifecycle_state(self, node_name, timeout=STARTUP_TIMEOUT):
-        """The label of a lifecycle node's state (its ~/get_state: answered once it spins)."""
+    def lifecycle_state(self, node_name, timeout=STARTUP_TIMEOUT, attempt_s=5.0):
+        """
+        The label of a lifecycle node's state (its ~/get_state: answered once it spins).
+
+        Asked again every ``attempt_s`` (get_state changes nothing): a request that went only
+        to a killed predecessor still on the graph, or before the response path matched, is
+        never answered.
+        """
         from lifecycle_msgs.srv import GetState
-        res = self.call(GetState, f'{node_name}/get_state', GetState.Request(), timeout,
-                        f'{node_name} to answer ~/get_state (it configures and activates '
-                        'before it answers any service)')
-        return res.current_state.label
+        name = f'{node_name}/get_state'
+        what = (f'{node_name} to answer ~/get_state (it configures and activates before it '
+                'answers any service)')
+        client = self.node.create_client(GetState, name)
+        try:
+            self.spin_until(client.service_is_ready, timeout, what)
+            end = time.monotonic() + timeout
+            while True:
+                future = client.call_async(GetState.Request())
+                attempt_end = min(end, time.monotonic() + attempt_s)
+                self.spin_until(lambda: future.done() or time.monotonic() > attempt_end,
+                                timeout + attempt_s, what)
+                if future.done():
+                    return future.result().current_state.label
+                client.remove_pending_request(future)
+                if time.monotonic() > end:
+                    raise self.failure(f'timed out after {timeout} s waiting for {what}')
+        finally:
+            self.node.destroy_client(client)
 
     def wait_active(self, node_name, timeout=STARTUP_TIMEOUT):
         """Wait until the lifecycle node ``node_name`` is active (before calling its services)."""
