@@ -389,8 +389,9 @@ class Probe:
     def call(self, srv_type, name, request, timeout=10.0, what=None,
              startup_timeout=STARTUP_TIMEOUT):
         """
-        Call a service; fail after ``timeout`` s (each: the server to appear, its answer).
+        Call a service; fail if it gives no answer within ``timeout`` s.
 
+        The server may take ``startup_timeout`` s to appear (a process starting under load).
         The service of a lifecycle node (one that offers ``<node>/get_state``) is called once
         that node answers get_state (up to ``startup_timeout``): a starting node configures
         (the stand-in analyses its scene, seconds under load) before its executor answers any
