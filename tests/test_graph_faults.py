@@ -88,11 +88,11 @@ rclpy.shutdown()
 
 def run_forger(tmp_path, mode, first, count, session, readers=2):
     """Run the forger to its end (it leaves the graph at once); return what it printed."""
-    from conftest import _process_env
+    from feeder_testing import install_env
     other = tmp_path / 'other-keys' / 'hmac.key'
     auth.ensure_key(other)          # a key, but not the feeder's
     out = subprocess.run([sys.executable, '-c', FORGER, mode, str(first), str(count),
-                          str(other), session, str(readers)], env=_process_env(),
+                          str(other), session, str(readers)], env=install_env(),
                          capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stdout + out.stderr
     assert 'acknowledged: True' in out.stdout, out.stdout
@@ -377,10 +377,10 @@ except BaseException:
 def start_slow_reader(topic, out):
     import subprocess
     import sys
-    from conftest import _process_env
+    from feeder_testing import install_env
     with open(out, 'w') as fh:
         return subprocess.Popen([sys.executable, '-c', SLOW_READER, topic], stdout=fh,
-                                stderr=subprocess.STDOUT, env=_process_env())
+                                stderr=subprocess.STDOUT, env=install_env())
 
 
 def test_the_aborted_cycle_reaches_a_reader_that_is_slow_to_acknowledge(graph, ros, tmp_path):
