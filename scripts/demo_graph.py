@@ -291,16 +291,21 @@ def run(args, scene_path, out, procs, t0, key):
     must_agree = not scene.stochastic
     plot(rows, an, scene.part, out / 'ready.png', scene.name)
     ready_n = sum(1 for r in rows if r[5] == 1)
-    # Ready cycles whose every statement came older than check_verdict's limit (1 s): a
-    # consumer must not act on them; it happens when this process is starved (load).
-    late = len(stale_ready - printed['seqs'])
+    # Ready cycles not printed: their every statement came older than check_verdict's limit
+    # (1 s), so a consumer must not act on it, or none came (edge1_ready keeps only its latest
+    # statement: the next cycle's replaced it before this process read it). Both happen only
+    # when this process is starved (load).
+    ready_seqs = {r[0] for r in rows if r[5] == 1}
+    late = len((stale_ready - printed['seqs']) & ready_seqs)
+    unseen = len(ready_seqs - printed['seqs'] - stale_ready)
     print(f'demo_graph: {n} cycles in {t_cycles:.1f} s ({n / t_cycles:.0f}/s); sensor fired '
           f'{sum(r[4] for r in rows)} times, {goal_seen} on the goal edge after the warm-up; '
           f'edge1_ready {ready_n} times, {false_ready} false, {missed} missed' +
           (f'; {unpredicted} cycles without a prediction' if unpredicted else '') +
           (f'; {unsigned} statements NOT signed by {monitor}' if unsigned else '') +
-          (f'; {late} ready statements came too late to act on (sent more than 1 s before '
-           'they arrived: this process was starved)' if late else ''), flush=True)
+          (f'; not printed: {late} ready statements that came too late to act on (sent more '
+           f'than 1 s before they arrived), {unseen} that never came (replaced by the next '
+           "cycle's first): this process was starved" if late or unseen else ''), flush=True)
     print(f'demo_graph: first cycle that could be ready: {first_ready} (warm-up '
           f'{mon_vals.get("warmup_cycles", "?")}, settling {mon_vals.get("settle_cycles", "?")} '
           'throws); every statement checked with the run\'s key', flush=True)
