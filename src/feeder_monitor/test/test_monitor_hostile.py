@@ -29,9 +29,9 @@ import time
 from feeder_common import auth, messages
 # tests/ (test support in no package) is on sys.path by pytest.ini
 from feeder_testing import reserve_domain_id
-from hypothesis import given, HealthCheck, settings, strategies as st
 from hostile_messages import (KILLER_STAMP, ranges, statuses,
                               TRANSITION_EVENTS, wire)
+from hypothesis import given, HealthCheck, settings, strategies as st
 import pytest
 import rclpy
 from rclpy.context import Context
