@@ -52,6 +52,16 @@ def cycle_until_ready(ros, ready, limit_s=240.0):
     enable(ros, False)
 
 
+def trigger_when_idle(ros, timeout=10.0):
+    """Trigger one cycle once the driver is done with the one in flight (it refuses: busy)."""
+    end = time.monotonic() + timeout
+    while True:
+        res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
+        if res.success or 'busy' not in res.message or time.monotonic() > end:
+            return res
+        ros.spin_for(0.05)
+
+
 def hold_a_ready(ros, ready, limit=300):
     """
     Leave the monitor stating a ready that holds: no cycle fires after the one it proves.
@@ -64,7 +74,7 @@ def hold_a_ready(ros, ready, limit=300):
         if ready.checked[-1].ready_now:
             return
         n = len(ready)
-        res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
+        res = trigger_when_idle(ros)
         assert res.success, res.message
         ros.spin_until(lambda: any(c.state != Verdict.STATE_CYCLING
                                    for c in ready.checked[n:]), 10.0, 'the verdict')
