@@ -57,15 +57,14 @@ import importlib
 import json
 import os
 import pathlib
-import signal
-import subprocess
 import sys
 import time
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / 'tests'))
 
-from feeder_testing import INSTALL, claim_domain_id, dds_env, install_env  # noqa: E402
+# The harness (processes, domain, probe node): tests/feeder_testing.py
+from feeder_testing import Probe, Processes, use_domain  # noqa: E402
 
 SCENE = str(REPO / 'scenes' / 'triangle.yaml')
 NS = '/feeder'
@@ -77,55 +76,6 @@ MAX_AGE_NS = 1_000_000_000  # the monitor's max_report_age (default 1 s)
 NS_PER_S = 1_000_000_000
 
 
-class Processes:
-    """The run's processes, each in its own session, logging to DIR/logs/<name>.log."""
-
-    def __init__(self, log_dir, env):
-        """Log to ``log_dir``; every process gets the environment ``env``."""
-        self.log_dir = log_dir
-        self.env = env
-        self.procs = {}
-
-    def start(self, name, argv):
-        """Start ``argv`` as process ``name``."""
-        with open(self.log_dir / f'{name}.log', 'w') as log:
-            self.procs[name] = subprocess.Popen([str(a) for a in argv], stdout=log,
-                                                stderr=subprocess.STDOUT, env=self.env,
-                                                cwd=REPO, start_new_session=True)
-
-    def node(self, name, pkg, exe, *args):
-        """Start the installed executable ``exe`` of package ``pkg``."""
-        path = INSTALL / pkg / 'lib' / pkg / exe
-        if not path.exists():
-            raise SystemExit(f'attack_soak: {path} missing: run . scripts/setup.sh first')
-        self.start(name, [path, *args])
-
-    def check(self):
-        """Exit with its log's tail if a process has ended."""
-        for name, p in self.procs.items():
-            if p.poll() is not None:
-                log = (self.log_dir / f'{name}.log').read_text()[-2000:]
-                raise SystemExit(f'attack_soak: {name} exited ({p.returncode}):\n{log}')
-
-    def stop(self, name, timeout=10.0):
-        """SIGINT, then SIGTERM, then SIGKILL, ``timeout`` s apart; the exit status."""
-        p = self.procs[name]
-        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
-            if p.poll() is not None:
-                break
-            p.send_signal(sig)
-            try:
-                p.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                pass
-        return p.returncode
-
-    def stop_all(self):
-        """Stop every process, the last started first."""
-        for name in reversed(list(self.procs)):
-            self.stop(name, timeout=5.0)
-
-
 # ---- the run ----------------------------------------------------------------------------------
 
 def run(args, out):
@@ -133,10 +83,7 @@ def run(args, out):
     from feeder_common import auth
     key_file = out / 'hmac.key'
     auth.ensure_key(key_file)
-    domain, lock = claim_domain_id()
-    env = install_env(base=dds_env(domain))
-    os.environ.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-    (out / 'logs').mkdir(exist_ok=True)
+    domain, lock = use_domain()
     link = out / 'tty'
     load0 = ', '.join(f'{x:.1f}' for x in os.getloadavg())
     print(f'attack_soak: {args.cycles} cycles every {args.period} s (emulator cycle time '
@@ -144,82 +91,72 @@ def run(args, out):
           f'{args.miss_rate}, bit errors {args.bit_error_rate} per byte, an attack every '
           f'{args.forge_every} s; ROS_DOMAIN_ID={domain} (loopback), load {load0}; in {out}',
           flush=True)
-    procs = Processes(out / 'logs', env)
-    import rclpy
+    procs = Processes(out / 'logs', error=SystemExit, prog='attack_soak')
     from diagnostic_msgs.msg import DiagnosticArray
+    from feeder_common.diagnostics import local_name
     from std_srvs.srv import SetBool
-    rclpy.init()
-    node = rclpy.create_node('feeder_attack_soak')
+    probe = Probe('feeder_attack_soak', procs=procs, watch=True, error=SystemExit)
+    node = probe.node
     diag = {}
 
     def on_diag(msg):
         for s in msg.status:
-            diag[s.name] = {kv.key: kv.value for kv in s.values}
+            # by '<node>: <task>' (the status names carry the namespace)
+            diag[local_name(s.name)] = {kv.key: kv.value for kv in s.values}
 
     node.create_subscription(DiagnosticArray, '/diagnostics', on_diag, 50)
-
-    def spin_until(cond, timeout, what):
-        end = time.monotonic() + timeout
-        while not cond():
-            if time.monotonic() > end:
-                raise SystemExit(f'attack_soak: timed out waiting for {what}')
-            procs.check()
-            rclpy.spin_once(node, timeout_sec=0.05)
 
     def fired():
         return int(diag.get('feeder_driver: cycles', {}).get('fired', 0))
 
     def enable(on):
-        client = node.create_client(SetBool, f'{DRIVER}/enable')
-        spin_until(client.service_is_ready, 60, 'the driver')
         for _ in range(50):
-            fut = client.call_async(SetBool.Request(data=on))
-            spin_until(fut.done, 10, 'enable')
-            if fut.result().success:
+            res = probe.call(SetBool, f'{DRIVER}/enable', SetBool.Request(data=on))
+            if res.success:
                 break
-            time.sleep(0.2)     # the link is not up yet
+            probe.spin_for(0.2)     # the link is not up yet
         else:
-            raise SystemExit(f'attack_soak: enable {on} refused: {fut.result().message}')
-        node.destroy_client(client)
+            raise SystemExit(f'attack_soak: enable {on} refused: {res.message}')
 
     t_wall = None
     ros = ['--ros-args', '-r', f'__ns:={NS}']
     try:
-        procs.node('emulator', 'feeder_driver', 'controller_emulator', '--scene', SCENE,
-                   '--link', link, '--cycle-time', args.cycle_time, '--heartbeat', 0.25,
-                   '--spurious-rate', args.spurious_rate, '--miss-rate', args.miss_rate,
-                   '--bit-error-rate', args.bit_error_rate, '--host-bit-error-rate',
-                   args.bit_error_rate, '--seed', args.seed, '--truth-log', out / 'truth.jsonl')
+        procs.start('feeder_driver', 'controller_emulator', '--scene', SCENE,
+                    '--link', link, '--cycle-time', args.cycle_time, '--heartbeat', 0.25,
+                    '--spurious-rate', args.spurious_rate, '--miss-rate', args.miss_rate,
+                    '--bit-error-rate', args.bit_error_rate, '--host-bit-error-rate',
+                    args.bit_error_rate, '--seed', args.seed, '--truth-log',
+                    out / 'truth.jsonl', name='emulator')
         end = time.monotonic() + 60
         while not os.path.islink(link):
             procs.check()
             if time.monotonic() > end:
                 raise SystemExit('attack_soak: the emulator made no pty in 60 s')
             time.sleep(0.1)
-        procs.node('recorder', 'feeder_monitor', 'bag_recorder', out / 'bag', '--topics',
-                   *TOPICS, *ros)
-        procs.node('monitor', 'feeder_monitor', 'monitor_node', *ros, '-p', f'scene:={SCENE}',
-                   '-p', f'key_file:={key_file}')
-        procs.node('driver', 'feeder_driver', 'driver_node', *ros, '-p', f'port:={link}',
-                   '-p', f'key_file:={key_file}', '-p', f'cycle_period:={args.period}',
-                   '-p', 'ack_timeout_s:=0.1', '-p', 'cycle_timeout_s:=0.5')
-        spin_until(lambda: node.count_subscribers(f'{NS}/cycle_status') >= 2, 120,
-                   'the monitor and the recorder on cycle_status')
-        spin_until(lambda: node.count_publishers(f'{NS}/edge1_verdict') >= 1, 120,
-                   'the monitor')
-        procs.start('forger', [sys.executable, REPO / 'bench' / 'forger.py', '--ns', NS,
-                               '--every', args.forge_every, '--log', out / 'forgeries.jsonl',
-                               '--counts', out / 'forger.json'])
-        spin_until(lambda: node.count_subscribers(f'{NS}/cycle_status') >= 3, 120,
-                   'the forger')
-        end = time.monotonic() + 3.0      # the recorder's discovery of every topic
-        spin_until(lambda: time.monotonic() > end, 10, 'discovery')
+        procs.start('feeder_monitor', 'bag_recorder', out / 'bag', '--topics', *TOPICS, *ros,
+                    name='recorder')
+        procs.start('feeder_monitor', 'monitor_node', *ros, '-p', f'scene:={SCENE}',
+                    '-p', f'key_file:={key_file}', name='monitor')
+        procs.start('feeder_driver', 'driver_node', *ros, '-p', f'port:={link}',
+                    '-p', f'key_file:={key_file}', '-p', f'cycle_period:={args.period}',
+                    '-p', 'ack_timeout_s:=0.1', '-p', 'cycle_timeout_s:=0.5', name='driver')
+        # The writers matched their readers, by their own accounts (the nodes' endpoints
+        # statuses): the driver's reports the monitor and the recorder, the monitor's
+        # statements the recorder.
+        probe.wait_remote_matched(DRIVER, readers={f'{NS}/cycle_status': 2,
+                                                   f'{NS}/cycle_fired': 2}, timeout=120)
+        probe.wait_remote_matched(MONITOR, readers={f'{NS}/edge1_verdict': 1,
+                                                    f'{NS}/edge1_ready': 1}, timeout=120)
+        procs.command([sys.executable, REPO / 'bench' / 'forger.py', '--ns', NS,
+                       '--every', args.forge_every, '--log', out / 'forgeries.jsonl',
+                       '--counts', out / 'forger.json'], 'forger')
+        probe.wait_remote_matched(DRIVER, readers={f'{NS}/cycle_status': 3}, timeout=120)
         enable(True)
         t0 = time.monotonic()
         last_print = t0
         while fired() < args.cycles:
             procs.check()
-            rclpy.spin_once(node, timeout_sec=0.2)
+            probe.executor.spin_once(timeout_sec=0.2)
             if time.monotonic() - last_print >= 60:
                 last_print = time.monotonic()
                 rate = fired() / (last_print - t0)
@@ -227,13 +164,11 @@ def run(args, out):
                       f'({rate:.0f}/s)', flush=True)
         enable(False)
         t_wall = time.monotonic() - t0
-        end = time.monotonic() + 3.0      # the last cycles reach the monitor and the bag
-        spin_until(lambda: time.monotonic() > end, 10, 'the last cycles')
+        probe.spin_for(3.0)       # the last cycles reach the monitor and the bag
         procs.stop('forger')
         procs.stop('recorder', timeout=60)
     finally:
-        node.destroy_node()
-        rclpy.shutdown()
+        probe.close()
         procs.stop_all()
         lock.close()
     facts = {'cycles_fired': fired(), 'wall_s': t_wall, 'load_start': load0,

@@ -37,7 +37,8 @@ Exit status 0 when no run has a false ready or a cycle without truth and every r
 1 (a node that fails, e.g. the stand-in whose analysis of the noisy scene leaves the domain of
 f, is reported with its log and the next design runs). The interval
 treats cycles as independent draws; the orbit's cycles are correlated (a limit set is close to
-periodic), so it is a guide, not a test.
+periodic), so it is a guide, not a test. The processes, the domain and the node are the
+harness's (tests/feeder_testing.py through graph_bench; the one sys.path line adds tests/).
 """
 
 import argparse
@@ -47,11 +48,8 @@ import sys
 import tempfile
 import time
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / 'scripts'))
-
-from demo_graph import Processes  # noqa: E402
-from feeder_testing import claim_domain_id  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'tests'))
+from feeder_testing import Processes, REPO, use_domain  # noqa: E402
 from graph_bench import BenchNode  # noqa: E402
 
 DEFAULT_RUNS = (f'{REPO}/docs/design/triangle_design.yaml:0.005',
@@ -63,17 +61,17 @@ class Listener(BenchNode):
 
     prog = 'design_graph'
 
-    def __init__(self, rclpy):
+    def __init__(self, procs):
         from diagnostic_msgs.msg import DiagnosticStatus
         from feeder_interfaces.msg import Verdict
         from rclpy.qos import QoSProfile, ReliabilityPolicy
-        super().__init__(rclpy, 'feeder_design_graph')
+        super().__init__('feeder_design_graph', procs)
         qos = QoSProfile(depth=10_000, reliability=ReliabilityPolicy.RELIABLE)
         self.statuses, self.verdicts = [], []
-        self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
-                                      self.statuses.append, qos)
-        self.node.create_subscription(Verdict, '/feeder/edge1_verdict',
-                                      self.verdicts.append, qos)
+        self.status_sub = self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
+                                                        self.statuses.append, qos)
+        self.verdict_sub = self.node.create_subscription(Verdict, '/feeder/edge1_verdict',
+                                                         self.verdicts.append, qos)
 
 
 def kernel_prediction(scene):
@@ -84,7 +82,7 @@ def kernel_prediction(scene):
     return float(res.column('readies_per_throw', 0, 0)[0])
 
 
-def run_one(rclpy, design_path, floor, args, out):
+def run_one(design_path, floor, args, out):
     from feeder_common import auth
     from feeder_common.messages import check_verdict
     from feeder_monitor.feed_check import design_prediction, judge_feed
@@ -99,36 +97,36 @@ def run_one(rclpy, design_path, floor, args, out):
     truth_path = out / f'{name}_truth.jsonl'
     logs = out / name
     logs.mkdir(exist_ok=True)
-    procs = Processes(logs)
-    lis = Listener(rclpy)
+    procs = Processes(logs, error=SystemExit, prog='design_graph')
+    lis = Listener(procs)
     ns = ['-r', '__ns:=/feeder']
     key_file = logs / 'hmac.key'        # the run's own key (mode 0600)
     key = auth.ensure_key(key_file)
     k = ['-p', f'key_file:={key_file}']
     try:
-        procs.start('sim_hw', 'feeder_sim', 'standin_node', '--ros-args', *ns, '-r',
-                    '__node:=feeder_driver', '-p', f'scene:={noisy}', '-p',
-                    f'cycle_period:={args.period}', '-p', f'truth_log:={truth_path}', *k)
-        procs.start('predictor', 'feeder_sim', 'predictor_node', '--ros-args', *ns, '-p',
-                    f'scene:={design_path}')
-        procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
-                    f'scene:={design_path}', *k)
-        lis.spin_until(lambda: lis.node.count_subscribers('/feeder/cycle_status') >= 3, 120,
-                       'the readers of cycle_status', procs)
-        lis.spin_until(lambda: lis.node.count_publishers('/feeder/edge1_verdict') >= 1, 120,
-                       'the monitor', procs)
-        end = time.monotonic() + 2.0
-        lis.spin_until(lambda: time.monotonic() > end, 10, 'discovery')
+        procs.start('feeder_sim', 'standin_node', '--ros-args', *ns, '-r',
+                    '__node:=feeder_driver', '-p',
+                    f'scene:={noisy}', '-p', f'cycle_period:={args.period}', '-p',
+                    f'truth_log:={truth_path}', *k, name='sim_hw')
+        procs.start('feeder_sim', 'predictor_node', '--ros-args', *ns, '-p',
+                    f'scene:={design_path}', name='predictor')
+        procs.start('feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
+                    f'scene:={design_path}', *k, name='monitor')
+        # The writers matched their readers, by their own accounts: the stand-in's
+        # cycle_status the monitor's, the predictor's and ours; the monitor's verdicts ours.
+        lis.wait_remote_matched('/feeder/feeder_driver', readers={
+            '/feeder/cycle_status': 3, '/feeder/proximity': 1, '/feeder/cycle_fired': 1},
+            timeout=120)
+        lis.wait_remote_matched('/feeder/feeder_monitor', readers={'/feeder/edge1_verdict': 1},
+                                timeout=120)
         t0 = time.monotonic()
-        lis.enable(True, procs)
+        lis.enable(True)
         lis.spin_until(lambda: len(lis.statuses) >= args.cycles,
-                       60 + 3 * args.cycles * args.period, f'{args.cycles} cycles', procs)
-        lis.enable(False, procs)
+                       60 + 3 * args.cycles * args.period, f'{args.cycles} cycles')
+        lis.enable(False)
         wall = time.monotonic() - t0
-        lis.spin_until(lambda: len(lis.verdicts) >= len(lis.statuses), 20, 'the last verdicts',
-                       procs)
-        end = time.monotonic() + 1.0
-        lis.spin_until(lambda: time.monotonic() > end, 10, 'late messages')
+        lis.spin_until(lambda: len(lis.verdicts) >= len(lis.statuses), 20, 'the last verdicts')
+        lis.spin_for(1.0)       # late messages
     finally:
         lis.close()
         procs.stop_all()
@@ -179,27 +177,22 @@ def main():
                      ':0.005')
     out = (args.out or pathlib.Path(tempfile.mkdtemp(prefix='feeder-design-graph-'))).resolve()
     out.mkdir(parents=True, exist_ok=True)
-    domain, lock = claim_domain_id()
-    os.environ['ROS_DOMAIN_ID'] = str(domain)
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    domain, lock = use_domain()
     load = ', '.join(f'{x:.1f}' for x in os.getloadavg())
     print(f'design_graph: {args.cycles} cycles per design at cycle_period {args.period} s, '
           f'ROS_DOMAIN_ID={domain} (loopback), load average {load}, output in {out}',
           flush=True)
-    import rclpy
-    rclpy.init()
     bad = 0
     try:
         for path, floor in runs:
             try:
-                report = run_one(rclpy, path, floor, args, out)
+                report = run_one(path, floor, args, out)
             except SystemExit as exc:     # a node failed: say which and why, go on
                 print(f'\n{path.name} at s = {floor}: the run failed: {exc}', flush=True)
                 bad += 1
                 continue
             bad += report.false_readies + report.missing_truth
     finally:
-        rclpy.shutdown()
         lock.close()
     return 1 if bad else 0
 

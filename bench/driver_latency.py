@@ -33,8 +33,8 @@ import tempfile
 import time
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(REPO / 'src' / 'feeder_driver'), str(REPO / 'src' / 'feeder_common'),
-                str(REPO / 'tests')]
+# The harness (tests/feeder_testing.py); the packages from the colcon install
+sys.path.insert(0, str(REPO / 'tests'))
 
 from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
 from feeder_driver.driver_node import DriverNode  # noqa: E402

@@ -49,15 +49,15 @@ sys.path.insert(0, str(REPO / 'tests'))
 from feeder_testing import claim_domain_id, dds_env, install_env  # noqa: E402
 
 # The graph's processes: name -> (package, executable, arguments before the common ones).
-# Every one also gets: --ros-args -r __ns:=/feeder -p scene:=SCENE -p key_file:=KEY. Change
-# the executables here when sim_node splits into standin_node and predictor_node.
+# Every one also gets: --ros-args -r __ns:=/feeder -p scene:=SCENE, and key_file:=KEY those
+# in KEY_NODES.
 NODES = {
-    'stand-in': ('feeder_sim', 'sim_node',
-                 ['-r', '__node:=feeder_driver', '-p', 'hardware_mode:=true']),
-    'predictor': ('feeder_sim', 'sim_node', []),
+    'stand-in': ('feeder_sim', 'standin_node', ['-r', '__node:=feeder_driver']),
+    'predictor': ('feeder_sim', 'predictor_node', []),
     'monitor': ('feeder_monitor', 'monitor_node', []),
 }
 PERIOD_NODES = ('stand-in',)       # the ones that take -p cycle_period:=PERIOD
+KEY_NODES = ('stand-in', 'monitor')  # the ones that sign or check (key_file)
 
 
 def parse_args():
@@ -149,7 +149,9 @@ def run(args, scene, env, key, log_dir):
                             str(scene)], env=env, check=True, stdout=subprocess.DEVNULL)
         for name, (pkg, exe, extra) in NODES.items():
             cmd = [str(INSTALL / pkg / 'lib' / pkg / exe), '--ros-args', '-r', '__ns:=/feeder',
-                   *extra, '-p', f'scene:={scene}', '-p', f'key_file:={key}']
+                   *extra, '-p', f'scene:={scene}']
+            if name in KEY_NODES:
+                cmd += ['-p', f'key_file:={key}']
             if name in PERIOD_NODES:
                 cmd += ['-p', f'cycle_period:={args.period}']
             log = open(log_dir / f'{scene.stem}-{name}.log', 'w')

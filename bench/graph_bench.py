@@ -28,6 +28,10 @@ Benchmarks of the sim and the monitor as processes on loopback DDS (prints a tab
 Asserts nothing. Usage (after ``. scripts/setup.sh``):
 
     python bench/graph_bench.py [--latency-cycles 1000] [--rate-seconds 5] [--cpu-seconds 20]
+
+The processes, the domain and the probe node are the harness's (tests/feeder_testing.py; the
+one sys.path line below puts tests/ on the path). The benchmark's own nodes wait on matched
+endpoints before cycling, as the tests do.
 """
 
 import argparse
@@ -40,11 +44,9 @@ import sys
 import tempfile
 import time
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / 'scripts'))
-
-from demo_graph import Processes  # noqa: E402
-from feeder_testing import claim_domain_id  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'tests'))
+import feeder_testing  # noqa: E402
+from feeder_testing import Probe as HarnessProbe, Processes, REPO, use_domain  # noqa: E402
 
 SCENE = str(REPO / 'scenes' / 'triangle.yaml')
 CLK_TCK = os.sysconf('SC_CLK_TCK')
@@ -76,69 +78,48 @@ def _ready_of(readies, verdict_info):
     return readies[k] if k >= 0 else None
 
 
-class BenchNode:
-    """A benchmark's own node: spins until a condition holds, switches the stand-in's cycling."""
+class BenchNode(HarnessProbe):
+    """A benchmark's own node (the harness's Probe): fails with SystemExit, watches ``procs``."""
 
     prog = 'graph_bench'
 
-    def __init__(self, rclpy, name):
-        self.rclpy = rclpy
-        self.node = rclpy.create_node(name)
+    def __init__(self, name, procs=None):
+        super().__init__(name, procs=procs, watch=procs is not None, error=SystemExit)
 
-    def spin_until(self, cond, timeout, what, procs=None):
-        """Spin until ``cond()``; exit with a message after ``timeout`` s or if a node died."""
-        end = time.monotonic() + timeout
-        while not cond():
-            if time.monotonic() > end:
-                raise SystemExit(f'{self.prog}: timed out waiting for {what}')
-            if procs is not None:
-                procs.check()
-            self.rclpy.spin_once(self.node, timeout_sec=0.05)
-
-    def enable(self, on, procs=None):
-        """Switch the cycling of /feeder/feeder_driver on or off (its ~/enable service)."""
-        from std_srvs.srv import SetBool
-        client = self.node.create_client(SetBool, '/feeder/feeder_driver/enable')
-        self.spin_until(client.service_is_ready, 120, 'the sim', procs)
-        fut = client.call_async(SetBool.Request(data=on))
-        self.spin_until(fut.done, 10, 'enable', procs)
-        if not fut.result().success:
-            raise SystemExit(f'{self.prog}: enable {on} refused: {fut.result().message}')
-        self.node.destroy_client(client)
-
-    def close(self):
-        self.node.destroy_node()
+    def enable(self, on, node_name='/feeder/feeder_driver'):
+        """Switch the cycling of the stand-in on or off (once it is active)."""
+        if on:
+            self.wait_active(node_name)
+        return super().enable(node_name, on)
 
 
 class Probe(BenchNode):
     """The benchmark's node: subscriptions with receive timestamps, service calls."""
 
-    def __init__(self, rclpy):
+    def __init__(self, procs=None):
         from diagnostic_msgs.msg import DiagnosticStatus
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from feeder_interfaces.msg import Verdict
         from sensor_msgs.msg import Range
-        super().__init__(rclpy, 'feeder_bench')
+        super().__init__('feeder_bench', procs)
         reliable = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE)
         latched = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE,
                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
         self.prox, self.ready, self.status, self.verdicts = [], [], [], []
-        self.node.create_subscription(Range, '/feeder/proximity',
-                                      lambda m, i: self.prox.append(i), reliable)
-        self.node.create_subscription(Verdict, '/feeder/edge1_ready',
-                                      lambda m, i: self.ready.append(i), latched)
-        self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
-                                      lambda m, i: self.status.append((_seq(m), i)), reliable)
+        self.subs = {
+            'proximity': self.node.create_subscription(
+                Range, '/feeder/proximity', lambda m, i: self.prox.append(i), reliable),
+            'edge1_ready': self.node.create_subscription(
+                Verdict, '/feeder/edge1_ready', lambda m, i: self.ready.append(i), latched),
+            'cycle_status': self.node.create_subscription(
+                DiagnosticStatus, '/feeder/cycle_status',
+                lambda m, i: self.status.append((_seq(m), i)), reliable)}
         # The monitor publishes edge1_ready, then the cycle's edge1_verdict (the same signed
         # Verdict, with its seq); it also republishes edge1_ready while idle (and lowers it when
         # a cycle fires), so cycles are matched through the verdicts.
-        self.node.create_subscription(Verdict, '/feeder/edge1_verdict',
-                                      lambda m, i: self.verdicts.append((m.seq, i)), reliable)
-
-    def spin_for(self, seconds):
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            self.rclpy.spin_once(self.node, timeout_sec=0.02)
+        self.subs['edge1_verdict'] = self.node.create_subscription(
+            Verdict, '/feeder/edge1_verdict', lambda m, i: self.verdicts.append((m.seq, i)),
+            reliable)
 
     def clear(self):
         self.prox.clear()
@@ -178,35 +159,68 @@ def start(procs, which, period):
     rt = ('-p', f'realtime_priority:={REALTIME_PRIORITY}') if REALTIME_PRIORITY else ()
     key = run_key(procs.log_dir)     # the stand-in signs, the monitor checks (not the predictor)
     if 'sim' in which:
-        procs.start('sim', 'feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder',
-                    '-r', '__node:=feeder_driver', '-p', f'scene:={SCENE}', '-p',
-                    f'cycle_period:={period}', *rt, *key)
+        procs.start('feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
+                    '__node:=feeder_driver', '-p',
+                    f'scene:={SCENE}', '-p', f'cycle_period:={period}', *rt, *key, name='sim')
     if 'monitor' in which:
-        procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', '-r',
-                    '__ns:=/feeder', '-p', f'scene:={SCENE}', *rt, *key)
+        procs.start('feeder_monitor', 'monitor_node', '--ros-args', '-r',
+                    '__ns:=/feeder', '-p', f'scene:={SCENE}', *rt, *key, name='monitor')
     if 'predictor' in which:
-        procs.start('predictor', 'feeder_sim', 'predictor_node', '--ros-args', '-r',
+        procs.start('feeder_sim', 'predictor_node', '--ros-args', '-r',
                     '__ns:=/feeder/predictor', '-r', 'cycle_status:=/feeder/cycle_status',
-                    '-p', f'scene:={SCENE}', *rt)
+                    '-p', f'scene:={SCENE}', *rt, name='predictor')
     if 'recorder' in which:
         bag = pathlib.Path(procs.log_dir) / 'bag'
         shutil.rmtree(bag, ignore_errors=True)
-        procs.start('recorder', 'feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
-                    '__ns:=/feeder')
+        procs.start('feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
+                    '__ns:=/feeder', name='recorder')
+
+
+def watch_diagnostics(probe):
+    """The latest status of each name on /diagnostics, by local name (a dict kept up to date)."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from feeder_common.diagnostics import local_name
+    diags = {}
+
+    def on_diag(msg):
+        for s in msg.status:
+            diags[local_name(s.name)] = s
+
+    probe.node.create_subscription(DiagnosticArray, '/diagnostics', on_diag, 50)
+    return diags
 
 
 def wait_graph(probe, which):
-    readers = 1 + ('monitor' in which) + ('predictor' in which) + ('recorder' in which)
+    """
+    Wait until every writer matched its readers, by the writers' own accounts.
+
+    Each feeder node reports its matched endpoints on /diagnostics (feeder_common.diagnostics):
+    the stand-in's cycle_status and proximity writers matched the probe and the other nodes'
+    readers, the monitor's edge1_verdict the probe's; then the stand-in is active.
+    """
+    status = 1 + ('monitor' in which) + ('predictor' in which) + ('recorder' in which)
+    prox = 1 + ('monitor' in which) + ('recorder' in which)
+    probe.wait_remote_matched('/feeder/feeder_driver', readers={
+        '/feeder/cycle_status': status, '/feeder/proximity': prox})
     if 'monitor' in which:
         probe.spin_until(lambda: probe.ready, 90, 'the monitor')
-    probe.spin_until(lambda: probe.node.count_subscribers('/feeder/cycle_status') >= readers,
-                     90, 'the readers of cycle_status')
-    probe.spin_for(1.0)
+        probe.wait_remote_matched('/feeder/feeder_monitor',
+                                  readers={'/feeder/edge1_verdict': 1})
+    probe.wait_active('/feeder/feeder_driver')
 
 
-def latency(rclpy, log_dir, cycles, period=0.01):
-    procs = Processes(log_dir)
-    probe = Probe(rclpy)
+def bench_processes(log_dir):
+    """The benchmark's node processes (from INSTALL: --install may name another)."""
+    return Processes(log_dir, install=INSTALL, error=SystemExit, prog='graph_bench')
+
+
+# The colcon install the nodes run from (--install)
+INSTALL = feeder_testing.INSTALL
+
+
+def latency(log_dir, cycles, period=0.01):
+    procs = bench_processes(log_dir)
+    probe = Probe(procs)
     probe_realtime()
     try:
         start(procs, ('sim', 'monitor'), period)
@@ -267,47 +281,39 @@ except BaseException:
 """
 
 
-def echo_baseline(rclpy, cycles, period):
+def echo_baseline(log_dir, cycles, period):
     """Two hops through a do-nothing rclpy node: the platform's floor for the monitor's path."""
-    import subprocess
-    from demo_graph import node_env
     from std_msgs.msg import Float64
-    proc = subprocess.Popen([sys.executable, '-c', ECHO, str(PROBE_PRIORITY)], env=node_env())
-    node = rclpy.create_node('feeder_bench_ping')
+    procs = bench_processes(log_dir)
+    procs.command([sys.executable, '-c', ECHO, PROBE_PRIORITY], 'echo')
+    probe = BenchNode('feeder_bench_ping', procs)
     probe_realtime()
     got = []
-    pub = node.create_publisher(Float64, '/bench/ping', 10)
-    node.create_subscription(Float64, '/bench/pong', lambda m, i: got.append(i), 10)
+    pub = probe.node.create_publisher(Float64, '/bench/ping', 10)
+    sub = probe.node.create_subscription(Float64, '/bench/pong', lambda m, i: got.append(i), 10)
     try:
-        end = time.monotonic() + 60
-        while node.count_subscribers('/bench/ping') < 1 or node.count_publishers(
-                '/bench/pong') < 1:
-            assert time.monotonic() < end, 'echo did not start'
-            rclpy.spin_once(node, timeout_sec=0.05)
-        t_end = time.monotonic() + 1.0
-        while time.monotonic() < t_end:
-            rclpy.spin_once(node, timeout_sec=0.02)
+        # Both hops matched: the echo's reader with our writer, its writer with our reader.
+        probe.wait_matched(pub, what='the echo to match /bench/ping')
+        probe.wait_matched(sub, what='the echo to match /bench/pong')
+        probe.spin_for(1.0)     # the echo's reader side of /bench/pong shows nowhere
         sent = []
         for _ in range(cycles):
             sent.append(time.time_ns())
             pub.publish(Float64(data=0.0))
             t_next = time.monotonic() + period
             while time.monotonic() < t_next:
-                rclpy.spin_once(node, timeout_sec=max(0.0, t_next - time.monotonic()))
-        t_end = time.monotonic() + 1.0
-        while time.monotonic() < t_end:
-            rclpy.spin_once(node, timeout_sec=0.02)
+                probe.executor.spin_once(timeout_sec=max(0.0, t_next - time.monotonic()))
+        probe.spin_for(1.0)
         # the pong's source timestamp is the echo's publish; the ping's is in ``sent``
         return [(i['received_timestamp'] - t) * 1e-6 for i, t in zip(got, sent)]
     finally:
-        node.destroy_node()
-        proc.send_signal(2)
-        proc.wait(timeout=10)
+        probe.close()
+        procs.stop_all()
 
 
-def rate(rclpy, log_dir, seconds, which, period=0.005):
-    procs = Processes(log_dir)
-    probe = Probe(rclpy)
+def rate(log_dir, seconds, which, period=0.005):
+    procs = bench_processes(log_dir)
+    probe = Probe(procs)
     try:
         start(procs, which, period)
         wait_graph(probe, which)
@@ -325,9 +331,9 @@ def rate(rclpy, log_dir, seconds, which, period=0.005):
         procs.stop_all()
 
 
-def cpu(rclpy, log_dir, seconds, period):
-    procs = Processes(log_dir)
-    probe = Probe(rclpy)
+def cpu(log_dir, seconds, period):
+    procs = bench_processes(log_dir)
+    probe = Probe(procs)
     which = ('sim', 'monitor', 'predictor', 'recorder')
     try:
         start(procs, which, period)
@@ -381,18 +387,13 @@ def main():
         ap.error(f'--realtime-priority must be 0-99, got {args.realtime_priority}')
     if args.probe_realtime and not args.realtime_priority:
         ap.error('--probe-realtime needs --realtime-priority P')
-    global REALTIME_PRIORITY
+    global REALTIME_PRIORITY, INSTALL
     REALTIME_PRIORITY = args.realtime_priority
     if args.install is not None:
-        import demo_graph
-        demo_graph.INSTALL = args.install.resolve()
+        INSTALL = args.install.resolve()
     if args.executor:
         os.environ['FEEDER_EXECUTOR'] = args.executor
-    domain, lock = claim_domain_id()
-    os.environ['ROS_DOMAIN_ID'] = str(domain)
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    import rclpy
-    rclpy.init()
+    domain, lock = use_domain()
     log_dir = pathlib.Path(tempfile.mkdtemp(prefix='feeder-bench-'))
     burners = busy_load(args.load)
     global PROBE_PRIORITY
@@ -405,21 +406,20 @@ def main():
 
     try:
         load = ', '.join(f'{x:.1f}' for x in os.getloadavg())
-        import demo_graph
         executor = os.environ.get('FEEDER_EXECUTOR', "the nodes' default")
         print(f'graph_bench: ROS_DOMAIN_ID={domain} (loopback), {os.cpu_count()} cores, load '
               f'average {load} (other work on the machine skews latency), {args.load} busy '
               f'processes started, realtime_priority {args.realtime_priority}'
               f'{" (probe too)" if args.probe_realtime else ""}, logs in {log_dir}; nodes '
-              f'from {demo_graph.INSTALL}, executor: {executor}', flush=True)
+              f'from {INSTALL}, executor: {executor}', flush=True)
         if args.only in (None, 'latency'):
-            series = latency(rclpy, log_dir, args.latency_cycles, args.latency_period)
+            series = latency(log_dir, args.latency_cycles, args.latency_period)
             for k, (label, xs) in enumerate(series.items()):
                 over = f'{len(xs)} cycles at {1 / args.latency_period:.0f} Hz'
                 row(label, over, f'p50 {statistics.median(xs):.2f} ms, p90 {pct(xs, 90):.2f} '
                     f'ms, p99 {pct(xs, 99):.2f} ms, max {max(xs):.2f} ms',
                     'p99 < 5 ms' if k == 0 else '')
-            xs = echo_baseline(rclpy, args.latency_cycles, args.latency_period)
+            xs = echo_baseline(log_dir, args.latency_cycles, args.latency_period)
             row('baseline: ping published -> pong received through a do-nothing rclpy node',
                 f'{len(xs)} pings at {1 / args.latency_period:.0f} Hz',
                 f'p50 {statistics.median(xs):.2f} ms, p90 {pct(xs, 90):.2f} ms, p99 '
@@ -428,20 +428,19 @@ def main():
             for label, which in (('sim alone', ('sim',)),
                                  ('sim + monitor + predictor + recorder',
                                   ('sim', 'monitor', 'predictor', 'recorder'))):
-                r = rate(rclpy, log_dir, args.rate_seconds, which)
+                r = rate(log_dir, args.rate_seconds, which)
                 row(f'cycles/s at cycle_period 0.005 s, {label}', f'{args.rate_seconds:.0f} s',
                     f'{r:.1f} cycles/s', '>= 100')
         if args.only in (None, 'cpu'):
             for period, label, secs in ((1.0, '1 Hz', args.cpu_seconds),
                                         (0.01, '100 Hz', min(args.cpu_seconds, 10.0))):
-                for name, use in cpu(rclpy, log_dir, secs, period).items():
+                for name, use in cpu(log_dir, secs, period).items():
                     row(f'CPU of {name} at {label} cycling', f'{secs:.0f} s',
                         f'{use:.2f} % of a core', '< 3 %' if period == 1.0 else '')
     finally:
         for b in burners:
             b.kill()
             b.wait()
-        rclpy.shutdown()
         lock.close()
     load = ', '.join(f'{x:.1f}' for x in os.getloadavg())
     print(f'\nload average at the end: {load}')

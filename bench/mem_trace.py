@@ -35,12 +35,10 @@ import tempfile
 import time
 import tracemalloc
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / 'scripts'))
-sys.path.insert(0, str(REPO / 'bench'))
-
-from demo_graph import Processes  # noqa: E402
-from feeder_testing import claim_domain_id  # noqa: E402
+# The harness (tests/feeder_testing.py: processes, domain, probe node); bench/ is this
+# script's own directory, on sys.path already.
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'tests'))
+from feeder_testing import Probe, Processes, use_domain  # noqa: E402
 from soak import SCENE, TOPICS, rss_kb  # noqa: E402
 
 
@@ -68,17 +66,14 @@ def main():
     ap.add_argument('--top', type=int, default=12)
     args = ap.parse_args()
     out = pathlib.Path(tempfile.mkdtemp(prefix='feeder-memtrace-'))
-    domain, lock = claim_domain_id()
-    os.environ['ROS_DOMAIN_ID'] = str(domain)
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    domain, lock = use_domain()
     import rclpy
     from rclpy.context import Context
     from rclpy.executors import SingleThreadedExecutor
-    from std_srvs.srv import SetBool
-    procs = Processes(out)
-    procs.start('sim', 'feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
+    procs = Processes(out, error=SystemExit, prog='mem_trace')
+    procs.start('feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
                 '__node:=feeder_driver', '-p', f'scene:={SCENE}',
-                '-p', f'cycle_period:={args.period}')
+                '-p', f'cycle_period:={args.period}', name='sim')
     context = Context()
     rclpy.init(context=context)
     node, writer = make_node(args.node, context, out)
@@ -97,15 +92,13 @@ def main():
             procs.check()
             ex.spin_once(timeout_sec=0.05)
 
+    # Switches the stand-in's cycling once its cycle_status writer matched the traced node's
+    # reader and ctl's (the stand-in's own account) and it is active.
+    probe = Probe('feeder_mem_trace_probe', procs=procs, watch=True, error=SystemExit)
     try:
-        client = ctl.create_client(SetBool, '/feeder/feeder_driver/enable')
-        end = time.monotonic() + 120
-        while not client.service_is_ready() and time.monotonic() < end:
-            spin(0.1)
-        spin(3.0)
-        fut = client.call_async(SetBool.Request(data=True))
-        while not fut.done():
-            spin(0.05)
+        probe.wait_remote_matched('/feeder/feeder_driver',
+                                  readers={'/feeder/cycle_status': 2}, timeout=120)
+        probe.enable('/feeder/feeder_driver', True)
         spin(args.warmup)
         tracemalloc.start(6)
         n0, rss0, t0 = seq['n'], rss_kb(os.getpid()), time.monotonic()
@@ -114,10 +107,9 @@ def main():
         n1, rss1, t1 = seq['n'], rss_kb(os.getpid()), time.monotonic()
         traced, _ = tracemalloc.get_traced_memory()
         tracemalloc.stop()
-        fut = client.call_async(SetBool.Request(data=False))
-        while not fut.done():
-            spin(0.05)
+        probe.enable('/feeder/feeder_driver', False)
     finally:
+        probe.close()
         procs.stop_all()
     cycles = n1 - n0
     per = 1000.0 / max(cycles, 1)

@@ -27,6 +27,9 @@ work after the stamp, transport and the executor's dispatch. Asserts nothing. Us
 ``. scripts/setup.sh``):
 
     python bench/monitor_hop.py [--executor events|single] [--seconds 10]
+
+The sim process, the domain and the probe node that switches the cycling are the harness's
+(tests/feeder_testing.py; the one sys.path line below puts tests/ on the path).
 """
 
 import argparse
@@ -37,12 +40,8 @@ import sys
 import tempfile
 import time
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / 'scripts'))
-
-from demo_graph import Processes  # noqa: E402
-
-from feeder_testing import claim_domain_id  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'tests'))
+from feeder_testing import Probe, Processes, REPO, use_domain  # noqa: E402
 
 SCENE = str(REPO / 'scenes' / 'triangle.yaml')
 
@@ -111,48 +110,48 @@ def main():
     ap.add_argument('--seconds', type=float, default=10.0)
     ap.add_argument('--period', type=float, default=0.01)
     args = ap.parse_args()
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    domain, _lock = claim_domain_id()        # held until the process ends
-    os.environ['ROS_DOMAIN_ID'] = str(domain)
+    domain, _lock = use_domain()        # held until the process ends
     import rclpy
     from rclpy.parameter import Parameter
     from feeder_common.node import autostart, make_executor
-    from std_srvs.srv import SetBool
     times = {}
     node_cls = instrument(times)
     from feeder_common import auth
-    procs = Processes(pathlib.Path(tempfile.mkdtemp(prefix='monitor_hop-')))
+    procs = Processes(pathlib.Path(tempfile.mkdtemp(prefix='monitor_hop-')), error=SystemExit,
+                      prog='monitor_hop')
     key_file = str(procs.log_dir / 'hmac.key')      # the run's own key (mode 0600)
     auth.ensure_key(key_file)
     rclpy.init()
+    probe = None
     try:
-        procs.start('sim', 'feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder',
-                    '-r', '__node:=feeder_driver', '-p', f'scene:={SCENE}',
-                    '-p', f'cycle_period:={args.period}', '-p', f'key_file:={key_file}')
+        procs.start('feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
+                    '__node:=feeder_driver', '-p',
+                    f'scene:={SCENE}', '-p', f'cycle_period:={args.period}',
+                    '-p', f'key_file:={key_file}', name='sim')
         executor = make_executor(args.executor)
         node = node_cls(namespace='/feeder',
                         parameter_overrides=[Parameter('scene', value=SCENE),
                                              Parameter('key_file', value=key_file)])
         autostart(node)     # configure + activate (a lifecycle node), as the run helper does
         executor.add_node(node)
-        client = node.create_client(SetBool, '/feeder/feeder_driver/enable')
+        probe = Probe('feeder_monitor_hop', procs=procs, watch=True, error=SystemExit)
 
         def spin(seconds, until=lambda: False):
             end = time.monotonic() + seconds
             while time.monotonic() < end and not until():
                 executor.spin_once(timeout_sec=0.05)
 
-        spin(90, client.service_is_ready)
-        if not client.service_is_ready():
-            raise SystemExit('monitor_hop: the sim did not come up (see its log in '
-                             f'{procs.log_dir})')
-        future = client.call_async(SetBool.Request(data=True))
+        # The sim's reports matched the monitor here (the sim's own account), the sim is active.
+        probe.wait_remote_matched('/feeder/feeder_driver', readers={
+            '/feeder/cycle_status': 1, '/feeder/proximity': 1, '/feeder/cycle_fired': 1})
+        probe.wait_active('/feeder/feeder_driver')
+        probe.enable('/feeder/feeder_driver', True)
         spin(2.0)
-        if not (future.done() and future.result().success):
-            raise SystemExit('monitor_hop: the sim did not start cycling')
         times.clear()
         spin(args.seconds)
     finally:
+        if probe is not None:
+            probe.close()
         procs.stop_all()
     kind = args.executor or os.environ.get('FEEDER_EXECUTOR', 'default')
     print(f'monitor hop, executor {kind}, {args.seconds:g} s at {1 / args.period:g} Hz '

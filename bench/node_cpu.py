@@ -24,6 +24,8 @@ callbacks and the DDS writes; ``dds.*`` threads are Fast DDS's receive and event
 ``--py-spy DIR`` also records each node with py-spy (not a requirement of the project:
 ``pip install py-spy``) into ``DIR/<node>.txt`` (raw collapsed stacks, e.g. for
 flamegraph.pl or speedscope). Figures, not assertions: the machine's other load skews them.
+The processes, the domain and the probe are the harness's (tests/feeder_testing.py, through
+graph_bench: this script's directory is on sys.path; the one line below adds tests/).
 """
 
 import argparse
@@ -36,13 +38,10 @@ import sys
 import tempfile
 import time
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / 'scripts'))
-sys.path.insert(0, str(REPO / 'bench'))
-
-import demo_graph  # noqa: E402
-from feeder_testing import claim_domain_id  # noqa: E402
-from graph_bench import Probe, start, wait_graph  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'tests'))
+from feeder_testing import use_domain  # noqa: E402
+import graph_bench  # noqa: E402
+from graph_bench import bench_processes, Probe, start, wait_graph  # noqa: E402
 
 NODES = ('sim', 'monitor', 'predictor', 'recorder')
 
@@ -87,15 +86,11 @@ def main():
             ap.error('--py-spy: py-spy is not on PATH (pip install py-spy)')
         args.py_spy.mkdir(parents=True, exist_ok=True)
     if args.install is not None:
-        demo_graph.INSTALL = args.install.resolve()
-    domain, lock = claim_domain_id()
-    os.environ['ROS_DOMAIN_ID'] = str(domain)
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    import rclpy
-    rclpy.init()
+        graph_bench.INSTALL = args.install.resolve()
+    domain, lock = use_domain()
     log_dir = pathlib.Path(tempfile.mkdtemp(prefix='feeder-node-cpu-'))
-    procs = demo_graph.Processes(log_dir)
-    probe = Probe(rclpy)
+    procs = bench_processes(log_dir)
+    probe = Probe(procs)
     spies = []
     try:
         start(procs, NODES, args.period)
@@ -121,10 +116,9 @@ def main():
     finally:
         probe.close()
         procs.stop_all()
-        rclpy.shutdown()
     load = ', '.join(f'{x:.1f}' for x in os.getloadavg())
     print(f'node_cpu: {1 / args.period:.0f} Hz cycling, {wall:.1f} s, load average {load}, '
-          f'nodes from {demo_graph.INSTALL}')
+          f'nodes from {graph_bench.INSTALL}')
     print('| node | % of a core | by thread |')
     print('|---|---|---|')
     for name, p in procs.procs.items():

@@ -31,8 +31,8 @@ import pathlib
 import sys
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(REPO / 'src' / 'feeder_monitor'),
-                str(REPO / 'src' / 'feeder_monitor' / 'test')]
+# feeder_monitor's test support (readiness_faults); the package itself from the colcon install
+sys.path.insert(0, str(REPO / 'src' / 'feeder_monitor' / 'test'))
 
 from feeder_monitor.readiness import limit_set_orbit, rules_from_analysis  # noqa: E402
 from readiness_faults import run_faults, truth_orbit  # noqa: E402

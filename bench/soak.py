@@ -53,12 +53,10 @@ import sys
 import tempfile
 import time
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(REPO / 'scripts'))
-
-from demo_graph import Processes  # noqa: E402
-from feeder_testing import claim_domain_id  # noqa: E402
-from graph_bench import BenchNode  # noqa: E402
+# The harness (tests/feeder_testing.py: processes, domain, probe node; through graph_bench)
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'tests'))
+from feeder_testing import Processes, REPO, use_domain  # noqa: E402
+from graph_bench import BenchNode, watch_diagnostics  # noqa: E402
 
 SCENE = str(REPO / 'scenes' / 'triangle.yaml')
 PERIOD = 0.005
@@ -84,15 +82,15 @@ def key_path(out):
 def start(procs, bag, key):
     ns = ['-r', '__ns:=/feeder']
     k = ['-p', f'key_file:={key}']
-    procs.start('sim', 'feeder_sim', 'standin_node', '--ros-args', *ns, '-r',
+    procs.start('feeder_sim', 'standin_node', '--ros-args', *ns, '-r',
                 '__node:=feeder_driver', '-p', f'scene:={SCENE}',
-                '-p', f'cycle_period:={PERIOD}', *k)
-    procs.start('predictor', 'feeder_sim', 'predictor_node', '--ros-args', *ns, '-p',
-                f'scene:={SCENE}')
-    procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
-                f'scene:={SCENE}', *k)
-    procs.start('recorder', 'feeder_monitor', 'bag_recorder', bag, '--topics', *TOPICS,
-                '--ros-args', *ns)
+                '-p', f'cycle_period:={PERIOD}', *k, name='sim')
+    procs.start('feeder_sim', 'predictor_node', '--ros-args', *ns, '-p',
+                f'scene:={SCENE}', name='predictor')
+    procs.start('feeder_monitor', 'monitor_node', '--ros-args', *ns, '-p',
+                f'scene:={SCENE}', *k, name='monitor')
+    procs.start('feeder_monitor', 'bag_recorder', bag, '--topics', *TOPICS,
+                '--ros-args', *ns, name='recorder')
 
 
 class Driver(BenchNode):
@@ -100,18 +98,15 @@ class Driver(BenchNode):
 
     prog = 'soak'
 
-    def __init__(self, rclpy):
-        from diagnostic_msgs.msg import DiagnosticArray
-        from feeder_common.diagnostics import local_name
-        self.local_name = local_name
-        super().__init__(rclpy, 'feeder_soak')
-        self.seq = 0
-        self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50)
+    def __init__(self, procs):
+        super().__init__('feeder_soak', procs)
+        self.diags = watch_diagnostics(self)
 
-    def _on_diag(self, msg):
-        for s in msg.status:
-            if self.local_name(s.name) == 'feeder_driver: actuator':
-                self.seq = int({kv.key: kv.value for kv in s.values}['seq'])
+    @property
+    def seq(self):
+        """The stand-in's last cycle, from its actuator diagnostics (1 Hz)."""
+        actuator = self.diags.get('feeder_driver: actuator')
+        return int({kv.key: kv.value for kv in actuator.values}['seq']) if actuator else 0
 
 
 def read_bag(bag):
@@ -349,27 +344,25 @@ def main():
     bag = out / 'bag'
     if bag.exists():
         raise SystemExit(f'soak: {bag} exists; give another --out')
-    domain, lock = claim_domain_id()
-    os.environ['ROS_DOMAIN_ID'] = str(domain)
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    domain, lock = use_domain()
     load0 = ', '.join(f'{x:.1f}' for x in os.getloadavg())
     print(f'soak: {args.cycles} cycles at cycle_period {PERIOD} s, ROS_DOMAIN_ID={domain} '
           f'(loopback), load average {load0}, bag and logs in {out}', flush=True)
-    import rclpy
-    rclpy.init()
-    procs = Processes(out)
-    drv = Driver(rclpy)
+    procs = Processes(out, error=SystemExit, prog='soak')
+    drv = Driver(procs)
     samples = {}
     try:
         start(procs, bag, key_path(out))
-        drv.spin_until(lambda: drv.node.count_subscribers('/feeder/cycle_status') >= 3, 120,
-                       'the readers of cycle_status', procs)
-        drv.spin_until(lambda: drv.node.count_publishers('/feeder/edge1_verdict') >= 1, 120,
-                       'the monitor', procs)
-        drv.spin_until(lambda: drv.node.count_publishers('/feeder/predicted/state') >= 1, 120,
-                       'the predictor', procs)
-        end = time.monotonic() + 3.0      # the recorder's discovery of every topic
-        drv.spin_until(lambda: time.monotonic() > end, 10, 'discovery')
+        # Every writer matched its readers, by its own account (the nodes' endpoints
+        # statuses): the stand-in's cycle_status the monitor, the predictor and the recorder;
+        # its proximity the monitor and the recorder; the monitor's and the predictor's
+        # outputs the recorder.
+        drv.wait_remote_matched('/feeder/feeder_driver', readers={
+            '/feeder/cycle_status': 3, '/feeder/proximity': 2}, timeout=120)
+        drv.wait_remote_matched('/feeder/feeder_monitor', readers={
+            '/feeder/edge1_verdict': 1, '/feeder/edge1_ready': 1}, timeout=120)
+        drv.wait_remote_matched('/feeder/feeder_sim', readers={'/feeder/predicted/state': 1},
+                                timeout=120)
         t0 = time.monotonic()
         drv.enable(True)
         next_sample = 0.0
@@ -380,16 +373,14 @@ def main():
                 next_sample = now + args.sample_every
                 for name, p in procs.procs.items():
                     samples.setdefault(name, []).append((drv.seq, rss_kb(p.pid)))
-            rclpy.spin_once(drv.node, timeout_sec=0.2)
+            drv.executor.spin_once(timeout_sec=0.2)
         drv.enable(False)
         wall = time.monotonic() - t0
-        end = time.monotonic() + 3.0      # the last cycles reach the monitor and the bag
-        drv.spin_until(lambda: time.monotonic() > end, 10, 'the last cycles')
+        drv.spin_for(3.0)       # the last cycles reach the monitor and the bag
         procs.procs['recorder'].send_signal(signal.SIGINT)
         procs.procs['recorder'].wait(60)
     finally:
-        drv.node.destroy_node()
-        rclpy.shutdown()
+        drv.close()
         procs.stop_all()
         lock.close()
     fired = drv.seq

@@ -25,7 +25,9 @@ monitor's signed statement, checked with feeder_common.messages.check_verdict: i
 cycle's sample stamp, ready) and a summary,
 stops everything and leaves OUT_DIR/bag (rosbag2 MCAP), OUT_DIR/cycles.csv and
 OUT_DIR/ready.png. Exit status 0 when every verdict agreed with the predicted state, 1 if not,
-2 on a set-up problem. ROS glue only: the physics is throwmap's, the logic the nodes'.
+2 on a set-up problem. ROS glue only: the physics is throwmap's, the logic the nodes'. The
+processes, the domain and the probe node are the harness's (tests/feeder_testing.py; this
+script puts tests/ on sys.path, its one path edit).
 """
 
 import argparse
@@ -33,18 +35,12 @@ import csv
 import os
 import pathlib
 import shutil
-import signal
-import subprocess
 import sys
 import tempfile
 import time
 
-REPO = pathlib.Path(__file__).resolve().parents[1]
-INSTALL = REPO / 'ros2_ws' / 'install'
-STARTUP_TIMEOUT = 90.0
-# The domain picker and the node environment are the graph tests' (tests/feeder_testing.py).
-sys.path.insert(0, str(REPO / 'tests'))
-from feeder_testing import claim_domain_id, install_env  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'tests'))
+from feeder_testing import Probe, Processes, REPO, STARTUP_TIMEOUT, use_domain  # noqa: E402
 
 
 def parse_args():
@@ -63,64 +59,6 @@ def parse_args():
     return a
 
 
-def node_env():
-    return install_env(INSTALL)
-
-
-def demo_domain():
-    """
-    Return (ROS_DOMAIN_ID, lock or None): the caller's, so that its shell sees the graph.
-
-    Without ROS_DOMAIN_ID in the environment, a free one is claimed (tests/feeder_testing.py).
-    """
-    given = os.environ.get('ROS_DOMAIN_ID', '').strip()
-    if given:
-        if not given.isdigit() or not 0 <= int(given) <= 232:
-            raise SystemExit(f'demo_graph: ROS_DOMAIN_ID={given!r} is not a domain id '
-                             '(0..232; 0..101 keeps Fast DDS ports valid everywhere)')
-        return int(given), None
-    return claim_domain_id()
-
-
-class Processes:
-    """The node processes; their output goes to OUT_DIR/logs/<name>.log."""
-
-    def __init__(self, log_dir):
-        self.log_dir = log_dir
-        self.procs = {}
-
-    def start(self, name, pkg, exe, *args):
-        path = INSTALL / pkg / 'lib' / pkg / exe
-        if not path.exists():
-            raise SystemExit(f'demo_graph: {path} missing: run . scripts/setup.sh first')
-        with open(self.log_dir / f'{name}.log', 'w') as log:
-            self.procs[name] = subprocess.Popen([str(path), *map(str, args)], stdout=log,
-                                                stderr=subprocess.STDOUT, env=node_env(),
-                                                cwd=REPO, start_new_session=True)
-
-    def check(self):
-        for name, p in self.procs.items():
-            if p.poll() is not None:
-                log = (self.log_dir / f'{name}.log').read_text()[-2000:]
-                raise SystemExit(f'demo_graph: {name} exited ({p.returncode}):\n{log}')
-
-    def stop(self, name, timeout=10.0):
-        p = self.procs[name]
-        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
-            if p.poll() is not None:
-                break
-            p.send_signal(sig)
-            try:
-                p.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                pass
-        return p.returncode
-
-    def stop_all(self):
-        for name in reversed(list(self.procs)):
-            self.stop(name, timeout=5.0)
-
-
 def main():
     args = parse_args()
     out = args.out.resolve()
@@ -129,10 +67,9 @@ def main():
     bag = out / 'bag'
     if bag.exists():
         shutil.rmtree(bag)
-    domain, lock = demo_domain()
-    os.environ['ROS_DOMAIN_ID'] = str(domain)
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    procs = Processes(out / 'logs')
+    # The caller's ROS_DOMAIN_ID, so that its shell sees the graph; else a free one.
+    domain, lock = use_domain(keep_given=True)
+    procs = Processes(out / 'logs', error=SystemExit, prog='demo_graph')
     # The run's own key (mode 0600, in a private temporary folder): ~/.ros is left alone.
     from feeder_common import auth
     key_dir = tempfile.mkdtemp(prefix='feeder-demo-')
@@ -144,15 +81,16 @@ def main():
     try:
         scene = str(args.scene.resolve())
         key = f'key_file:={key_file}'
-        procs.start('sim_hw', 'feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder',
+        procs.start('feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder',
                     '-r', '__node:=feeder_driver',
-                    '-p', f'scene:={scene}', '-p', f'cycle_period:={args.period}', '-p', key)
-        procs.start('predictor', 'feeder_sim', 'predictor_node', '--ros-args', '-r',
-                    '__ns:=/feeder', '-p', f'scene:={scene}')
-        procs.start('monitor', 'feeder_monitor', 'monitor_node', '--ros-args', '-r',
-                    '__ns:=/feeder', '-p', f'scene:={scene}', '-p', key)
-        procs.start('recorder', 'feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
-                    '__ns:=/feeder')
+                    '-p', f'scene:={scene}', '-p', f'cycle_period:={args.period}', '-p', key,
+                    name='sim_hw')
+        procs.start('feeder_sim', 'predictor_node', '--ros-args', '-r',
+                    '__ns:=/feeder', '-p', f'scene:={scene}', name='predictor')
+        procs.start('feeder_monitor', 'monitor_node', '--ros-args', '-r',
+                    '__ns:=/feeder', '-p', f'scene:={scene}', '-p', key, name='monitor')
+        procs.start('feeder_monitor', 'bag_recorder', bag, '--ros-args', '-r',
+                    '__ns:=/feeder', name='recorder')
         return run(args, scene, out, procs, t0, auth.load_key(key_file))
     finally:
         procs.stop_all()
@@ -162,13 +100,11 @@ def main():
 
 
 def run(args, scene_path, out, procs, t0, key):
-    import rclpy
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
     from feeder_common.diagnostics import local_name
     from feeder_common.messages import check_verdict, parse_predicted_state
     from feeder_interfaces.msg import Verdict
-    from std_srvs.srv import SetBool
     from throwmap import analyse, load_scene, sees
 
     reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
@@ -177,41 +113,42 @@ def run(args, scene_path, out, procs, t0, key):
     scene = load_scene(scene_path)
     an = analyse(scene)
     goal, radius = an.sensor.goal_edge, an.sensor.radius
-    rclpy.init()
-    node = rclpy.create_node('feeder_demo')
+    probe = Probe('feeder_demo', procs=procs, watch=True, error=SystemExit)
+    node = probe.node
     got = {k: [] for k in ('status', 'predicted', 'ready', 'verdict')}
     diags = {}
 
     def keep(key):
         return got[key].append
 
+    actuator = []       # the stand-in's actuator statuses, in arrival order
+
     def on_diag(msg):
         for s in msg.status:
             diags[local_name(s.name)] = s
+            if local_name(s.name) == 'feeder_driver: actuator':
+                actuator.append(s)
 
     node.create_subscription(DiagnosticStatus, '/feeder/cycle_status', keep('status'), reliable)
     node.create_subscription(DiagnosticStatus, '/feeder/predicted/state', keep('predicted'),
                              reliable)
     monitor = '/feeder/feeder_monitor'
 
+    stale_ready = set()     # cycles of signed ready statements that came too old to act on
+
     def on_ready(msg):
         # What a consumer does with each statement: check it when it arrives.
-        got['ready'].append(check_verdict(msg, key, monitor,
-                                          node.get_clock().now().nanoseconds))
+        c = check_verdict(msg, key, monitor, node.get_clock().now().nanoseconds)
+        got['ready'].append(c)
+        if msg.ready and c.authentic and not c.ready_now:
+            stale_ready.add(c.seq)
 
     node.create_subscription(Verdict, '/feeder/edge1_ready', on_ready, latched)
     # One verdict per judged cycle, with its seq (edge1_ready is the current statement, which
     # the monitor also republishes while idle: it cannot be matched to cycles by counting).
     node.create_subscription(Verdict, '/feeder/edge1_verdict', keep('verdict'), reliable)
     node.create_subscription(DiagnosticArray, '/diagnostics', on_diag, reliable)
-
-    def spin_until(cond, timeout, what):
-        end = time.monotonic() + timeout
-        while not cond():
-            procs.check()
-            if time.monotonic() > end:
-                raise SystemExit(f'demo_graph: timed out waiting for {what}')
-            rclpy.spin_once(node, timeout_sec=0.05)
+    spin_until = probe.spin_until
 
     def recording(topic):
         return any(i.node_name == 'feeder_bag_recorder'
@@ -220,29 +157,32 @@ def run(args, scene_path, out, procs, t0, key):
     spin_until(lambda: got['ready'], STARTUP_TIMEOUT, 'the monitor')
     spin_until(lambda: 'feeder_monitor: readiness' in diags, STARTUP_TIMEOUT,
                'the monitor diagnostics')
-    spin_until(lambda: node.count_subscribers('/feeder/cycle_status') >= 4 and
-               node.count_subscribers('/feeder/proximity') >= 2, STARTUP_TIMEOUT,
-               'the predictor, the monitor and the recorder')
     spin_until(lambda: all(recording(t) for t in ('/feeder/proximity', '/feeder/edge1_ready',
                                                   '/feeder/predicted/state')),
                STARTUP_TIMEOUT, 'the recorder')
-    client = node.create_client(SetBool, '/feeder/feeder_driver/enable')
-    spin_until(client.service_is_ready, STARTUP_TIMEOUT, 'the sim')
-    rclpy.spin_once(node, timeout_sec=0.5)
+    # Every writer matched its readers, by the writers' own accounts (each node's endpoints
+    # status): the stand-in's cycle_status the predictor, the monitor, the recorder and us;
+    # its proximity and cycle_fired the monitor and the recorder; the predictor's state and
+    # the monitor's verdicts the recorder and us.
+    probe.wait_remote_matched('/feeder/feeder_driver', readers={
+        '/feeder/cycle_status': 4, '/feeder/proximity': 2, '/feeder/cycle_fired': 2})
+    probe.wait_remote_matched('/feeder/feeder_sim', readers={'/feeder/predicted/state': 2})
+    probe.wait_remote_matched('/feeder/feeder_monitor', readers={'/feeder/edge1_verdict': 2})
+    probe.wait_active('/feeder/feeder_driver')
     print(f'demo_graph: graph up after {time.monotonic() - t0:.1f} s; goal edge {goal}, sensor '
           f'at {100 * radius:.2f} cm (guarantee {100 * an.sensor.guarantee_radius:.2f} cm), '
           f'warm-up {an.sensor.warmup_throws} throw(s)', flush=True)
 
     def enable(on):
-        fut = client.call_async(SetBool.Request(data=on))
-        spin_until(fut.done, 10.0, 'the enable service')
-        if not fut.result().success:
-            raise SystemExit(f'demo_graph: enable {on} refused: {fut.result().message}')
+        probe.enable('/feeder/feeder_driver', on)
 
     printed = {'next': 0, 'seqs': set()}
 
+    def status_value(msg, key):
+        return {kv.key: kv.value for kv in msg.values}.get(key)
+
     def seq_of(msg):
-        return int({kv.key: kv.value for kv in msg.values}['seq'])
+        return int(status_value(msg, 'seq'))
 
     def signed(msg):
         return check_verdict(msg, key, monitor, 0, max_age_s=float('inf')).authentic
@@ -276,13 +216,30 @@ def run(args, scene_path, out, procs, t0, key):
         procs.check()
         if time.monotonic() > end:
             raise SystemExit('demo_graph: the feeder stopped cycling')
-        rclpy.spin_once(node, timeout_sec=0.05)
+        probe.executor.spin_once(timeout_sec=0.05)
         report()
     enable(False)
     t_cycles = time.monotonic() - t_run
-    settle = time.monotonic() + 1.5
-    while time.monotonic() < settle:
-        rclpy.spin_once(node, timeout_sec=0.05)
+    # Until the last cycle's status, prediction and verdict are in: the stand-in's last seq
+    # from an actuator status sent after the disable (the first one after it may have been
+    # on its way), and the predictor's account of the cycles it followed.
+    seen_before = len(actuator)
+
+    def last_fired():
+        later = actuator[seen_before + 1:]
+        return int(status_value(later[-1], 'seq')) if later else None
+
+    def all_in():
+        last = last_fired()
+        agreement = diags.get('feeder_sim: sensor agreement')
+        return last is not None and bool(got['status']) and \
+            seq_of(got['status'][-1]) >= last and last in states() and \
+            any(int(m.seq) == last for m in got['verdict']) and agreement is not None and \
+            status_value(agreement, 'followed') == str(len(got['status']))
+
+    settle = time.monotonic() + 30.0
+    while not all_in() and time.monotonic() < settle:
+        probe.executor.spin_once(timeout_sec=0.05)
         report()
     rc = procs.stop('recorder')
     recorder_line = (out / 'logs' / 'recorder.log').read_text().strip().splitlines()[-1:]
@@ -334,11 +291,21 @@ def run(args, scene_path, out, procs, t0, key):
     must_agree = not scene.stochastic
     plot(rows, an, scene.part, out / 'ready.png', scene.name)
     ready_n = sum(1 for r in rows if r[5] == 1)
+    # Ready cycles not printed: their every statement came older than check_verdict's limit
+    # (1 s), so a consumer must not act on it, or none came (edge1_ready keeps only its latest
+    # statement: the next cycle's replaced it before this process read it). Both happen only
+    # when this process is starved (load).
+    ready_seqs = {r[0] for r in rows if r[5] == 1}
+    late = len((stale_ready - printed['seqs']) & ready_seqs)
+    unseen = len(ready_seqs - printed['seqs'] - stale_ready)
     print(f'demo_graph: {n} cycles in {t_cycles:.1f} s ({n / t_cycles:.0f}/s); sensor fired '
           f'{sum(r[4] for r in rows)} times, {goal_seen} on the goal edge after the warm-up; '
           f'edge1_ready {ready_n} times, {false_ready} false, {missed} missed' +
           (f'; {unpredicted} cycles without a prediction' if unpredicted else '') +
-          (f'; {unsigned} statements NOT signed by {monitor}' if unsigned else ''), flush=True)
+          (f'; {unsigned} statements NOT signed by {monitor}' if unsigned else '') +
+          (f'; not printed: {late} ready statements that came too late to act on (sent more '
+           f'than 1 s before they arrived), {unseen} that never came (replaced by the next '
+           "cycle's first): this process was starved" if late or unseen else ''), flush=True)
     print(f'demo_graph: first cycle that could be ready: {first_ready} (warm-up '
           f'{mon_vals.get("warmup_cycles", "?")}, settling {mon_vals.get("settle_cycles", "?")} '
           'throws); every statement checked with the run\'s key', flush=True)
@@ -352,8 +319,7 @@ def run(args, scene_path, out, procs, t0, key):
     print(f'demo_graph: recorder exit {rc}: {recorder_line[0] if recorder_line else "?"}')
     print(f'demo_graph: wrote {out / "bag"}, {out / "cycles.csv"}, {out / "ready.png"} '
           f'({time.monotonic() - t0:.1f} s in all)', flush=True)
-    node.destroy_node()
-    rclpy.shutdown()
+    probe.close()
     ok = rc == 0 and ready_n > 0 and unpredicted == 0 and unsigned == 0 and (
         (false_ready == 0 and missed == 0 and agree) if must_agree else True)
     return 0 if ok else 1

@@ -39,7 +39,10 @@ REPO = pathlib.Path(__file__).resolve().parents[1]
 TRIANGLE = str(REPO / 'scenes' / 'triangle.yaml')
 EXPERIMENT = str(REPO / 'scenes' / 'experiment.yaml')
 SHORT_ARM = str(REPO / 'tests' / 'scenes' / 'short_arm.yaml')
+NS = '/feeder'
 MONITOR = '/feeder/feeder_monitor'      # the monitor whose signature the consumers check
+DRIVER = '/feeder/feeder_driver'        # the driver, or the stand-in in its place
+PREDICTOR = '/feeder/feeder_sim'        # the predictor beside them (predictor())
 # A statement on edge1_ready counts as ready now only if the monitor sent it at most this long
 # before it arrived (its idle republish is every ready_deadline / 4 = 0.25 s by default).
 FRESH_S = 1.0
@@ -147,10 +150,9 @@ class Statements(Collector):
     def any_ready(self, start=0):
         return any(c.ready_now for c in self.checked[start:])
 
-    def wait_matched(self):
+    def wait_matched(self, n=1):
         """Wait until the monitor's writer matched this reader (edge1_verdict is volatile)."""
-        self.ros.spin_until(lambda: self.sub.get_publisher_count() >= 1, STARTUP_TIMEOUT,
-                            f'the monitor to match the {self.sub.topic_name} reader')
+        self.ros.wait_matched(self.sub, n, STARTUP_TIMEOUT)
 
 
 class Verdicts(Statements):
@@ -208,13 +210,38 @@ def wait_for_monitor(ros, ready):
 
 
 def wait_for_readers(ros, topic, count):
+    """
+    Wait until ``count`` readers of ``topic`` are on the graph (ours included).
+
+    On the graph is not matched: a writer may not reach them yet. For our own endpoints use
+    ``ros.wait_matched``; for the monitor's readers of the driver's reports,
+    :func:`wait_monitor_matched`.
+    """
     ros.spin_until(lambda: ros.node.count_subscribers(topic) >= count, STARTUP_TIMEOUT,
-                   f'{count} readers of {topic}')
+                   f'{count} readers of {topic} on the graph')
 
 
 def wait_for_publishers(ros, topic, count):
+    """Wait until ``count`` writers of ``topic`` are on the graph (see wait_for_readers)."""
     ros.spin_until(lambda: ros.node.count_publishers(topic) >= count, STARTUP_TIMEOUT,
-                   f'{count} publishers of {topic}')
+                   f'{count} publishers of {topic} on the graph')
+
+
+def wait_reports_matched(ros, status_readers, proximity_readers, fired_readers=1,
+                         verdict_readers=1, driver=DRIVER, monitor=MONITOR):
+    """
+    Wait until the driver's (stand-in's) and the monitor's writers matched their readers.
+
+    Their own accounts (each node's ``endpoints`` status, feeder_common.diagnostics): the
+    driver's cycle_status, proximity and cycle_fired writers matched at least so many readers
+    (the monitor's, ours, a predictor's...), the monitor's edge1_verdict writer
+    ``verdict_readers``. Only then do the first cycles' volatile reports reach every reader.
+    """
+    ros.wait_remote_matched(driver, readers={
+        f'{NS}/cycle_status': status_readers, f'{NS}/proximity': proximity_readers,
+        f'{NS}/cycle_fired': fired_readers})
+    if verdict_readers:
+        ros.wait_remote_matched(monitor, readers={f'{NS}/edge1_verdict': verdict_readers})
 
 
 def watch_monitor(ros):
@@ -228,15 +255,15 @@ def watch_monitor(ros):
     verdicts = Verdicts(ros)
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     wait_for_monitor(ros, ready)
-    verdicts.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 2)    # the monitor's and ours
-    wait_for_readers(ros, '/feeder/proximity', 1)
-    ros.spin_for(0.5)
+    # cycle_status: the monitor's reader and ours; proximity, cycle_fired: the monitor's.
+    wait_reports_matched(ros, status_readers=2, proximity_readers=1)
+    ros.wait_active(DRIVER)
     return ready, verdicts, statuses
 
 
 def run_cycles(ros, cycles, statuses, period):
     """Enable cycling until ``statuses`` holds ``cycles`` messages, then disable it."""
+    ros.wait_active(DRIVER)
     res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True))
     assert res.success, res.message
     ros.spin_until(lambda: len(statuses) >= cycles, 20 + 3 * cycles * period,
@@ -331,14 +358,13 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready, comple
     states = PredictedStates(ros)
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
-    verdict_stream.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 3)     # the monitor's, the predictor's, ours
-    wait_for_readers(ros, '/feeder/proximity', 2)        # the monitor's and ours
-    wait_for_publishers(ros, '/feeder/predicted/state', 1)
+    # cycle_status: the monitor's, the predictor's and our readers; proximity: the monitor's
+    # and ours; the predictor's predicted/state: ours.
+    wait_reports_matched(ros, status_readers=3, proximity_readers=2)
+    ros.wait_remote_matched(PREDICTOR, readers={f'{NS}/predicted/state': 1})
     warmup, settle = monitor_rules(ros, diags)
     assert warmup >= an.sensor.warmup_throws
     first_ready = max(warmup, settle + 1)       # judged throws before a detection can count
-    ros.spin_for(0.5)
 
     run_cycles(ros, first_ready + cycles, statuses, period)
     ros.spin_until(lambda: len(states) >= len(statuses), 10.0, 'the predictor')

@@ -47,8 +47,7 @@ def support():
     env = install_env(INSTALL)
     old = os.environ.get('AMENT_PREFIX_PATH')
     os.environ['AMENT_PREFIX_PATH'] = env['AMENT_PREFIX_PATH']
-    import sys
-    sys.path.insert(0, str(INSTALL / 'feeder_bringup' / 'lib' / 'python3.11' / 'site-packages'))
+    # (feeder_bringup's source tree is on sys.path by pytest.ini)
     from feeder_bringup import launch_support
     yield launch_support
     if old is None:

@@ -22,6 +22,7 @@ signed statements it printed as they came (seq, stamp, ready). 200 cycles: the m
 ready only after its settling (87 throws of the triangle, issue 20).
 """
 
+import csv
 import os
 import pathlib
 import re
@@ -44,9 +45,18 @@ def test_the_demo_graph_runs_and_every_ready_is_proven(tmp_path):
     assert 'NOT signed' not in text
     printed = re.findall(r'cycle +(\d+): edge1_ready true \(signed, sent [0-9.]+ ms before it '
                          r'came\), stamp (\d+)\.(\d{9});', text)
-    assert len(printed) == int(m.group(1)), text[-3000:]
+    # Every ready verdict was printed as it came; or, when the demo's process was starved
+    # (load), its statements came too old to act on (check_verdict's 1 s) or never came
+    # (edge1_ready keeps its latest statement only), and the demo says how many.
+    starved = re.search(r'; not printed: (\d+) ready statements that came too late to act on '
+                        r'.*, (\d+) that never came', text)
+    skipped = int(starved.group(1)) + int(starved.group(2)) if starved else 0
+    assert len(printed) + skipped == int(m.group(1)), text[-3000:]
     seqs = [int(seq) for seq, _, _ in printed]
-    assert seqs == sorted(set(seqs)) and min(seqs) > 87
+    assert seqs == sorted(set(seqs)) and min(seqs, default=88) > 87
+    with open(out / 'cycles.csv') as fh:
+        ready = {int(r['seq']) for r in csv.DictReader(fh) if r['edge1_ready'] == '1'}
+    assert set(seqs) <= ready, (seqs, ready)
     stamps = [int(sec) * 10 ** 9 + int(nsec) for _, sec, nsec in printed]
     assert stamps == sorted(stamps)
     for name in ('cycles.csv', 'ready.png'):

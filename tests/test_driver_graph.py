@@ -33,7 +33,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_interfaces.msg import Verdict
 from feeder_nodes import (check_statements, Collector, Diagnostics, monitor, monitor_rules,
                           STARTUP_TIMEOUT, Statements, status_values, TRIANGLE, Verdicts,
-                          wait_for_monitor, wait_for_readers)
+                          wait_for_monitor, wait_reports_matched)
 from sensor_msgs.msg import Range
 from std_srvs.srv import SetBool
 
@@ -98,9 +98,10 @@ def run_driver_graph(graph, ros, tmp_path, emulator_faults, cycles, faults):
     prox = Collector(ros, Range, '/feeder/proximity')
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
-    verdict_stream.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 2)    # the monitor's and ours
-    wait_for_readers(ros, '/feeder/proximity', 2)
+    # Every volatile stream matched before the first cycle (the writers' own accounts): the
+    # driver's cycle_status and proximity writers with the monitor's readers and ours, the
+    # monitor's edge1_verdict writer with ours.
+    wait_reports_matched(ros, status_readers=2, proximity_readers=2)
     warmup_cycles, settle = monitor_rules(ros, diags)
     if not faults:
         cycles += max(warmup_cycles, settle + 1)

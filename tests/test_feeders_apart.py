@@ -60,9 +60,8 @@ def test_each_feeders_recorder_takes_only_its_namespace(graph, ros, tmp_path):
                                     f'__ns:={ns}', name=f'recorder_{ns[1:]}')
         statuses[ns] = Collector(ros, DiagnosticStatus, f'{ns}/cycle_status')
     live = Collector(ros, DiagnosticArray, '/diagnostics')
-    for ns in SPACES:
-        ros.spin_until(lambda ns=ns: ros.node.count_subscribers(f'{ns}/cycle_status') >= 2,
-                       STARTUP_TIMEOUT, f'{ns}: the recorder and the test on cycle_status')
+    for ns in SPACES:       # the stand-in's cycle_status matched the recorder's reader and ours
+        ros.wait_remote_matched(f'{ns}/feeder_driver', readers={f'{ns}/cycle_status': 2})
     ros.spin_for(1.0)       # the recorders' discovery subscribes to every topic there
     for ns in SPACES:
         assert ros.call(SetBool, f'{ns}/feeder_driver/enable', SetBool.Request(data=True),

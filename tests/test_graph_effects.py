@@ -16,9 +16,9 @@
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_nodes import (check_ready_correctness, Collector, Diagnostics, EXPERIMENT, monitor,
-                          PredictedStates, predictor, REPO, run_cycles, SHORT_ARM,
+                          PredictedStates, predictor, PREDICTOR, REPO, run_cycles, SHORT_ARM,
                           sim_as_hardware, Statements, status_values, wait_for_monitor,
-                          wait_for_publishers, wait_for_readers)
+                          wait_reports_matched)
 from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import Range
 from std_srvs.srv import Trigger
@@ -93,10 +93,9 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     pred = Predictions(ros, '/feeder')
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
-    wait_for_readers(ros, '/feeder/cycle_status', 3)     # predictor, monitor, us
-    wait_for_readers(ros, '/feeder/proximity', 2)
-    wait_for_publishers(ros, '/feeder/predicted/state', 1)
-    ros.spin_for(0.5)
+    # cycle_status: the predictor, the monitor, us; proximity: the monitor, us
+    wait_reports_matched(ros, status_readers=3, proximity_readers=2, verdict_readers=0)
+    ros.wait_remote_matched(PREDICTOR, readers={'/feeder/predicted/state': 1})
 
     # 40 cycles: the part is lost in the first; the arm keeps cycling empty.
     cycles = 40

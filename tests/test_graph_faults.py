@@ -32,10 +32,10 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from feeder_common import auth, qos
 from feeder_common.messages import check_verdict, cycle_status
 from feeder_interfaces.msg import Verdict
-from feeder_nodes import (Collector, Diagnostics, LATCHED, MONITOR, monitor, PredictedStates,
-                          predictor, STARTUP_TIMEOUT, sim_as_hardware, Statements,
-                          status_values, TRIANGLE, Verdicts, wait_for_monitor,
-                          wait_for_readers, watch_monitor)
+from feeder_nodes import (Collector, Diagnostics, DRIVER, LATCHED, MONITOR, monitor,
+                          PredictedStates, predictor, STARTUP_TIMEOUT, sim_as_hardware,
+                          Statements, status_values, TRIANGLE, Verdicts, wait_for_monitor,
+                          wait_reports_matched, watch_monitor)
 import pytest
 from rclpy.duration import Duration
 from rclpy.event_handler import SubscriptionEventCallbacks
@@ -88,11 +88,11 @@ rclpy.shutdown()
 
 def run_forger(tmp_path, mode, first, count, session, readers=2):
     """Run the forger to its end (it leaves the graph at once); return what it printed."""
-    from conftest import _process_env
+    from feeder_testing import install_env
     other = tmp_path / 'other-keys' / 'hmac.key'
     auth.ensure_key(other)          # a key, but not the feeder's
     out = subprocess.run([sys.executable, '-c', FORGER, mode, str(first), str(count),
-                          str(other), session, str(readers)], env=_process_env(),
+                          str(other), session, str(readers)], env=install_env(),
                          capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stdout + out.stderr
     assert 'acknowledged: True' in out.stdout, out.stdout
@@ -239,9 +239,8 @@ def test_a_verdict_is_live_false_on_exit_and_a_killed_monitor_shows(graph, ros):
     # Monitor b's statements do not pass as monitor a's (the signature names the monitor).
     assert not check_verdict(ready_b.msgs[0], ros.key, MONITOR,
                              ros.node.get_clock().now().nanoseconds).authentic
-    verdicts.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 2)
-    ros.spin_for(0.5)
+    # the driver's reports: monitors a and b; edge1_verdict (monitor a's): ours
+    wait_reports_matched(ros, status_readers=2, proximity_readers=2, fired_readers=2)
     trigger_until_ready(ros, verdicts)
 
     # Idle: the true statement is republished every ready_deadline / 4, each fresh.
@@ -330,9 +329,7 @@ def wait_for_handshake(ros):
 
 def fire_the_first_cycle(ros):
     """Once the driver and a reader of its cycle_status are up, fire cycle 1."""
-    wait_for_readers(ros, '/feeder/cycle_status', 1)
-    ros.spin_until(lambda: ros.node.count_publishers('/feeder/cycle_status') >= 1, 60.0,
-                   'the driver')
+    ros.wait_remote_matched(DRIVER, readers={'/feeder/cycle_status': 1})
     res = wait_for_handshake(ros)
     assert 'seq 1' in res.message, res.message
 
@@ -380,10 +377,10 @@ except BaseException:
 def start_slow_reader(topic, out):
     import subprocess
     import sys
-    from conftest import _process_env
+    from feeder_testing import install_env
     with open(out, 'w') as fh:
         return subprocess.Popen([sys.executable, '-c', SLOW_READER, topic], stdout=fh,
-                                stderr=subprocess.STDOUT, env=_process_env())
+                                stderr=subprocess.STDOUT, env=install_env())
 
 
 def test_the_aborted_cycle_reaches_a_reader_that_is_slow_to_acknowledge(graph, ros, tmp_path):
@@ -442,8 +439,7 @@ def test_an_error_that_lasted_one_period_reaches_a_slow_diagnostics_reader(ros, 
     updater = Updater(ros.node, period=3600.0, hardware_id='test')
     updater.add('pulse', lambda st: st.summary(level['now'], f'pulse {level["now"]}'))
     try:
-        ros.spin_until(lambda: ros.node.count_subscribers('/diagnostics') >= 1, 60.0,
-                       'the reader of /diagnostics')
+        ros.wait_matched(updater.pub, 1, 60.0, 'the slow reader to match our /diagnostics')
         updater.force_update()
         end = time.monotonic() + 30.0       # the reader's subscription matched and took one
         while 'pulse ok' not in out.read_text():
@@ -485,7 +481,7 @@ def test_a_signal_while_cycling_reports_every_fired_cycle(graph, ros, tmp_path, 
     """At 100 Hz, a signal aborts the cycle in flight: it is the last cycle_status."""
     emu, drv = start_emulator_and_driver(graph, tmp_path, '--cycle-time', '0.05')
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
-    wait_for_readers(ros, '/feeder/cycle_status', 1)
+    ros.wait_remote_matched(DRIVER, readers={'/feeder/cycle_status': 1})    # ours
     wait_for_handshake(ros)
     ros.set_parameters('/feeder/feeder_driver', {'cycle_period': 0.01})
     res = ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True))

@@ -42,7 +42,7 @@ PREDICTOR = '/feeder/feeder_sim'
 
 
 def feed_node(graph, *params):
-    args = ['--ros-args', '-r', '__ns:=/feeder', '-p', f'key_file:={graph.key_file}']
+    args = ['--ros-args', '-r', '__ns:=/feeder']        # the graph gives it the test's key
     for p in params:
         args += ['-p', p]
     return graph.start('feeder_monitor', 'feed_node', *args, name='feed')

@@ -24,8 +24,8 @@ import math
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common.stamps import parse_stamp_text
-from feeder_nodes import (Collector, Diagnostics, PredictedStates, predictor, sim_as_hardware,
-                          status_values, TRIANGLE, wait_for_publishers, wait_for_readers)
+from feeder_nodes import (Collector, Diagnostics, DRIVER, PredictedStates, predictor, PREDICTOR,
+                          sim_as_hardware, status_values, TRIANGLE)
 from geometry_msgs.msg import PoseStamped
 import pytest
 from std_srvs.srv import Trigger
@@ -41,11 +41,13 @@ def test_predictor_follows_the_hardware(graph, ros):
     poses = Collector(ros, PoseStamped, '/feeder/predicted/part_pose')
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     diags = Diagnostics(ros)
-    wait_for_readers(ros, '/feeder/cycle_status', 2)        # the predictor's and ours
-    wait_for_publishers(ros, '/feeder/predicted/state', 1)
+    # The stand-in's cycle_status matched the predictor's reader and ours, the predictor's
+    # writers ours.
+    ros.wait_remote_matched(DRIVER, readers={'/feeder/cycle_status': 2})
+    ros.wait_remote_matched(PREDICTOR, readers={'/feeder/predicted/state': 1,
+                                                '/feeder/predicted/part_pose': 1})
     # Exactly one publisher: the predictor; the hardware stand-in publishes no predictions.
     assert ros.node.count_publishers('/feeder/predicted/state') == 1
-    ros.spin_for(0.5)
     for _ in range(N):
         assert ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request()).success
     ros.spin_until(lambda: all(len(c) == N for c in (states, poses, statuses)), 20.0,

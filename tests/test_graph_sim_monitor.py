@@ -17,7 +17,7 @@
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_nodes import (check_ready_correctness, Collector, Diagnostics, monitor, run_cycles,
                           sim_as_hardware, Statements, TRIANGLE, wait_for_monitor,
-                          wait_for_readers)
+                          wait_reports_matched)
 
 PERIOD = 0.01
 
@@ -34,9 +34,7 @@ def test_a_misplaced_sensor_shows_as_an_anomaly(graph, ros):
     statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
-    wait_for_readers(ros, '/feeder/cycle_status', 2)
-    wait_for_readers(ros, '/feeder/proximity', 1)
-    ros.spin_for(0.5)
+    wait_reports_matched(ros, status_readers=2, proximity_readers=1, verdict_readers=0)
     run_cycles(ros, 150, statuses, PERIOD)
     name = 'feeder_monitor: readiness'
     ros.spin_until(lambda: any(lv == DiagnosticStatus.ERROR for lv in diags.levels(name)), 5.0,

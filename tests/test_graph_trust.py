@@ -31,8 +31,8 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common import auth, qos
 from feeder_common.messages import signed_verdict
 from feeder_interfaces.msg import Verdict
-from feeder_nodes import (monitor, sim_as_hardware, Statements, STARTUP_TIMEOUT,
-                          TRIANGLE, Verdicts, wait_for_monitor, wait_for_readers)
+from feeder_nodes import (DRIVER, monitor, sim_as_hardware, Statements, STARTUP_TIMEOUT,
+                          TRIANGLE, Verdicts, wait_for_monitor, wait_reports_matched)
 from std_srvs.srv import SetBool, Trigger
 
 PERIOD = 0.02
@@ -52,6 +52,16 @@ def cycle_until_ready(ros, ready, limit_s=240.0):
     enable(ros, False)
 
 
+def trigger_when_idle(ros, timeout=10.0):
+    """Trigger one cycle once the driver is done with the one in flight (it refuses: busy)."""
+    end = time.monotonic() + timeout
+    while True:
+        res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
+        if res.success or 'busy' not in res.message or time.monotonic() > end:
+            return res
+        ros.spin_for(0.05)
+
+
 def hold_a_ready(ros, ready, limit=300):
     """
     Leave the monitor stating a ready that holds: no cycle fires after the one it proves.
@@ -64,7 +74,7 @@ def hold_a_ready(ros, ready, limit=300):
         if ready.checked[-1].ready_now:
             return
         n = len(ready)
-        res = ros.call(Trigger, '/feeder/feeder_driver/trigger_cycle', Trigger.Request())
+        res = trigger_when_idle(ros)
         assert res.success, res.message
         ros.spin_until(lambda: any(c.state != Verdict.STATE_CYCLING
                                    for c in ready.checked[n:]), 10.0, 'the verdict')
@@ -116,7 +126,7 @@ def test_attack_6_ready_drops_when_a_cycle_fires_though_the_driver_stops_at_once
     monitor(graph)
     ready = Statements(ros)
     wait_for_monitor(ros, ready)
-    wait_for_readers(ros, '/feeder/cycle_fired', 1)      # the monitor's
+    ros.wait_remote_matched(DRIVER, readers={'/feeder/cycle_fired': 1})     # the monitor's
     wait_enabled(ros)                       # the driver's handshake with the controller
     hold_a_ready(ros, ready)
     held = ready.checked[-1]
@@ -147,8 +157,7 @@ def test_attack_8_a_killed_driver_is_known_within_2_s_and_a_restart_trusted_at_o
     ready = Statements(ros)
     verdicts = Verdicts(ros)
     wait_for_monitor(ros, ready)
-    verdicts.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 1)     # the monitor's
+    wait_reports_matched(ros, status_readers=1, proximity_readers=1)       # the monitor's
     kill_when_ready_and_time_the_drop(ros, ready, sim)
     # A new driver run: its reports are judged from the first one (no distrust period).
     m = len(verdicts)
@@ -181,7 +190,8 @@ def test_attack_8_another_live_writer_does_not_hide_a_dead_driver(graph, ros):
     monitor(graph)
     ready = Statements(ros)
     wait_for_monitor(ros, ready)
-    wait_for_readers(ros, '/feeder/cycle_status', 1)     # the monitor's
+    wait_reports_matched(ros, status_readers=1, proximity_readers=1,       # the monitor's
+                         verdict_readers=0)
     forger = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status',
                                        qos.CYCLE_STATUS)
     ros.spin_until(lambda: forger.get_subscription_count() >= 1, STARTUP_TIMEOUT,
@@ -196,8 +206,7 @@ def test_attack_7_a_stalled_monitor_states_no_ready_about_a_stale_cycle(graph, r
     ready = Statements(ros)
     verdicts = Verdicts(ros)
     wait_for_monitor(ros, ready)
-    verdicts.wait_matched()
-    wait_for_readers(ros, '/feeder/cycle_status', 1)     # the monitor's
+    wait_reports_matched(ros, status_readers=1, proximity_readers=1)       # the monitor's
     cycle_until_ready(ros, ready)
     enable(ros, True)
     ros.spin_for(0.5)

@@ -68,7 +68,10 @@ def test_markers_that_wait_reuse_one_timer(kind):
     finally:
         context.try_shutdown()
     assert len(sent) >= 10, 'the markers that waited were never sent'
+    # At most one per period: counted over the whole run, not gap by gap (under load the
+    # time this test reads after a late publish can make the next gap look short: 17.4 ms of
+    # 20 in a loaded run); unthrottled, one per state (5 ms) would be 4 times too many.
     gaps = [b - a for a, b in zip(sent, sent[1:])]
-    assert min(gaps) >= MARKERS_PERIOD * 0.9, gaps      # at most one per period
+    assert len(gaps) <= (sent[-1] - sent[0]) / (MARKERS_PERIOD * 0.9), gaps
     assert last <= sent[-1] <= last + 2 * MARKERS_PERIOD, (last, sent[-1])
     assert grown <= 1, f'{grown} timers created for {len(sent)} markers messages'

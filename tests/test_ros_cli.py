@@ -213,11 +213,11 @@ def check_feeders_apart(ros, spaces, cycles=40):
     crossed = Verdicts(ros, f'{spaces[0]}/edge1_verdict', monitor=f'{spaces[2]}/feeder_monitor')
     for ns in spaces:
         ros.spin_until(lambda ns=ns: len(ready[ns]) >= 1, STARTUP_TIMEOUT, f'{ns} monitor')
-        verdicts[ns].wait_matched()
-        ros.spin_until(lambda ns=ns: ros.node.count_subscribers(f'{ns}/cycle_status') >= 3,
-                       STARTUP_TIMEOUT, f'{ns} readers')
-    crossed.wait_matched()
-    ros.spin_for(0.5)
+        # The writers' own accounts: the driver's cycle_status matched 3 readers (ours among
+        # them), the monitor's edge1_verdict ours (two on the first feeder: ``crossed``).
+        ros.wait_remote_matched(f'{ns}/feeder_driver', readers={f'{ns}/cycle_status': 3})
+        ros.wait_remote_matched(f'{ns}/feeder_monitor',
+                                readers={f'{ns}/edge1_verdict': 2 if ns == spaces[0] else 1})
     busy = [ns for k, ns in enumerate(spaces) if k != 1]
     for ns in busy:
         assert ros.call(SetBool, f'{ns}/feeder_driver/enable',

@@ -23,6 +23,13 @@ strings; except that the node name carries its namespace (:func:`status_prefix`,
 ``/diagnostics``, are told apart by rqt_robot_monitor and diagnostic_aggregator (the analyzers
 for N feeders: feeder_bringup's ``config/diagnostic_analyzers.yaml``).
 
+Every update ends with a status ``<node>: endpoints``: how many remote endpoints each of the
+node's writers and readers has MATCHED (``matched readers of /feeder/cycle_status: 3``;
+rmw's matched counts, not the graph's: a reader on the graph that a writer has not matched yet
+gets none of its volatile messages). Tests, the demo and the benchmarks wait on it before they
+start cycling (tests/feeder_testing.py, ``Probe.wait_remote_matched``); an operator can read it
+as who hears whom.
+
 ``DiagnosticStatus.level`` is a byte field: levels are the message's own constants
 (``DiagnosticStatus.OK`` is a one-byte bytes value) or the names ``ok``, ``warn``, ``error``,
 ``stale``.
@@ -88,8 +95,35 @@ class Status:
             self.add(key, value)
 
 
+# Topics every node has: no endpoint counts for them.
+_NOT_COUNTED = ('/rosout', '/parameter_events')
+
+
+def matched_endpoints(node):
+    """
+    Return {'matched readers of <topic>': n, 'matched writers of <topic>': n} of ``node``.
+
+    For each of its publishers (subscriptions), the readers (writers) it matched: rclpy's
+    ``Publisher.get_subscription_count`` and ``Subscription.get_publisher_count``.
+    """
+    counts = {}
+    for role, endpoints, count in (
+            ('readers', node.publishers, lambda e: e.get_subscription_count()),
+            ('writers', node.subscriptions, lambda e: e.get_publisher_count())):
+        for e in endpoints:
+            if e.topic_name in _NOT_COUNTED:
+                continue
+            key = f'matched {role} of {e.topic_name}'
+            counts[key] = counts.get(key, 0) + count(e)
+    return dict(sorted(counts.items()))
+
+
 class Updater:
-    """Publish the tasks' statuses every ``period`` s (and on :meth:`force_update`)."""
+    """
+    Publish the tasks' statuses every ``period`` s (and on :meth:`force_update`).
+
+    The last status of each update is the node's matched endpoints (``<node>: endpoints``).
+    """
 
     def __init__(self, node, period=1.0, hardware_id='none'):
         self.node = node
@@ -116,6 +150,12 @@ class Updater:
             except Exception as exc:    # noqa: B902 - a broken task must not stop the rest
                 stat.summary('error', f'diagnostic task failed: {exc!r}')
             out.append(stat.msg)
+        stat = Status(f'{self.prefix}: endpoints', self.hardware_id)
+        counts = matched_endpoints(self.node)
+        stat.summary('ok', f'{len(counts)} writers and readers, '
+                     f'{sum(counts.values())} matched remote endpoints')
+        stat.update(counts)
+        out.append(stat.msg)
         return out
 
     def update(self):

@@ -15,15 +15,12 @@
 import gc
 import os
 import pathlib
-import sys
 
 import pytest
 
 HERE = pathlib.Path(__file__).resolve()
 REPO = HERE.parents[3]
-# Test the source tree (also when an installed copy is on PYTHONPATH); the graph test support
-# (feeder_testing: a free domain id) lives with the tests.
-sys.path[:0] = [str(HERE.parents[1]), str(REPO / 'tests')]
+# The source tree and tests/ (feeder_testing: a free domain id) are on sys.path by pytest.ini.
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
 

@@ -14,8 +14,11 @@
 
 """/diagnostics status names carry the node's namespace (issue 23, item 1)."""
 
+import time
+
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_common.diagnostics import local_name, namespace_of, status_prefix, Updater
+from feeder_common.diagnostics import (local_name, matched_endpoints, namespace_of,
+                                       status_prefix, Updater)
 import rclpy
 from rclpy.context import Context
 
@@ -38,9 +41,38 @@ def test_an_updater_names_its_statuses_with_the_namespace():
         node = rclpy.create_node('feeder_driver', namespace='/feeder_2', context=ctx)
         updater = Updater(node, period=60.0)
         updater.add('cycles', lambda st: st.summary('ok', 'fine'))
-        (status,) = updater.statuses()
+        pub = node.create_publisher(DiagnosticStatus, 'cycle_status', 10)
+        status, endpoints = updater.statuses()
         assert status.name == 'feeder_2/feeder_driver: cycles'
         assert status.level == DiagnosticStatus.OK
+        # Last, the node's matched endpoints: none matched here (no peer).
+        assert endpoints.name == 'feeder_2/feeder_driver: endpoints'
+        assert {kv.key: kv.value for kv in endpoints.values} == {
+            'matched readers of /feeder_2/cycle_status': '0',
+            'matched readers of /diagnostics': '0'}
+        node.destroy_publisher(pub)
         node.destroy_node()
+    finally:
+        rclpy.shutdown(context=ctx)
+
+
+def test_the_endpoints_status_counts_matched_peers(domain_id):
+    """A writer's count goes up once a reader matched it, and the reader's likewise."""
+    ctx = Context()
+    rclpy.init(context=ctx, domain_id=domain_id)
+    try:
+        writer = rclpy.create_node('writer', namespace='/feeder', context=ctx)
+        reader = rclpy.create_node('reader', namespace='/feeder', context=ctx)
+        writer.create_publisher(DiagnosticStatus, 'cycle_status', 10)
+        reader.create_subscription(DiagnosticStatus, 'cycle_status', lambda m: None, 10)
+        end = time.monotonic() + 30.0
+        while matched_endpoints(writer).get('matched readers of /feeder/cycle_status') != 1:
+            assert time.monotonic() < end, matched_endpoints(writer)
+            time.sleep(0.05)
+        while matched_endpoints(reader).get('matched writers of /feeder/cycle_status') != 1:
+            assert time.monotonic() < end, matched_endpoints(reader)
+            time.sleep(0.05)
+        writer.destroy_node()
+        reader.destroy_node()
     finally:
         rclpy.shutdown(context=ctx)

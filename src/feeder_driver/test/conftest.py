@@ -12,20 +12,18 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Fixtures of the feeder_driver tests: source on sys.path, DDS on loopback, own domain."""
+"""Fixtures of the feeder_driver tests: DDS on loopback, a domain of their own."""
 
 import gc
 import os
 import pathlib
-import sys
 
 import pytest
 
 PKG = pathlib.Path(__file__).resolve().parents[1]
 REPO = PKG.parents[1]
-# Test the source trees, not a possibly stale colcon install; the graph test support
-# (feeder_testing) lives with the tests, in no package.
-sys.path[:0] = [str(PKG), str(REPO / 'src' / 'feeder_common'), str(REPO / 'tests')]
+# The source trees (not a possibly stale colcon install) and tests/ (feeder_testing, in no
+# package) are on sys.path by pytest.ini.
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
 

@@ -14,7 +14,6 @@
 
 import os
 import pathlib
-import sys
 
 import pytest
 from throwmap import analyse, load_scene
@@ -22,10 +21,8 @@ from throwmap import analyse, load_scene
 HERE = pathlib.Path(__file__).resolve()
 REPO = HERE.parents[3]
 SCENES = REPO / 'scenes'
-# Test the source trees (also when installed copies are on PYTHONPATH).
-# The graph test support (feeder_testing: a free domain id) lives with the tests.
-sys.path[:0] = [str(HERE.parents[1]), str(HERE.parents[2] / 'feeder_sim'),
-                str(HERE.parents[2] / 'feeder_common'), str(REPO / 'tests')]
+# The source trees (also when installed copies are on PYTHONPATH) and tests/ (feeder_testing:
+# a free domain id) are on sys.path by pytest.ini.
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
 

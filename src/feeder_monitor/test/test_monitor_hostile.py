@@ -24,10 +24,13 @@ afterwards a valid cycle still gets its verdict.
 """
 
 import pathlib
-import sys
 import time
 
 from feeder_common import auth, messages
+# tests/ (test support in no package) is on sys.path by pytest.ini
+from feeder_testing import reserve_domain_id
+from hostile_messages import (KILLER_STAMP, ranges, statuses,
+                              TRANSITION_EVENTS, wire)
 from hypothesis import given, HealthCheck, settings, strategies as st
 import pytest
 import rclpy
@@ -36,11 +39,6 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 
 REPO = pathlib.Path(__file__).resolve().parents[3]
-# tests/: the hostile messages and the domain picker (test support, in no package)
-sys.path.insert(0, str(REPO / 'tests'))
-from feeder_testing import reserve_domain_id  # noqa: E402, I100
-from hostile_messages import (KILLER_STAMP, ranges, statuses,  # noqa: E402
-                              TRANSITION_EVENTS, wire)
 
 TRIANGLE = str(REPO / 'scenes' / 'triangle.yaml')
 NS = '/hostile'

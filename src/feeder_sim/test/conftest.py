@@ -13,7 +13,6 @@
 # limitations under the License.
 
 import pathlib
-import sys
 
 import pytest
 from throwmap import analyse, load_scene
@@ -21,8 +20,8 @@ from throwmap import analyse, load_scene
 HERE = pathlib.Path(__file__).resolve()
 REPO = HERE.parents[3]
 SCENES = REPO / 'scenes'
-# Test the source trees (also when installed copies are on PYTHONPATH).
-sys.path[:0] = [str(HERE.parents[1]), str(HERE.parents[2] / 'feeder_common')]
+# The source trees (also when installed copies are on PYTHONPATH) are on sys.path by
+# pytest.ini.
 
 
 @pytest.fixture(scope='session')

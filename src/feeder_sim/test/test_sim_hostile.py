@@ -23,10 +23,12 @@ parser refuses, and a valid cycle still gets its prediction.
 """
 
 import pathlib
-import sys
 import time
 
 from feeder_common import messages
+# tests/ (test support in no package) is on sys.path by pytest.ini
+from feeder_testing import reserve_domain_id
+from hostile_messages import KILLER_STAMP, statuses, wire
 from hypothesis import given, HealthCheck, settings, strategies as st
 import pytest
 import rclpy
@@ -35,10 +37,6 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 
 REPO = pathlib.Path(__file__).resolve().parents[3]
-# tests/: the hostile messages and the domain picker (test support, in no package)
-sys.path.insert(0, str(REPO / 'tests'))
-from feeder_testing import reserve_domain_id  # noqa: E402, I100
-from hostile_messages import KILLER_STAMP, statuses, wire  # noqa: E402
 
 TRIANGLE = str(REPO / 'scenes' / 'triangle.yaml')
 NS = '/hostile'
