@@ -28,8 +28,8 @@ test's duration, so concurrent test runs on one machine never share a graph. Fix
   wrapper=..., key_file=...)`` starts colcon-installed executables as processes with that
   environment; every one is stopped (SIGINT, then SIGTERM, then SIGKILL) when the test ends;
   ``graph.log(proc)`` returns what a process printed. Every driver_node, standin_node,
-  monitor_node and feed_node it starts gets ``-p key_file:=<the test's key file>`` (unless the test gives a
-  key_file of its own, or ``key_file=None``).
+  monitor_node and feed_node it starts gets ``-p key_file:=<the test's key file>`` (unless
+  the test gives a key_file of its own, or ``key_file=None``).
 * ``ros``: a :class:`feeder_testing.Probe` (a test node in its own rclpy context):
   ``spin_until(predicate, timeout, what)``, ``wait_matched(sub_or_pub, n)``,
   ``wait_active(node_name)``, ``call(srv_type, name, request)``, ``set_parameters`` /
