@@ -107,7 +107,11 @@ def test_the_plans_start_what_the_issue_asks(support):
     names = [(s.executable, s.name, s.namespace) for s in sim if s.package not in OPTIONAL]
     assert names == [('standin_node', 'feeder_driver', '/feeder'),
                      ('predictor_node', 'feeder_sim', '/feeder'),
-                     ('monitor_node', 'feeder_monitor', '/feeder')]
+                     ('monitor_node', 'feeder_monitor', '/feeder'),
+                     ('feed_node', 'feeder_feed', '/feeder')]
+    feed = next(s for s in sim if s.executable == 'feed_node')
+    monitor = next(s for s in sim if s.executable == 'monitor_node')
+    assert feed.parameters[0]['key_file'] == monitor.parameters[1]['key_file']
     assert sim[0].parameters[0].endswith('/feeder_sim/config/standin.yaml')
     assert sim[1].parameters[0].endswith('/feeder_sim/config/predictor.yaml')
     assert sim[0].parameters[1]['cycle_period'] == 1.0

@@ -62,7 +62,7 @@ def session_processes(sid):
 @pytest.mark.parametrize('launch_file, shown', [
     ('sim.launch.py', ["pkg='feeder_sim', exec='standin_node'",
                        "pkg='feeder_sim', exec='predictor_node'", "exec='monitor_node'",
-                       "exec='bag_recorder'", "exec='robot_state_publisher'", "exec='rviz2'"]),
+                       "exec='feed_node'", "exec='bag_recorder'", "exec='robot_state_publisher'", "exec='rviz2'"]),
     ('hardware.launch.py', ["exec='controller_emulator'", "exec='driver_node'",
                             "exec='predictor_node'", "exec='monitor_node'",
                             "exec='bag_recorder'"]),

@@ -119,6 +119,7 @@ SLOTS = {
     'hardware': Slot('feeder_sim', 'standin_node', 'feeder_driver', parameters=2),
     'predictor': Slot('feeder_sim', 'predictor_node', 'feeder_sim', parameters=2),
     'monitor': Slot('feeder_monitor', 'monitor_node', 'feeder_monitor', parameters=2),
+    'feed': Slot('feeder_monitor', 'feed_node', 'feeder_feed', parameters=1),
     'recorder': Slot('feeder_monitor', 'bag_recorder', 'feeder_bag_recorder', arguments=1),
     'robot_state_publisher': Slot('robot_state_publisher', 'robot_state_publisher',
                                   'robot_state_publisher', parameters=1,
@@ -127,9 +128,9 @@ SLOTS = {
 }
 # The slots of each launch file, in start order (a plan holds a subset, in this order).
 PLAN_SLOTS = {
-    'plan_sim': ('hardware', 'predictor', 'monitor', 'recorder', 'robot_state_publisher',
-                 'rviz'),
-    'plan_hardware': ('emulator', 'driver', 'predictor', 'monitor', 'recorder',
+    'plan_sim': ('hardware', 'predictor', 'monitor', 'feed', 'recorder',
+                 'robot_state_publisher', 'rviz'),
+    'plan_hardware': ('emulator', 'driver', 'predictor', 'monitor', 'feed', 'recorder',
                       'robot_state_publisher', 'rviz'),
 }
 
@@ -375,7 +376,7 @@ def _optional(args, name, package):
 
 
 def _common_nodes(args, ns, scene):
-    """Predictor, monitor, recorder, robot_state_publisher, rviz2 of one feeder."""
+    """Predictor, monitor, feed_node, recorder, robot_state_publisher, rviz2 of one feeder."""
     sensor = _sensor_parameter(args)
     rt = _realtime_parameter(args)
     record = _record_directory(args)
@@ -387,6 +388,8 @@ def _common_nodes(args, ns, scene):
                                 {'scene': scene, **sensor, **rt}]),
         _spec('monitor', ns, [str(share('feeder_monitor') / 'config' / 'monitor.yaml'),
                               {'scene': scene, **sensor, **rt, **_key_parameter(args)}]),
+        # The cell's "give me a part" action (~/feed_part), checking the monitor's signature.
+        _spec('feed', ns, [{**rt, **_key_parameter(args)}]),
     ]
     if record:
         # It records the feeder's namespace (+ /diagnostics, /tf, /tf_static): its own bag.

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-The real feeder: driver_node on a serial port, the predictor (predictor_node) and the monitor.
+The real feeder: driver_node on a serial port, the predictor, the monitor and feed_node.
 
     ros2 launch feeder_bringup hardware.launch.py port:=/dev/ttyACM0 [scene:=triangle]
     ros2 launch feeder_bringup hardware.launch.py emulator:=true   # controller emulator on a pty

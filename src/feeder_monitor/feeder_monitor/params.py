@@ -56,6 +56,7 @@ MONITOR_PARAMS = (
 )
 
 FEED_PARAMS = (
+    REALTIME_PRIORITY,
     ParamSpec('driver_node', 'feeder_driver', 'the node whose ~/trigger_cycle fires the cycles '
               "and whose signed cycle reports say a cycle failed (relative to this node's "
               'namespace, or absolute)', read_only=True, constraints='not empty',
