@@ -13,8 +13,7 @@
 # limitations under the License.
 
 """
-The simulated feeder: the hardware stand-in (standin_node), the predictor, the monitor
-and feed_node (the ~/feed_part action).
+The simulated feeder: the hardware stand-in, the predictor, the monitor and feed_node.
 
     ros2 launch feeder_bringup sim.launch.py [scene:=triangle] [namespace:=feeder]
         [cycle_period:=1.0] [sensor_radius:=auto] [record:=DIR] [rviz:=true]
