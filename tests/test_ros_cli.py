@@ -20,6 +20,7 @@ the reason; three feeders side by side also run as plain processes everywhere.
 """
 
 import os
+import re
 import signal
 import time
 
@@ -258,3 +259,34 @@ def test_three_feeders_side_by_side_with_ros2_launch(cli, ros, tmp_path, launche
     check_feeders_apart(ros, spaces)
     assert launch.stop() == 0, launch.log
     assert 'process has died' not in launch.log, launch.log
+
+
+def test_the_feed_action_through_ros2_action_send_goal(cli, ros, tmp_path, launches):
+    """Issue 22: the interface, the action's listing and a goal with feedback, by the CLI."""
+    launch = Launch(cli, tmp_path, 'sim.launch.py', 'cycle_period:=0.05')
+    launches.append(launch)
+    wait_nodes(ros, ['/feeder/feeder_driver', '/feeder/feeder_sim', '/feeder/feeder_monitor',
+                     '/feeder/feeder_feed'])
+    status, out = ros_cli.run(['interface', 'show', 'feeder_interfaces/action/FeedPart'], cli)
+    assert status == 0 and 'string REASON_READY = "ready"' in out and 'bool new_part' in out, out
+    # (ros2 action list has no --no-daemon: the daemon it starts is stopped right after)
+    try:
+        status, out = ros_cli.run(['action', 'list', '-t'], cli)
+    finally:
+        ros_cli.run(['daemon', 'stop'], cli)
+    assert '/feeder/feeder_feed/feed_part [feeder_interfaces/action/FeedPart]' in out, out
+    goal = ['action', 'send_goal', '/feeder/feeder_feed/feed_part',
+            'feeder_interfaces/action/FeedPart', '{max_cycles: 400, new_part: true}',
+            '--feedback']
+    deadline = time.monotonic() + STARTUP_TIMEOUT
+    while True:     # refused until the feed node holds a fresh statement of the monitor
+        status, out = ros_cli.run(goal, cli, timeout=120)
+        if 'reason: refused' not in out or time.monotonic() > deadline:
+            break
+        time.sleep(1.0)
+    assert status == 0 and 'Goal finished with status: SUCCEEDED' in out, out
+    # (the CLI's client reads feedback with a history of 10: it shows some cycles, not all)
+    assert 'reason: ready' in out and 'Feedback:' in out, out
+    cycles = int(re.search(r'detail: ready at cycle seq \d+ after (\d+) cycles', out).group(1))
+    assert cycles > 87, out       # the settling after a new part
+    assert launch.stop() == 0, launch.log
