@@ -124,7 +124,8 @@ def test_sim_launch_param_load_lifecycle_and_ctrl_c(cli, ros, tmp_path, launches
                    'the predictor process to end')
     assert launch.stop() == 0, launch.log
     log = launch.log
-    for exe in ('standin_node-1', 'predictor_node-2', 'monitor_node-3', 'bag_recorder-4'):
+    for exe in ('standin_node-1', 'predictor_node-2', 'monitor_node-3', 'feed_node-4',
+                'bag_recorder-5'):
         assert f'[INFO] [{exe}]: process has finished cleanly' in log, log
     assert 'Traceback' not in log and 'process has died' not in log, log
     ros.spin_until(lambda: not set(names) & nodes_on_graph(ros), 3.0, 'every node gone')
@@ -180,12 +181,13 @@ def test_realtime_priority_through_ros2_launch(cli, ros, tmp_path, launches):
                     f'emulator_link:={tmp_path / "tty"}', 'namespace:=rt',
                     'realtime_priority:=5')
     launches.append(launch)
-    wait_nodes(ros, ['/rt/feeder_driver', '/rt/feeder_sim', '/rt/feeder_monitor'])
+    wait_nodes(ros, ['/rt/feeder_driver', '/rt/feeder_sim', '/rt/feeder_monitor',
+                     '/rt/feeder_feed'])
     pids = {int(line.rsplit('[', 1)[1].rstrip(']')): line.split('[')[2].split(']')[0]
             for line in launch.log.splitlines() if 'process started with pid' in line}
     nodes = {pid: exe for pid, exe in pids.items() if not exe.startswith('controller_emulator')}
     assert sorted(exe.rsplit('-', 1)[0] for exe in nodes.values()) == \
-        ['driver_node', 'monitor_node', 'predictor_node'], launch.log
+        ['driver_node', 'feed_node', 'monitor_node', 'predictor_node'], launch.log
     for pid, exe in nodes.items():
         assert set(threads(pid).values()) == {(os.SCHED_FIFO, 5)}, exe
     emulator = next(pid for pid, exe in pids.items() if exe.startswith('controller_emulator'))
