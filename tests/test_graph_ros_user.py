@@ -57,6 +57,11 @@ def monitor(graph, *params, ns='/feeder', extra=()):
                        *[a for p in params for a in ('-p', p)], name='monitor')
 
 
+def feed(graph, *params, ns='/feeder'):
+    return graph.start('feeder_monitor', 'feed_node', '--ros-args', '-r', f'__ns:={ns}',
+                       *[a for p in params for a in ('-p', p)], name='feed')
+
+
 def nodes_on_graph(ros):
     return {f'{ns.rstrip("/")}/{n}' for n, ns in ros.node.get_node_names_and_namespaces()}
 
@@ -75,6 +80,7 @@ START = {       # node: (start function, fully qualified name)
                 '/feeder/feeder_driver'),
     'predictor': (sim, '/feeder/feeder_sim'),
     'monitor': (monitor, '/feeder/feeder_monitor'),
+    'feed': (feed, '/feeder/feeder_feed'),
 }
 
 
@@ -83,6 +89,7 @@ START = {       # node: (start function, fully qualified name)
     ('standin', 'cycle_period', '2', 2.0),
     ('predictor', 'markers_period', '1', 1.0),
     ('monitor', 'silence_margin', '2', 2.0),
+    ('feed', 'verdict_timeout', '3', 3.0),
 ])
 def test_an_integer_for_a_double_is_that_double(graph, ros, node, param, given, expected):
     start, fqn = START[node]
@@ -105,6 +112,8 @@ BAD = [
     ('monitor', 'warmup_cycles:=1.5', 'warmup_cycles must be an integer, got double 1.5'),
     ('monitor', 'scene:=5', 'scene must be a string, got integer 5'),
     ('monitor', 'silence_margin:=true', 'silence_margin must be a double, got bool True'),
+    ('feed', 'max_statement_age:=soon', "max_statement_age must be a double, got string 'soon'"),
+    ('feed', 'verdict_timeout:=0.0', 'verdict_timeout'),
 ]
 
 
@@ -193,6 +202,7 @@ def test_every_node_exits_0_and_leaves_the_graph_at_once(graph, ros, tmp_path, s
         '/feeder/feeder_driver': sim(graph, 'cycle_period:=0.005', hardware=True),
         '/feeder/feeder_sim': sim(graph),
         '/feeder/feeder_monitor': monitor(graph),
+        '/feeder/feeder_feed': feed(graph),
         '/drv/feeder_driver': driver(graph, ns='/drv'),
         '/feeder/feeder_bag_recorder': graph.start(
             'feeder_monitor', 'bag_recorder', tmp_path / 'bag', '--ros-args', '-r',

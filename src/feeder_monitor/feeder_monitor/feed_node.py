@@ -58,6 +58,9 @@ class FeedNode(Node):
     executor_kind = 'single'
 
     def __init__(self, **kwargs):
+        # Set before Node.__init__: a refused parameter ends the context, which destroys the
+        # half-built node.
+        self._server = None
         super().__init__('feeder_feed', **kwargs)
         self._params = ParameterGate(self, FEED_PARAMS)
         p = self._params.declare_all()
@@ -247,7 +250,9 @@ class FeedNode(Node):
         return result
 
     def destroy_node(self):
-        self._server.destroy()
+        if self._server is not None:
+            self._server.destroy()
+            self._server = None
         return super().destroy_node()
 
 
