@@ -148,8 +148,13 @@ def test_twenty_parts_in_a_row_each_a_true_ready(graph, ros, tmp_path):
     print('cycles per part:', [r.cycles for r in results])
 
 
+def fired_so_far(truth_path):
+    """The highest seq the stand-in fired (its truth log is written at each fire)."""
+    return max(read_truth_log(truth_path)[1], default=0)
+
+
 def test_budget_cancel_and_refusals(graph, ros, tmp_path):
-    cell, verdicts, _ = start_feeder(graph, ros, tmp_path)
+    cell, verdicts, truth_path = start_feeder(graph, ros, tmp_path)
     # A budget too small for the settling after a new part.
     status, result, feedback = cell.feed(max_cycles=3, new_part=True)
     assert (result.success, result.reason, result.cycles) == (
@@ -160,6 +165,7 @@ def test_budget_cancel_and_refusals(graph, ros, tmp_path):
     assert result.reason == FeedPart.Result.REASON_REFUSED and 'no budget' in result.detail
 
     # A second goal while one runs is refused; cancel ends the first with no cycle after it.
+    before = fired_so_far(truth_path)
     first, feedback = cell.send(max_cycles=1000, new_part=True)
     ros.spin_until(lambda: len(feedback) >= 5, 30.0, 'five cycles of the first goal')
     status, second, _ = cell.feed(max_cycles=10)
@@ -169,12 +175,10 @@ def test_budget_cancel_and_refusals(graph, ros, tmp_path):
     ros.spin_until(cancel.done, 10.0, 'the cancel reply')
     status, result = cell.result(first)
     assert result.reason == FeedPart.Result.REASON_CANCELED and not result.success
-    n_verdicts = len(verdicts.checked)
+    # Every cycle the stand-in fired since was this goal's, and none came after the cancel
+    # (counted from the stand-in's own log, not from messages that may arrive late).
     ros.spin_for(1.0)
-    # At most the cycle in flight at the cancel was judged after it.
-    assert len(verdicts.checked) - n_verdicts <= 1
-    assert verdicts.checked, f"no verdict reached the test: {len(verdicts.msgs)} messages"
-    assert max(c.seq for c in verdicts.checked) <= max(f.seq for f in feedback) + 1
+    assert fired_so_far(truth_path) - before == result.cycles >= 5
 
 
 def test_a_goal_without_a_monitor_is_refused_and_a_dead_driver_is_a_serial_fault(
