@@ -14,7 +14,7 @@
 # limitations under the License.
 
 """
-Demo of the feeder graph on one scene: sim as hardware, predictor, monitor and bag recorder.
+Demo of the feeder graph on one scene: hardware stand-in, predictor, monitor and bag recorder.
 
     scripts/demo_graph.py OUT_DIR [--cycles 300] [--period 0.02] [--scene scenes/triangle.yaml]
 
