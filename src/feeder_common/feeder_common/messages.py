@@ -14,28 +14,27 @@
 
 
 """
-Builders and parsers of the messages the driver (or the sim standing in for it) sends.
+Builders and parsers of the feeder's messages (feeder_interfaces; docs/interfaces.md).
 
-``cycle_status`` (diagnostic_msgs/DiagnosticStatus): one per fired cycle, ``name = 'cycle'``,
-level OK (completed) or ERROR (failed, the reason in ``message``), ``hardware_id`` = who ran
-it, values ``seq``, ``sensor`` (``1``/``0``/``none``), ``stamp`` (the sample time,
-:mod:`feeder_common.stamps`). ``proximity`` (sensor_msgs/Range, REP 117 fixed-distance ranger):
-``-inf`` part detected, ``+inf`` not. ``joint_states``: the arm joint ``feeder_arm_joint``.
-A driver signs each ``cycle_status`` (values ``session``, ``mac``) and announces each cycle on
-``cycle_fired`` before it fires (:class:`CycleSigner`, feeder_common.auth). The monitor's
-``edge1_ready`` / ``edge1_verdict`` are ``feeder_interfaces/Verdict``, signed
+``cycle_status`` (feeder_interfaces/CycleStatus): one per fired cycle, outcome ``completed``
+(with the sensor bit) or ``failed`` (SENSOR_NONE, the ``reason``), ``hardware_id`` = who ran
+it, ``stamp`` the sample time. ``cycle_fired`` (the same type, outcome ``fired``) announces
+each cycle before it fires. A driver signs both (``session``, ``mac``: :class:`CycleSigner`,
+feeder_common.auth). ``proximity`` (sensor_msgs/Range, REP 117 fixed-distance ranger): ``-inf``
+part detected, ``+inf`` not. ``joint_states``: the arm joint ``feeder_arm_joint``. The
+monitor's ``edge1_ready`` / ``edge1_verdict`` are ``feeder_interfaces/Verdict``, signed
 (:func:`signed_verdict`); a consumer checks one in one call (:func:`check_verdict`).
-``predicted/state`` (DiagnosticStatus, the predictor's state after each followed cycle): ``name =
-'predicted_state'``, level OK, values ``seq`` and ``stamp`` of the cycle, ``edge`` (-1: no part
-on the arm), ``R`` (m, ``none`` without a part), ``throw_kind`` (``jog``/``flip``/``lost``).
+``predicted/state`` (feeder_interfaces/PredictedState): the predictor's state after each
+followed cycle (edge -1 and r NaN: no part on the arm); ``predicted/limit_set`` and
+``predicted/analysis`` (LimitSet, Analysis): the scene's analysis, field by field.
 Every stamp is integer nanoseconds here; :func:`time_msg` and :func:`time_ns` convert.
 
 Every parser takes exactly what its builder writes (the wire is hostile: anyone on the graph
-can publish anything): the status's ``name`` and level, each value it reads given once, a
-``seq`` in ASCII decimal digits (no sign, space, underscore, other scripts' digits or leading
-zero) below 2**63, a stamp as :mod:`feeder_common.stamps` writes it, an ``R`` that is the
-``repr`` of a finite float, texts at most :data:`MAX_TEXT` characters long. Anything else is a
-ValueError naming the problem; no other exception escapes a parser, whatever the message holds.
+can publish anything): an outcome and a sensor code the topic carries and that go together,
+a ``seq`` below 2**63, a stamp from 1970 on with nanosec below 1e9, a finite ``r`` or NaN with
+edge -1 and kind ``lost``, texts at most :data:`MAX_TEXT` characters long, a session of lower
+case hex and a MAC of 32 bytes or none. Anything else is a ValueError naming the problem; no
+other exception escapes a parser, whatever the message holds.
 """
 
 from dataclasses import dataclass
@@ -43,33 +42,32 @@ import math
 from typing import Optional
 
 from builtin_interfaces.msg import Time
-from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from feeder_interfaces.msg import Analysis as AnalysisMsg
+from feeder_interfaces.msg import BasinOutcome, EdgeBand, EdgeDesign, Escape
+from feeder_interfaces.msg import CycleStatus as CycleStatusMsg
+from feeder_interfaces.msg import LimitSet as LimitSetMsg
+from feeder_interfaces.msg import PredictedState as PredictedStateMsg
 from feeder_interfaces.msg import Verdict
 from sensor_msgs.msg import JointState, Range
 
 from . import auth
 from .frames import ARM_JOINT, SENSOR_FRAME
-from .stamps import is_decimal, NS, parse_stamp_text, stamp_text
+from .stamps import NS
 
-CYCLE_STATUS_NAME = 'cycle'
-CYCLE_FIRED_NAME = 'cycle_fired'
-PREDICTED_STATE_NAME = 'predicted_state'
 # A follower of cycle_status replays at most this many missed cycles; a longer jump of seq is
 # implausible (a forged or corrupt seq, or a driver that ran unseen for minutes): an anomaly.
 MAX_SEQ_JUMP = 1000
-# A seq is below 2**63 (an int64 holds it), so its text has at most 19 digits.
+# A seq is below 2**63 (an int64 holds it: a consumer in any language can count with it).
 MAX_SEQ = 2**63 - 1
-# An edge of a part (-1: none) fits an int32.
-MAX_EDGE = 2**31 - 1
 # The longest message, hardware_id or state text a parser takes (a port path, a reason).
 MAX_TEXT = 4096
-# The longest repr of a finite float ('-2.2250738585072014e-308' is 24 characters).
-_MAX_FLOAT_TEXT = 32
 _SENSOR_TEXT = {True: '1', False: '0', None: 'none'}
 _HEX = frozenset('0123456789abcdef')
-_SENSOR_BIT = {'1': True, '0': False, 'none': None}
-THROW_KINDS = ('jog', 'flip', 'lost')
-_LEVELS = {DiagnosticStatus.OK: True, DiagnosticStatus.ERROR: False}
+_SENSOR_CODE = {True: CycleStatusMsg.SENSOR_DETECTED, False: CycleStatusMsg.SENSOR_CLEAR,
+                None: CycleStatusMsg.SENSOR_NONE}
+_SENSOR_OF_CODE = {code: bit for bit, code in _SENSOR_CODE.items()}
+THROW_KINDS = (PredictedStateMsg.THROW_JOG, PredictedStateMsg.THROW_FLIP,
+               PredictedStateMsg.THROW_LOST)
 
 
 def time_msg(stamp_ns):
@@ -114,81 +112,11 @@ def _clip(text):
     return text if len(text) <= MAX_TEXT else text[:MAX_TEXT - 1] + '\u2026'
 
 
-def parse_seq(text, what='seq'):
-    """
-    Parse a ``seq`` as the builders write it: ASCII decimal digits, below 2**63.
-
-    ValueError naming the problem for anything else (a sign, spaces, ``_``, digits of other
-    scripts, a leading zero, too many digits).
-    """
-    if not isinstance(text, str):
-        raise ValueError(f'{what} is text, not {type(text).__name__}')
-    if len(text) > len(str(MAX_SEQ)):
-        raise ValueError(f'{what} is {len(text)} characters long; a seq has at most '
-                         f'{len(str(MAX_SEQ))} digits')
-    if not is_decimal(text):
-        raise ValueError(f'{what} {text!r} is not a non-negative integer in ASCII decimal '
-                         'digits without a leading zero')
-    seq = int(text)
+def _seq_field(seq, what):
+    """Return ``seq`` if a cycle number an int64 holds (uint64 on the wire); else ValueError."""
     if seq > MAX_SEQ:
         raise ValueError(f'{what} {seq} is beyond {MAX_SEQ}')
-    return seq
-
-
-def _parse_edge(text, what):
-    """Parse an edge index: ``-1`` (no part) or ASCII decimal digits up to MAX_EDGE."""
-    if text == '-1':
-        return -1
-    if len(text) > len(str(MAX_EDGE)) or not is_decimal(text) or int(text) > MAX_EDGE:
-        raise ValueError(f'{what} {text[:40]!r} is not -1 or an edge index in ASCII decimal '
-                         f'digits up to {MAX_EDGE}')
-    return int(text)
-
-
-def _parse_float(text, what):
-    """Parse a finite float written as its ``repr`` (the shortest text that reads back)."""
-    try:
-        value = float(text) if len(text) <= _MAX_FLOAT_TEXT else None
-    except ValueError:
-        value = None
-    if value is None or not math.isfinite(value) or repr(value) != text:
-        raise ValueError(f'{what} {text[:40]!r} is not a finite float written as its repr')
-    return value
-
-
-def _optional_stamp(text, what):
-    """Parse ``none`` (no usable stamp) or a stamp (:mod:`feeder_common.stamps`)."""
-    if text == 'none':
-        return None
-    try:
-        return parse_stamp_text(text)
-    except ValueError as exc:
-        raise ValueError(f'{what}: {exc}') from None
-
-
-def _values(msg, what, name, keys):
-    """
-    Return the values ``keys`` of status ``msg``, each given once; else ValueError naming why.
-
-    Checks the status's ``name``, that it is OK or ERROR, and the length of its texts; values
-    of other keys are ignored (a later field must not break an older reader).
-    """
-    if msg.name != name:
-        raise ValueError(f'{what} named {msg.name[:40]!r}, not {name!r}')
-    if msg.level not in _LEVELS:
-        raise ValueError(f'{what} level {msg.level!r} is neither OK nor ERROR')
-    _text(f'{what} message', msg.message)
-    _text(f'{what} hardware_id', msg.hardware_id)
-    found = {}
-    for kv in msg.values:
-        if kv.key in keys:
-            if kv.key in found:
-                raise ValueError(f'{what} gives {kv.key} twice')
-            found[kv.key] = kv.value
-    missing = [k for k in keys if k not in found]
-    if missing:
-        raise ValueError(f'{what} without a {", ".join(missing)} value')
-    return found
+    return int(seq)
 
 
 @dataclass(frozen=True)
@@ -203,40 +131,67 @@ class CycleStatus:
     ok: bool
     sensor: Optional[bool]
     stamp_ns: int
-    message: str
+    reason: str             # why the cycle failed ('' when it completed)
     hardware_id: str
     session: str = ''       # the reporting run (CycleSigner); '' unsigned
     mac: bytes = b''        # HMAC-SHA256 of the report (feeder_common.auth); b'' unsigned
 
 
-def cycle_status(seq, ok, message, sensor, stamp_ns, hardware_id):
+def cycle_status(seq, ok, reason, sensor, stamp_ns, hardware_id):
     """
-    Build a ``cycle_status``; ``sensor`` True/False, or None for a failed cycle.
+    Build an unsigned ``cycle_status``; ``sensor`` True/False, or None for a failed cycle.
 
-    ``message`` and ``hardware_id`` are cut to MAX_TEXT characters (what a parser takes).
+    ``reason`` (why a cycle failed) is only sent for a failed cycle; it and ``hardware_id``
+    are cut to MAX_TEXT characters (what a parser takes), a NUL sent as U+FFFD.
     """
-    return DiagnosticStatus(
-        level=DiagnosticStatus.OK if ok else DiagnosticStatus.ERROR, name=CYCLE_STATUS_NAME,
-        message=_clip(message), hardware_id=_clip(hardware_id),
-        values=[KeyValue(key='seq', value=str(int(seq))),
-                KeyValue(key='sensor', value=_SENSOR_TEXT[sensor]),
-                KeyValue(key='stamp', value=stamp_text(stamp_ns))])
+    return CycleStatusMsg(
+        seq=int(seq), stamp=time_msg(stamp_ns),
+        outcome=CycleStatusMsg.OUTCOME_COMPLETED if ok else CycleStatusMsg.OUTCOME_FAILED,
+        sensor=_SENSOR_CODE[sensor], reason='' if ok else _wire_text(reason),
+        hardware_id=_wire_text(hardware_id))
+
+
+def _report_fields(msg, what, outcomes):
+    """
+    Check the fields every cycle report has; return (seq, outcome, sensor, stamp_ns).
+
+    ``outcomes``: the outcomes this topic carries. A bit goes with a completed cycle only.
+    """
+    if msg.outcome not in outcomes:
+        raise ValueError(f'{what} outcome {msg.outcome[:40]!r} is not '
+                         + ' or '.join(repr(o) for o in outcomes))
+    seq = _seq_field(msg.seq, f'{what} seq')
+    if msg.sensor not in _SENSOR_OF_CODE:
+        raise ValueError(f'{what} sensor {msg.sensor} is not SENSOR_NONE (-1), SENSOR_CLEAR (0) '
+                         'or SENSOR_DETECTED (1)')
+    sensor = _SENSOR_OF_CODE[msg.sensor]
+    if (msg.outcome == CycleStatusMsg.OUTCOME_COMPLETED) != (sensor is not None):
+        raise ValueError(f'{what} {msg.outcome} with sensor {msg.sensor}: a completed cycle has '
+                         'a bit (0 or 1), a fired or failed one SENSOR_NONE')
+    try:
+        stamp = time_ns(msg.stamp)
+    except ValueError as exc:
+        raise ValueError(f'{what}: {exc}') from None
+    if msg.outcome != CycleStatusMsg.OUTCOME_FAILED and msg.reason:
+        raise ValueError(f'{what} {msg.outcome} with a reason: only a failed cycle has one')
+    _text(f'{what} reason', msg.reason)
+    _text(f'{what} hardware_id', msg.hardware_id)
+    return seq, sensor, stamp
 
 
 def parse_cycle_status(msg):
-    """Parse a ``cycle_status`` as :func:`cycle_status` writes it; ValueError naming a fault."""
+    """
+    Parse a ``cycle_status`` (feeder_interfaces/CycleStatus, outcome completed or failed).
+
+    ValueError naming the fault for anything :func:`cycle_status` (signed or not) does not
+    write.
+    """
     what = 'cycle_status'
-    values = _values(msg, what, CYCLE_STATUS_NAME, ('seq', 'sensor', 'stamp'))
-    seq = parse_seq(values['seq'], f'{what} seq')
-    if values['sensor'] not in _SENSOR_BIT:
-        raise ValueError(f'{what} sensor {values["sensor"][:40]!r} is not 1, 0 or none')
-    try:
-        stamp = parse_stamp_text(values['stamp'])
-    except ValueError as exc:
-        raise ValueError(f'{what}: {exc}') from None
-    session, tag = _signature(msg.values)
-    return CycleStatus(seq, _LEVELS[msg.level], _SENSOR_BIT[values['sensor']], stamp,
-                       msg.message, msg.hardware_id, session, tag)
+    seq, sensor, stamp = _report_fields(
+        msg, what, (CycleStatusMsg.OUTCOME_COMPLETED, CycleStatusMsg.OUTCOME_FAILED))
+    session, tag = _signature(msg, what)
+    return CycleStatus(seq, msg.outcome == CycleStatusMsg.OUTCOME_COMPLETED, sensor, stamp,
+                       msg.reason, msg.hardware_id, session, tag)
 
 
 @dataclass(frozen=True)
@@ -251,38 +206,92 @@ class PredictedState:
 
 
 def predicted_state(seq, stamp_ns, edge, R, throw_kind):
-    """Build a ``predicted/state``; ``R`` None when no part is on the arm (edge -1)."""
-    return DiagnosticStatus(
-        level=DiagnosticStatus.OK, name=PREDICTED_STATE_NAME, message=str(throw_kind),
-        values=[KeyValue(key='seq', value=str(int(seq))),
-                KeyValue(key='stamp', value='none' if stamp_ns is None
-                         else stamp_text(stamp_ns)),
-                KeyValue(key='edge', value=str(int(edge))),
-                # repr: the shortest text that reads back as the same float
-                KeyValue(key='R', value='none' if R is None else repr(float(R))),
-                KeyValue(key='throw_kind', value=str(throw_kind))])
+    """
+    Build a ``predicted/state``; ``R`` None when no part is on the arm (edge -1).
+
+    ``stamp_ns`` None (no cycle stamp known) is sent as the zero time.
+    """
+    msg = PredictedStateMsg(seq=int(seq), edge=int(edge),
+                            r=math.nan if R is None else float(R), throw_kind=str(throw_kind))
+    if stamp_ns:
+        msg.stamp = time_msg(stamp_ns)
+    return msg
 
 
 def parse_predicted_state(msg):
     """Parse a ``predicted/state`` as :func:`predicted_state` writes it; ValueError if not."""
     what = 'predicted/state'
-    keys = ('seq', 'stamp', 'edge', 'R', 'throw_kind')
-    values = _values(msg, what, PREDICTED_STATE_NAME, keys)
-    if msg.level != DiagnosticStatus.OK:
-        raise ValueError(f'{what} of a level other than OK')
-    seq = parse_seq(values['seq'], f'{what} seq')
-    stamp = _optional_stamp(values['stamp'], what)
-    edge = _parse_edge(values['edge'], f'{what} edge')
-    R = None if values['R'] == 'none' else _parse_float(values['R'], f'{what} R')
-    kind = values['throw_kind']
+    seq = _seq_field(msg.seq, f'{what} seq')
+    try:
+        stamp = time_ns(msg.stamp) or None
+    except ValueError as exc:
+        raise ValueError(f'{what}: {exc}') from None
+    edge = msg.edge
+    if edge < PredictedStateMsg.EDGE_LOST:
+        raise ValueError(f'{what} edge {edge} is neither EDGE_LOST (-1) nor an edge index')
+    R = msg.r
+    if math.isinf(R):
+        raise ValueError(f'{what} r {R!r} is not a finite contact point (NaN: no part)')
+    R = None if math.isnan(R) else R
+    kind = msg.throw_kind
     if kind not in THROW_KINDS:
         raise ValueError(f'{what} throw_kind {kind[:40]!r} is not one of {", ".join(THROW_KINDS)}')
-    if msg.message != kind:
-        raise ValueError(f'{what} whose message is not its throw_kind')
-    if len({edge == -1, R is None, kind == 'lost'}) != 1:
-        raise ValueError(f'{what} edge {edge}, R {values["R"]!r}, throw_kind {kind!r}: edge -1, '
-                         'R none and throw_kind lost go together (no part on the arm)')
+    if len({edge == PredictedStateMsg.EDGE_LOST, R is None, kind == 'lost'}) != 1:
+        raise ValueError(f'{what} edge {edge}, r {msg.r!r}, throw_kind {kind!r}: edge -1, r NaN '
+                         'and throw_kind lost go together (no part on the arm)')
     return PredictedState(seq, stamp, edge, R, kind)
+
+
+def limit_set_msg(limit_set):
+    """
+    Build a ``predicted/limit_set`` from a limit set's ``as_dict()`` (throwmap.LimitSet).
+
+    An edge without a jog count (none seen) has ``jogs_min`` = ``jogs_max`` = -1.
+    """
+    jogs = limit_set['jogs']
+    cycle = limit_set['cycle_length']
+    return LimitSetMsg(
+        pattern=[int(e) for e in limit_set['pattern']],
+        bands=[EdgeBand(edge=int(edge), r_min=float(lo), r_max=float(hi),
+                        jogs_min=int(jogs.get(edge, (-1, -1))[0]),
+                        jogs_max=int(jogs.get(edge, (-1, -1))[1]))
+               for edge, (lo, hi) in sorted(limit_set['bands'].items(),
+                                            key=lambda band: int(band[0]))],
+        periodic=bool(limit_set['periodic']), transient=int(limit_set['transient']),
+        cycle_length_min=float(cycle['min']), cycle_length_mean=float(cycle['mean']),
+        cycle_length_max=float(cycle['max']))
+
+
+def analysis_msg(analysis, scene, scene_hash):
+    """
+    Build a ``predicted/analysis`` from an analysis' ``as_dict()`` (throwmap.Analysis).
+
+    ``scene``: the scene's name; ``scene_hash``: the first 8 bytes of the SHA-256 of its file,
+    as an integer. Without a pull sample (``pull`` None) the counts are 0 and the worst normal
+    force NaN.
+    """
+    design, sensor = analysis['design'], analysis['sensor']
+    pull = analysis.get('pull') or {'throws': 0, 'pulling': 0, 'worst': math.nan}
+    return AnalysisMsg(
+        scene=_wire_text(scene), scene_hash=int(scene_hash),
+        start_edge=int(analysis['start']['edge']), start_r=float(analysis['start']['R']),
+        limit_set=limit_set_msg(analysis['limit_set']),
+        edges=[EdgeDesign(edge=int(row['edge']), r_grasp=float(row['R_grasp']),
+                          r_min=float(row['R_min']), r_flip=float(row['R_flip']),
+                          r_max=float(row['R_max'])) for row in design['edges']],
+        r_max_all=float(design['R_max_all']), invariant=bool(design['invariant']),
+        escapes=[Escape(edge=int(edge), to_edge=int(to_edge), r=float(r))
+                 for edge, to_edge, r in design.get('escapes', ())],
+        basin=[BasinOutcome(pattern=_wire_text(pattern), starts=int(starts))
+               for pattern, starts in sorted(analysis['basin'].items())],
+        goal_edge=int(sensor['goal_edge']), sensor_radius=float(sensor['radius']),
+        sensor_footprint=float(sensor['footprint']),
+        guarantee_radius=float(sensor['guarantee_radius']),
+        reach_radius=float(sensor['reach_radius']),
+        detection_rate=float(sensor['detection_rate']),
+        warmup_throws=int(sensor['warmup_throws']), sensor_feasible=bool(sensor['feasible']),
+        pull_throws=int(pull['throws']), pulling_throws=int(pull['pulling']),
+        worst_normal_force=float(pull['worst']))
 
 
 def proximity(stamp_ns, detected, range_m, frame_id=SENSOR_FRAME):
@@ -392,25 +401,19 @@ def check_verdict(msg, key, monitor, now_ns, max_age_s=1.0):
     return VerdictCheck(not reason, authentic, int(msg.seq), stamp_ns, age, reason)
 
 
-def _signature(values):
+def _signature(msg, what):
     """
-    Return the ``session`` and ``mac`` of a signed status's values; ('', b'') unsigned.
+    Return the ``session`` and ``mac`` of a cycle report; ('', b'') unsigned.
 
-    Either may be absent (an unsigned report still parses, so that the monitor can say it was
-    unsigned); given twice, or not as CycleSigner writes them, is a ValueError.
+    Either may be empty (an unsigned report still parses, so that the monitor can say it was
+    unsigned); anything CycleSigner does not write is a ValueError.
     """
-    found = {}
-    for kv in values:
-        if kv.key in ('session', 'mac'):
-            if kv.key in found:
-                raise ValueError(f'a status gives {kv.key} twice')
-            found[kv.key] = kv.value
-    session, text = found.get('session', ''), found.get('mac', '')
+    session, tag = msg.session, bytes(msg.mac)
     if len(session) > 64 or not all(c in _HEX for c in session):
-        raise ValueError(f'session {session[:40]!r} is not up to 64 lowercase hex digits')
-    if text and (len(text) != 2 * auth.MAC_BYTES or not all(c in _HEX for c in text)):
-        raise ValueError(f'mac {text[:40]!r} is not {2 * auth.MAC_BYTES} lowercase hex digits')
-    return session, bytes.fromhex(text)
+        raise ValueError(f'{what} session {session[:40]!r} is not up to 64 lowercase hex digits')
+    if tag and len(tag) != auth.MAC_BYTES:
+        raise ValueError(f'{what} mac of {len(tag)} bytes; a MAC has {auth.MAC_BYTES}')
+    return session, tag
 
 
 @dataclass(frozen=True)
@@ -424,15 +427,10 @@ class CycleFired:
 
 
 def parse_cycle_fired(msg):
-    """Parse a ``cycle_fired`` as CycleSigner writes it; ValueError naming a fault."""
+    """Parse a ``cycle_fired`` (CycleStatus, outcome fired) as CycleSigner writes it."""
     what = 'cycle_fired'
-    values = _values(msg, what, CYCLE_FIRED_NAME, ('seq', 'stamp'))
-    seq = parse_seq(values['seq'], f'{what} seq')
-    try:
-        stamp = parse_stamp_text(values['stamp'])
-    except ValueError as exc:
-        raise ValueError(f'{what}: {exc}') from None
-    session, tag = _signature(msg.values)
+    seq, _, stamp = _report_fields(msg, what, (CycleStatusMsg.OUTCOME_FIRED,))
+    session, tag = _signature(msg, what)
     return CycleFired(seq, stamp, session, tag)
 
 
@@ -449,24 +447,23 @@ class CycleSigner:
         self.node = node
         self.session = session or auth.new_session()
 
-    def cycle_status(self, seq, ok, message, sensor, stamp_ns, hardware_id):
-        """Build a signed ``cycle_status`` (values ``session`` and ``mac`` besides the usual)."""
-        msg = cycle_status(seq, ok, message, sensor, stamp_ns, hardware_id)
-        tag = auth.mac(self.key, auth.CYCLE_LABEL, auth.cycle_fields(
-            self.node, self.session, seq, stamp_ns, 'completed' if ok else 'failed',
-            _SENSOR_TEXT[sensor], message))
-        msg.values += [KeyValue(key='session', value=self.session),
-                       KeyValue(key='mac', value=tag.hex())]
-        return msg
+    def cycle_status(self, seq, ok, reason, sensor, stamp_ns, hardware_id):
+        """Build a signed ``cycle_status`` (:func:`cycle_status` with ``session`` and ``mac``)."""
+        msg = cycle_status(seq, ok, reason, sensor, stamp_ns, hardware_id)
+        return self._signed(msg, auth.CYCLE_LABEL, auth.cycle_fields(
+            self.node, self.session, seq, stamp_ns, msg.outcome, _SENSOR_TEXT[sensor],
+            msg.reason))
 
     def cycle_fired(self, seq, stamp_ns, hardware_id):
         """Build a signed ``cycle_fired``: cycle ``seq`` is being fired (before the arm moves)."""
-        tag = auth.mac(self.key, auth.FIRED_LABEL,
-                       auth.fired_fields(self.node, self.session, seq, stamp_ns))
-        return DiagnosticStatus(
-            level=DiagnosticStatus.OK, name=CYCLE_FIRED_NAME, message='firing',
-            hardware_id=hardware_id,
-            values=[KeyValue(key='seq', value=str(int(seq))),
-                    KeyValue(key='stamp', value=stamp_text(stamp_ns)),
-                    KeyValue(key='session', value=self.session),
-                    KeyValue(key='mac', value=tag.hex())])
+        msg = CycleStatusMsg(seq=int(seq), stamp=time_msg(stamp_ns),
+                             outcome=CycleStatusMsg.OUTCOME_FIRED,
+                             sensor=CycleStatusMsg.SENSOR_NONE,
+                             hardware_id=_wire_text(hardware_id))
+        return self._signed(msg, auth.FIRED_LABEL,
+                            auth.fired_fields(self.node, self.session, seq, stamp_ns))
+
+    def _signed(self, msg, label, fields):
+        msg.session = self.session
+        msg.mac = list(auth.mac(self.key, label, fields))
+        return msg
