@@ -36,6 +36,7 @@ from feeder_common.messages import CycleSigner, joint_state, proximity
 from feeder_common.node import (clock_note, FeederLifecycleNode, flush, RateTimer, run_node,
                                 StartupError)
 from feeder_common.parameters import ParameterGate
+from feeder_interfaces.msg import CycleStatus
 from rclpy.lifecycle import TransitionCallbackReturn
 from sensor_msgs.msg import JointState, Range
 from std_srvs.srv import SetBool, Trigger
@@ -117,11 +118,11 @@ class DriverNode(FeederLifecycleNode):
     def on_configure(self, state):
         try:
             self._pub_prox = self.create_lifecycle_publisher(Range, 'proximity', qos.PROXIMITY)
-            self._pub_status = self.create_lifecycle_publisher(DiagnosticStatus, 'cycle_status',
+            self._pub_status = self.create_lifecycle_publisher(CycleStatus, 'cycle_status',
                                                                qos.CYCLE_STATUS)
             self._pub_joint = self.create_lifecycle_publisher(JointState, 'joint_states',
                                                               qos.JOINT_STATES)
-            self._pub_fired = self.create_lifecycle_publisher(DiagnosticStatus, 'cycle_fired',
+            self._pub_fired = self.create_lifecycle_publisher(CycleStatus, 'cycle_fired',
                                                               qos.CYCLE_FIRED)
             self.link = SerialLink(self._p['port'], self._p['baud_rate'], self._on_rx,
                                    self._on_lost)
@@ -314,7 +315,7 @@ class DriverNode(FeederLifecycleNode):
                                                     self._p['sensor_range_m'],
                                                     self._p['frame_id']))
         self._publish(self._pub_status, self._signer.cycle_status(
-            result.seq, ok, 'completed' if ok else result.reason,
+            result.seq, ok, '' if ok else result.reason,
             None if result.sensor is None else bool(result.sensor), result.stamp,
             self._p['port']))
         if ok:

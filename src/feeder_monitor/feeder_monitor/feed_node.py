@@ -31,14 +31,13 @@ import math
 import sys
 import time
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common import auth, qos
 from feeder_common.messages import (check_verdict, parse_cycle_status, parse_predicted_state,
                                     time_msg)
 from feeder_common.node import run_node, StartupError
 from feeder_common.parameters import ParameterGate
 from feeder_interfaces.action import FeedPart
-from feeder_interfaces.msg import Verdict
+from feeder_interfaces.msg import CycleStatus, PredictedState, Verdict
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.node import Node
 from rclpy.task import Future
@@ -80,9 +79,9 @@ class FeedNode(Node):
                                  qos.EDGE1_VERDICT)
         self.create_subscription(Verdict, 'edge1_ready', self._on_statement,
                                  qos.edge1_ready(p['max_statement_age']))
-        self.create_subscription(DiagnosticStatus, 'cycle_status', self._on_cycle_status,
+        self.create_subscription(CycleStatus, 'cycle_status', self._on_cycle_status,
                                  qos.CYCLE_STATUS)
-        self.create_subscription(DiagnosticStatus, 'predicted/state', self._on_prediction,
+        self.create_subscription(PredictedState, 'predicted/state', self._on_prediction,
                                  qos.PREDICTED_STATE)
         # Feedback comes once per cycle, up to about 1000 a second with the stand-in: a deep
         # reliable history, so that a client that reads in bursts still gets every cycle's.
@@ -127,7 +126,7 @@ class FeedNode(Node):
             return
         if self._gate.admit(status, self._now_ns()).admitted and self._goal is not None:
             self._goal.cycle_report(status.seq, status.ok and status.sensor is not None,
-                                    status.message)
+                                    status.reason)
             self._poke()
 
     def _on_prediction(self, msg):

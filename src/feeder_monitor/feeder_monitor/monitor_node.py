@@ -26,7 +26,6 @@ import functools
 import sys
 import time
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common import auth, qos
 from feeder_common.diagnostics import Updater
 from feeder_common.messages import (parse_cycle_fired, parse_cycle_status, proximity_detected,
@@ -34,7 +33,7 @@ from feeder_common.messages import (parse_cycle_fired, parse_cycle_status, proxi
 from feeder_common.node import FeederLifecycleNode, flush, run_node
 from feeder_common.parameters import ParameterGate
 from feeder_common.params import check_scene
-from feeder_interfaces.msg import Verdict
+from feeder_interfaces.msg import CycleStatus, Verdict
 from lifecycle_msgs.msg import TransitionEvent
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.lifecycle import TransitionCallbackReturn
@@ -162,10 +161,10 @@ class MonitorNode(FeederLifecycleNode):
             sub(TransitionEvent, f'{self._driver}/transition_event',
                 self._on_driver_transition, qos.DEFAULT),
             sub(Range, 'proximity', self._on_proximity, qos.PROXIMITY_SUBSCRIPTION),
-            sub(DiagnosticStatus, 'cycle_status', self._on_cycle_status, qos.CYCLE_STATUS,
+            sub(CycleStatus, 'cycle_status', self._on_cycle_status, qos.CYCLE_STATUS,
                 event_callbacks=SubscriptionEventCallbacks(
                     liveliness=self._on_driver_liveliness)),
-            sub(DiagnosticStatus, 'cycle_fired', self._on_cycle_fired, qos.CYCLE_FIRED),
+            sub(CycleStatus, 'cycle_fired', self._on_cycle_fired, qos.CYCLE_FIRED),
         ]
         self._log_rules(rules)
         self.get_logger().info(f'judging reports of {self._driver} signed with key id '
@@ -382,8 +381,7 @@ class MonitorNode(FeederLifecycleNode):
             self._remember(self._recent_bits, status.stamp_ns, (status.seq, status.sensor))
             v = self._monitor.completed(status.seq, status.sensor)
         else:
-            v = self._monitor.failed(status.seq, status.message if not status.ok
-                                     else 'a completed cycle without a sensor bit')
+            v = self._monitor.failed(status.seq, status.reason)
         self._judge(v, status.stamp_ns)
         self._cross_check(status.stamp_ns)
 

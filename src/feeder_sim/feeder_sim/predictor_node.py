@@ -27,18 +27,18 @@ feeder_sim.markers', the contract feeder_common's. Interfaces: docs/interfaces.m
 parameters: docs/nodes.md.
 """
 
+import hashlib
 import sys
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common import qos
 from feeder_common.frames import BASE_FRAME, plane_point, plane_quaternion
-from feeder_common.messages import (MAX_SEQ_JUMP, parse_cycle_status, predicted_state,
-                                    time_msg)
+from feeder_common.messages import (analysis_msg, limit_set_msg, MAX_SEQ_JUMP,
+                                    parse_cycle_status, predicted_state, time_msg)
 from feeder_common.node import run_node
+from feeder_interfaces.msg import Analysis, CycleStatus, LimitSet, PredictedState
 from geometry_msgs.msg import PoseStamped
-from std_msgs.msg import Float64MultiArray, MultiArrayDimension, String
 from std_srvs.srv import Trigger
-from throwmap import analysis_json, LIMIT_SET_FIELDS, limit_set_rows, ThrowmapError
+from throwmap import ThrowmapError
 from visualization_msgs.msg import MarkerArray
 
 from .marker_msgs import marker_array
@@ -77,12 +77,12 @@ class PredictorNode(PartNode):
         pub = self.create_lifecycle_publisher
         self._pubs = {
             'pose': pub(PoseStamped, 'predicted/part_pose', qos.PREDICTION),
-            'state': pub(DiagnosticStatus, 'predicted/state', qos.PREDICTED_STATE),
-            'limit_set': pub(Float64MultiArray, 'predicted/limit_set', qos.PREDICTION_LATCHED),
-            'analysis': pub(String, 'predicted/analysis', qos.PREDICTION_LATCHED),
+            'state': pub(PredictedState, 'predicted/state', qos.PREDICTED_STATE),
+            'limit_set': pub(LimitSet, 'predicted/limit_set', qos.PREDICTION_LATCHED),
+            'analysis': pub(Analysis, 'predicted/analysis', qos.PREDICTION_LATCHED),
             'markers': pub(MarkerArray, 'markers', qos.MARKERS),
         }
-        self._sub = self.create_subscription(DiagnosticStatus, 'cycle_status',
+        self._sub = self.create_subscription(CycleStatus, 'cycle_status',
                                              self._on_cycle_status, qos.CYCLE_STATUS)
 
     def _analysis_changed(self):
@@ -137,7 +137,7 @@ class PredictorNode(PartNode):
         self._seq = seq
         if not status.ok:
             self._counts['failed'] += 1
-            self.get_logger().warning(f'cycle {seq} failed ({status.message}): prediction '
+            self.get_logger().warning(f'cycle {seq} failed ({status.reason}): prediction '
                                       'kept; the part may have moved', throttle_duration_sec=5.0)
             return
         missed = seq - last - 1 if last is not None and seq > last + 1 else 0
@@ -231,17 +231,20 @@ class PredictorNode(PartNode):
     def _publish_latched(self):
         if not self._active:
             return
-        rows = limit_set_rows(self._analysis.limit_set)
-        fields = len(LIMIT_SET_FIELDS)
-        msg = Float64MultiArray()
-        msg.layout.dim = [
-            MultiArrayDimension(label='edges', size=len(rows), stride=len(rows) * fields),
-            MultiArrayDimension(label='fields', size=fields, stride=fields)]
-        msg.data = [v for row in rows for v in row]
-        self._pubs['limit_set'].publish(msg)
+        analysis = self._analysis.as_dict()
+        self._pubs['limit_set'].publish(limit_set_msg(analysis['limit_set']))
         self._pubs['analysis'].publish(
-            String(data=analysis_json(self._analysis)))
+            analysis_msg(analysis, self._scene.name, self._scene_hash()))
         self._publish_markers(force=True)
+
+    def _scene_hash(self):
+        """First 8 bytes of the SHA-256 of the scene's file, as an integer (0: no file)."""
+        try:
+            with open(self._scene.source, 'rb') as scene_file:
+                digest = hashlib.sha256(scene_file.read()).digest()
+        except OSError:
+            return 0
+        return int.from_bytes(digest[:8], 'big')
 
     # ------------------------------------------------------------------ diagnostics
     def _diag_agreement(self, stat):

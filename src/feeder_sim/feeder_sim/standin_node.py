@@ -30,11 +30,11 @@ docs/interfaces.md; parameters: docs/nodes.md.
 
 import sys
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common import auth, qos
 from feeder_common.arm import ArmMotion, stand_in_follow
 from feeder_common.messages import CycleSigner, joint_state, proximity
 from feeder_common.node import clock_note, RateTimer, run_node, StartupError
+from feeder_interfaces.msg import CycleStatus
 from sensor_msgs.msg import JointState, Range
 from std_srvs.srv import SetBool, Trigger
 from throwmap import ThrowmapError
@@ -87,8 +87,8 @@ class StandInNode(PartNode):
         pub = self.create_lifecycle_publisher
         self._pubs = {
             'proximity': pub(Range, 'proximity', qos.PROXIMITY),
-            'cycle_status': pub(DiagnosticStatus, 'cycle_status', qos.CYCLE_STATUS),
-            'cycle_fired': pub(DiagnosticStatus, 'cycle_fired', qos.CYCLE_FIRED),
+            'cycle_status': pub(CycleStatus, 'cycle_status', qos.CYCLE_STATUS),
+            'cycle_fired': pub(CycleStatus, 'cycle_fired', qos.CYCLE_FIRED),
             'joint_states': pub(JointState, 'joint_states', qos.JOINT_STATES),
         }
         self._joint_timer.start(self._param('joint_states_rate'))
@@ -196,7 +196,7 @@ class StandInNode(PartNode):
                                             self._param('sensor_range_m'),
                                             self._param('frame_id')))
         pubs['cycle_status'].publish(self._signer.cycle_status(
-            self._seq, True, 'completed', throw.detected, stamp, HARDWARE_ID))
+            self._seq, True, '', throw.detected, stamp, HARDWARE_ID))
         pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
         return self._seq, None
 

@@ -12,33 +12,17 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The analysis the nodes share (throwmap.analysis): rows, a moved sensor, strict JSON."""
+"""The analysis the nodes share (throwmap.analysis): a moved sensor redoes the sensor design."""
 
-import json
 import math
 
 import pytest
-from throwmap import (analyse, analysis_json, LIMIT_SET_FIELDS, limit_set_rows, scene_analysis,
-                      SensorDesignError)
+from throwmap import analyse, scene_analysis, SensorDesignError
 
 
 @pytest.fixture(scope='module')
 def triangle_analysis(triangle_scene):
     return analyse(triangle_scene)
-
-
-def test_limit_set_rows(triangle_analysis):
-    ls = triangle_analysis.limit_set
-    rows = limit_set_rows(ls)
-    assert [int(r[0]) for r in rows] == sorted(ls.bands)
-    assert all(len(r) == len(LIMIT_SET_FIELDS) for r in rows)
-    for edge, lo, hi, jmin, jmax in rows:
-        assert (lo, hi) == ls.bands[int(edge)]
-        assert lo <= hi
-        if int(edge) in ls.jogs:
-            assert (jmin, jmax) == ls.jogs[int(edge)]
-        else:
-            assert math.isnan(jmin) and math.isnan(jmax)
 
 
 def test_moving_the_sensor_redoes_the_sensor_design(triangle_scene, triangle_analysis):
@@ -57,14 +41,3 @@ def test_moving_the_sensor_redoes_the_sensor_design(triangle_scene, triangle_ana
         **dict(vars(base.sensor), radius=math.inf))
     with pytest.raises(SensorDesignError, match='give the sensor position'):
         scene_analysis(triangle_scene, 0.0, base.__class__(**dict(vars(base), sensor=inf)))
-
-
-def test_analysis_json_is_strict(triangle_analysis):
-    def no_constants(name):
-        raise AssertionError(f'non-strict JSON constant {name}')
-
-    text = analysis_json(triangle_analysis)
-    data = json.loads(text, parse_constant=no_constants)
-    assert data['limit_set']['pattern'] == list(triangle_analysis.limit_set.pattern)
-    assert data['sensor']['goal_edge'] == triangle_analysis.sensor.goal_edge
-    assert data['sensor']['radius'] == pytest.approx(triangle_analysis.sensor.radius)

@@ -29,8 +29,7 @@ stochastic, scene, part_on_arm, analysis, cli).
 """
 
 from .accuracy import Accuracy, SimulatorAccuracy
-from .analysis import (analyse, Analysis, analysis_json, LIMIT_SET_FIELDS, limit_set_rows,
-                       scene_analysis, SensorDesignError)
+from .analysis import analyse, Analysis, scene_analysis, SensorDesignError
 from .basins import Basin, basin, default_grid, design_radii
 from .effect_model import EffectModel, EffectThrowResult
 from .errors import DomainError, InputError, NumericalError, PartLost, ThrowmapError
@@ -44,11 +43,11 @@ from .sensor import read_sensor, sees, sensor_design, SensorDesign
 from .stochastic import (basin_distribution, sensor_probability, SensorProbability,
                          wilson_interval)
 
-__all__ = ['Accuracy', 'analyse', 'Analysis', 'analysis_json', 'basin', 'Basin',
+__all__ = ['Accuracy', 'analyse', 'Analysis', 'basin', 'Basin',
            'basin_distribution', 'default_grid', 'design_radii', 'DomainError', 'edge_grasp',
            'EffectModel', 'EffectThrowResult', 'grasp_table', 'Impact', 'in_dynamic_grasp',
-           'InputError', 'LIMIT_SET_FIELDS', 'limit_set', 'limit_set_from_orbit',
-           'limit_set_rows', 'LimitSet', 'load_scene', 'NumericalError', 'orbit', 'Orbit',
+           'InputError', 'limit_set', 'limit_set_from_orbit',
+           'LimitSet', 'load_scene', 'NumericalError', 'orbit', 'Orbit',
            'Part', 'PartLost', 'PartOnArm', 'read_sensor', 'resting_pose', 'Scene',
            'scene_analysis', 'sees', 'sensor_design', 'sensor_probability', 'SensorDesign',
            'SensorDesignError', 'SensorProbability', 'SimulatorAccuracy', 'Throw',

@@ -27,10 +27,8 @@ sensor design gives no finite radius and none was given (:class:`SensorDesignErr
 
 import dataclasses
 from dataclasses import dataclass
-import json
 import math
 
-import numpy as np
 
 from . import analysis_cache
 from .basins import Basin, basin, default_grid, design_radii
@@ -38,9 +36,6 @@ from .errors import ThrowmapError
 from .orbits import limit_set, LimitSet, pull_share
 from .sensor import sensor_design, SensorDesign
 from .stochastic import stochastic_summary
-
-# Fields of one limit-set row (limit_set_rows), in order.
-LIMIT_SET_FIELDS = ('edge', 'R_min', 'R_max', 'jogs_min', 'jogs_max')
 
 
 class SensorDesignError(ThrowmapError):
@@ -141,34 +136,3 @@ def scene_analysis(scene, sensor_radius=0.0, analysis=None):
             f'(guarantee radius {s.guarantee_radius:.6g} m, reach {s.reach_radius:.6g} m); '
             'give the sensor position (parameter sensor_radius, or sensor.radius in the scene)')
     return an
-
-
-def limit_set_rows(limit_set):
-    """Rows ``[edge, R_min, R_max, jogs_min, jogs_max]`` sorted by edge (NaN: no jog count)."""
-    rows = []
-    for edge in sorted(limit_set.bands):
-        lo, hi = limit_set.bands[edge]
-        jogs = limit_set.jogs.get(edge, (math.nan, math.nan))
-        rows.append([float(edge), float(lo), float(hi), float(jogs[0]), float(jogs[1])])
-    return rows
-
-
-def _plain(value):
-    """JSON-safe copy: numpy scalars to Python, tuples to lists, non-finite floats to None."""
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return [_plain(v) for v in value]
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        value = float(value)
-        return value if math.isfinite(value) else None
-    return value
-
-
-def analysis_json(analysis):
-    """Strict JSON of ``analysis.as_dict()`` (infinities and NaN become null)."""
-    return json.dumps(_plain(analysis.as_dict()), sort_keys=True)
