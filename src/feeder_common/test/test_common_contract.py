@@ -16,9 +16,10 @@
 
 import math
 
-from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from builtin_interfaces.msg import Time
 from feeder_common import frames, messages, stamps
 from feeder_common.params import check_scene, ParamSpec
+from feeder_interfaces.msg import CycleStatus, PredictedState
 import pytest
 
 
@@ -79,16 +80,21 @@ def test_check_scene_reports_the_loaders_reason(tmp_path):
 
 # ---- stamps -------------------------------------------------------------------------------
 
-def test_stamp_text_is_exact_to_the_nanosecond():
+def test_a_stamp_is_integer_nanoseconds_within_what_a_time_holds():
     ns = 1795362335_204302396
-    assert stamps.stamp_text(ns) == '1795362335.204302396'
-    assert stamps.parse_stamp_text('1795362335.204302396') == ns
-    assert float('1795362335.204302396') * 1e9 != ns     # what a float parser would lose
-    assert stamps.parse_stamp_text('3.000000007') == 3_000_000_007
-    # only what stamp_text writes (test_common_hostile.py has the rest)
-    for bad in ('', '-1.5', '1.2e3', 'x', '1.x', '12.5', '7'):
-        with pytest.raises(ValueError):
-            stamps.parse_stamp_text(bad)
+    assert messages.time_ns(messages.time_msg(ns)) == ns
+    assert float(ns) != ns          # what a float would lose
+    top = Time(sec=2**31 - 1, nanosec=stamps.NS - 1)    # the last nanosecond a Time holds
+    assert messages.time_ns(top) == stamps.MAX_STAMP_NS
+    assert messages.time_msg(stamps.MAX_STAMP_NS) == top
+    assert stamps.check_stamp_ns(0) == 0
+    assert stamps.check_stamp_ns(stamps.MAX_STAMP_NS) == stamps.MAX_STAMP_NS
+    for outside in (-1, stamps.MAX_STAMP_NS + 1):
+        with pytest.raises(ValueError, match='outside'):
+            stamps.check_stamp_ns(outside)
+    assert stamps.ns_seconds(1_500_000_000) == 1.5
+    for gone in ('stamp_text', 'parse_stamp_text', 'is_decimal', 'MAX_STAMP_TEXT'):
+        assert not hasattr(stamps, gone)
 
 
 # ---- frames (REP 103) ---------------------------------------------------------------------
@@ -137,35 +143,45 @@ def test_the_arm_axis_turns_the_tip_up_for_a_positive_angle():
 # ---- messages -----------------------------------------------------------------------------
 
 def test_cycle_status_round_trip():
-    msg = messages.cycle_status(42, True, 'completed', True, 1795362335_204302396, 'sim')
-    assert msg.level == DiagnosticStatus.OK and msg.name == 'cycle'
-    assert {kv.key: kv.value for kv in msg.values} == {
-        'seq': '42', 'sensor': '1', 'stamp': '1795362335.204302396'}
+    msg = messages.cycle_status(42, True, 'ignored: only a failed cycle has a reason', True,
+                                1795362335_204302396, 'sim')
+    assert (msg.seq, msg.stamp.sec, msg.stamp.nanosec, msg.outcome, msg.sensor, msg.reason,
+            msg.hardware_id, msg.session, list(msg.mac)) == \
+        (42, 1795362335, 204302396, CycleStatus.OUTCOME_COMPLETED, CycleStatus.SENSOR_DETECTED,
+         '', 'sim', '', [])
     st = messages.parse_cycle_status(msg)
-    assert (st.seq, st.ok, st.sensor, st.stamp_ns, st.hardware_id) == \
-        (42, True, True, 1795362335_204302396, 'sim')
-    failed = messages.parse_cycle_status(
-        messages.cycle_status(43, False, 'no ACK', None, 5, '/dev/ttyACM0'))
-    assert (failed.ok, failed.sensor, failed.message) == (False, None, 'no ACK')
+    assert st == messages.CycleStatus(42, True, True, 1795362335_204302396, '', 'sim')
+    clear = messages.parse_cycle_status(messages.cycle_status(44, True, '', False, 6, 'sim'))
+    assert (clear.ok, clear.sensor) == (True, False)
+    failed = messages.cycle_status(43, False, 'no ACK', None, 5, '/dev/ttyACM0')
+    assert (failed.outcome, failed.sensor, failed.reason) == \
+        (CycleStatus.OUTCOME_FAILED, CycleStatus.SENSOR_NONE, 'no ACK')
+    failed = messages.parse_cycle_status(failed)
+    assert (failed.ok, failed.sensor, failed.reason, failed.stamp_ns) == \
+        (False, None, 'no ACK', 5)
+    for gone in ('parse_seq', 'MAX_EDGE', 'CYCLE_STATUS_NAME'):
+        assert not hasattr(messages, gone)
 
 
-@pytest.mark.parametrize('values, words', [
-    ({}, 'without a seq'), ({'seq': 'x'}, "seq 'x' is not a non-negative integer"),
-    ({'seq': '-3'}, "seq '-3' is not a non-negative integer")])
-def test_a_cycle_status_without_a_usable_seq_is_refused(values, words):
-    values = {'sensor': '1', 'stamp': '1.000000000', **values}
-    msg = DiagnosticStatus(name='cycle',
-                           values=[KeyValue(key=k, value=v) for k, v in values.items()])
-    with pytest.raises(ValueError, match=words):
+def test_cycle_fired_is_the_same_type_signed_with_its_own_label():
+    signer = messages.CycleSigner(b'k' * 32, '/feeder/feeder_driver', 'ab12')
+    msg = signer.cycle_fired(9, 1795362335_204302396, 'sim')
+    assert (msg.outcome, msg.sensor, msg.reason, msg.hardware_id, msg.session, len(msg.mac)) == \
+        (CycleStatus.OUTCOME_FIRED, CycleStatus.SENSOR_NONE, '', 'sim', 'ab12', 32)
+    fired = messages.parse_cycle_fired(msg)
+    assert (fired.seq, fired.stamp_ns, fired.session, fired.mac) == \
+        (9, 1795362335_204302396, 'ab12', bytes(msg.mac))
+    status = signer.cycle_status(9, True, '', False, 1795362335_204302396, 'sim')
+    assert bytes(status.mac) != fired.mac       # another statement: another MAC
+    with pytest.raises(ValueError, match="cycle_status outcome 'fired'"):
         messages.parse_cycle_status(msg)
 
 
 def test_a_bad_stamp_is_a_bad_status():
     # The stamp pairs the status with its proximity: a status without a usable one is refused.
-    msg = DiagnosticStatus(name='cycle', values=[KeyValue(key='seq', value='1'),
-                                                 KeyValue(key='sensor', value='1'),
-                                                 KeyValue(key='stamp', value='soon')])
-    with pytest.raises(ValueError, match="stamp 'soon' is not <sec>.<9 digits>"):
+    msg = messages.cycle_status(1, True, '', True, 5, 'sim')
+    msg.stamp = Time(sec=-1, nanosec=0)
+    with pytest.raises(ValueError, match='cycle_status: stamp sec=-1 nanosec=0 is not a time'):
         messages.parse_cycle_status(msg)
 
 
@@ -226,15 +242,18 @@ def test_a_consumer_reads_a_signed_verdict_and_checks_it():
 def test_predicted_state_round_trip_keeps_R_to_the_bit():
     R = 0.1 + 0.2       # a float whose short decimal forms read back as another float
     msg = messages.predicted_state(12, 1795362335_204302396, 1, R, 'flip')
-    assert msg.name == 'predicted_state' and msg.level == DiagnosticStatus.OK
+    assert (msg.seq, msg.stamp.sec, msg.stamp.nanosec, msg.edge, msg.r, msg.throw_kind) == \
+        (12, 1795362335, 204302396, 1, R, PredictedState.THROW_FLIP)
     s = messages.parse_predicted_state(msg)
     assert (s.seq, s.stamp_ns, s.edge, s.R, s.throw_kind) == \
         (12, 1795362335_204302396, 1, R, 'flip')
-    lost = messages.parse_predicted_state(messages.predicted_state(13, None, -1, None, 'lost'))
+    msg = messages.predicted_state(13, None, -1, None, 'lost')
+    assert (msg.stamp.sec, msg.stamp.nanosec, msg.edge, math.isnan(msg.r)) == \
+        (0, 0, PredictedState.EDGE_LOST, True)
+    lost = messages.parse_predicted_state(msg)
     assert (lost.stamp_ns, lost.edge, lost.R, lost.throw_kind) == (None, -1, None, 'lost')
-    with pytest.raises(ValueError, match='without a stamp, edge, R, throw_kind value'):
-        messages.parse_predicted_state(DiagnosticStatus(
-            name='predicted_state', values=[KeyValue(key='seq', value='1')]))
+    with pytest.raises(ValueError, match="throw_kind '' is not one of jog, flip, lost"):
+        messages.parse_predicted_state(PredictedState(seq=1))     # a default message: no kind
 
 
 def test_a_string_longer_than_its_bound_is_refused_with_its_length():

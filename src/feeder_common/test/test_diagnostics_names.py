@@ -19,6 +19,7 @@ import time
 from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common.diagnostics import (local_name, matched_endpoints, namespace_of,
                                        status_prefix, Updater)
+from feeder_interfaces.msg import CycleStatus
 import rclpy
 from rclpy.context import Context
 
@@ -41,7 +42,7 @@ def test_an_updater_names_its_statuses_with_the_namespace():
         node = rclpy.create_node('feeder_driver', namespace='/feeder_2', context=ctx)
         updater = Updater(node, period=60.0)
         updater.add('cycles', lambda st: st.summary('ok', 'fine'))
-        pub = node.create_publisher(DiagnosticStatus, 'cycle_status', 10)
+        pub = node.create_publisher(CycleStatus, 'cycle_status', 10)
         status, endpoints = updater.statuses()
         assert status.name == 'feeder_2/feeder_driver: cycles'
         assert status.level == DiagnosticStatus.OK
@@ -63,8 +64,8 @@ def test_the_endpoints_status_counts_matched_peers(domain_id):
     try:
         writer = rclpy.create_node('writer', namespace='/feeder', context=ctx)
         reader = rclpy.create_node('reader', namespace='/feeder', context=ctx)
-        writer.create_publisher(DiagnosticStatus, 'cycle_status', 10)
-        reader.create_subscription(DiagnosticStatus, 'cycle_status', lambda m: None, 10)
+        writer.create_publisher(CycleStatus, 'cycle_status', 10)
+        reader.create_subscription(CycleStatus, 'cycle_status', lambda m: None, 10)
         end = time.monotonic() + 30.0
         while matched_endpoints(writer).get('matched readers of /feeder/cycle_status') != 1:
             assert time.monotonic() < end, matched_endpoints(writer)

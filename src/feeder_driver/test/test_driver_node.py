@@ -20,9 +20,11 @@ import threading
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from feeder_common import auth, messages
 from feeder_driver import protocol as p
 from feeder_driver.driver_node import DriverNode
 from feeder_driver.emulator import Faults
+from feeder_interfaces.msg import CycleStatus
 from feeder_testing import EmulatorThread
 import pytest
 import rclpy
@@ -52,10 +54,11 @@ class Harness:
                                parameter_overrides=[Parameter(k, value=v)
                                                     for k, v in params.items()])
         self.probe = rclpy.create_node('probe', context=self.ctx)
-        self.status, self.prox, self.joints, self.diags = [], [], [], []
-        self.probe.create_subscription(
-            DiagnosticStatus, '/feeder/cycle_status', self.status.append,
-            QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
+        self.status, self.fired, self.prox, self.joints, self.diags = [], [], [], [], []
+        for topic, got in (('cycle_status', self.status), ('cycle_fired', self.fired)):
+            self.probe.create_subscription(
+                CycleStatus, f'/feeder/{topic}', got.append,
+                QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE))
         self.probe.create_subscription(Range, '/feeder/proximity', self.prox.append,
                                        qos_profile_sensor_data)
         self.probe.create_subscription(JointState, '/feeder/joint_states', self.joints.append,
@@ -147,24 +150,31 @@ def values(status):
     return {kv.key: kv.value for kv in status.values}
 
 
-def by_seq(statuses):
-    return {int(values(s)['seq']): s for s in statuses}
+def reports(h):
+    """Return the driver's cycle_status messages parsed (each one must parse)."""
+    return [messages.parse_cycle_status(s) for s in h.status]
 
 
 def check_accounting(h, emu):
     """
-    Check that every fired cycle is accounted for; return (completed, failed) statuses.
+    Check that every fired cycle is accounted for; return (completed, failed) reports.
 
-    Every fired cycle has exactly one cycle_status, proximity comes once per completed
-    cycle, completed bits equal the emulator's truth, failures carry reasons.
+    Every fired cycle has exactly one cycle_fired and then one cycle_status, both signed in
+    one session; proximity comes once per completed cycle, completed bits equal the
+    emulator's truth, failures carry reasons.
     """
     core = h.node.core
     fired = core.counters['fired']
-    assert h.spin_until(lambda: len(h.status) == fired and h.idle(), 5)
-    seqs = [int(values(s)['seq']) for s in h.status]
-    assert seqs == list(range(1, fired + 1))
-    ok = [s for s in h.status if s.level == DiagnosticStatus.OK]
-    failed = [s for s in h.status if s.level == DiagnosticStatus.ERROR]
+    assert h.spin_until(lambda: len(h.status) == len(h.fired) == fired and h.idle(), 5)
+    statuses = reports(h)
+    notices = [messages.parse_cycle_fired(m) for m in h.fired]
+    assert [s.seq for s in statuses] == [n.seq for n in notices] == list(range(1, fired + 1))
+    sessions = {s.session for s in statuses} | {n.session for n in notices}
+    assert len(sessions) == 1 and sessions != {''}
+    assert all(len(r.mac) == auth.MAC_BYTES for r in statuses + notices)
+    assert all(n.stamp_ns <= s.stamp_ns for n, s in zip(notices, statuses))
+    ok = [s for s in statuses if s.ok]
+    failed = [s for s in statuses if not s.ok]
     assert len(ok) + len(failed) == fired
     assert core.counters['completed'] == len(ok) and core.counters['failed'] == len(failed)
     assert h.spin_until(lambda: len(h.prox) == len(ok), 2)
@@ -173,25 +183,20 @@ def check_accounting(h, emu):
     for rec in emu.records:
         truth.setdefault(rec['seq'], []).append(rec)
     for s in ok:
-        v = values(s)
-        (rec,) = truth[int(v['seq'])]
-        assert s.message == 'completed' and rec['outcome'] == 'completed'
-        assert v['sensor'] == str(rec['bit'])
+        (rec,) = truth[s.seq]
+        assert s.reason == '' and rec['outcome'] == 'completed'
+        assert s.sensor == bool(rec['bit'])
     # proximity and cycle_status of a completed cycle carry the same sample stamp.
-    prox = {r.header.stamp.sec * 10 ** 9 + r.header.stamp.nanosec: r.range for r in h.prox}
+    prox = {messages.time_ns(r.header.stamp): r.range for r in h.prox}
     assert len(prox) == len(h.prox)
     for s in ok:
-        sec, frac = values(s)['stamp'].split('.')
-        ns = int(sec) * 10 ** 9 + int(frac)
-        assert prox[ns] == (-math.inf if values(s)['sensor'] == '1' else math.inf)
+        assert prox[s.stamp_ns] == (-math.inf if s.sensor else math.inf)
     for s in failed:
-        v = values(s)
-        assert s.message and s.message != 'completed' and v['sensor'] == 'none'
-        recs = truth.get(int(v['seq']), [])
+        assert s.reason and s.sensor is None
+        recs = truth.get(s.seq, [])
         # Failed on the driver side: the emulator either injected a fault into that
         # cycle, refused it, or never saw the FIRE.
-        assert all(r['outcome'] != 'completed' or r['faults'] for r in recs), (s.message,
-                                                                               recs)
+        assert all(r['outcome'] != 'completed' or r['faults'] for r in recs), (s.reason, recs)
     return ok, failed
 
 
@@ -208,8 +213,10 @@ def test_normal_cycles(harness, emulator, link_path):
     r = h.prox[0]
     assert r.min_range == r.max_range == pytest.approx(0.03)
     assert r.radiation_type == Range.INFRARED and r.header.frame_id == 'my_sensor'
-    assert values(h.status[0])['sensor'] in ('0', '1')
-    assert h.status[0].name == 'cycle' and h.status[0].hardware_id == link_path
+    first = h.status[0]
+    assert first.outcome == CycleStatus.OUTCOME_COMPLETED and first.reason == ''
+    assert first.sensor in (CycleStatus.SENSOR_CLEAR, CycleStatus.SENSOR_DETECTED)
+    assert first.hardware_id == h.fired[0].hardware_id == link_path
     assert h.spin_until(lambda: len(h.joints) >= 30, 2)
     speeds = sorted({round(j.velocity[0], 4) for j in h.joints})
     assert speeds == [0.0, 5.585]
@@ -285,7 +292,7 @@ def test_every_fault_kind_is_accounted_for(harness, emulator, link_path):
     assert h.spin_until(lambda: len(h.status) >= 40, 20)
     h.enable(False)
     ok, failed = check_accounting(h, emu)
-    reasons = ' | '.join(s.message for s in failed)
+    reasons = ' | '.join(s.reason for s in failed)
     assert 'no ACK' in reasons               # delayed cycles (0.3 s > ack_timeout 0.15 s)
     assert 'SENS' in reasons                 # dropped SENS: IDLE heartbeat or timeout
     assert 'controller reset during cycle' in reasons
@@ -307,8 +314,9 @@ def test_unplug_replug_reconnects(harness, emulator, link_path):
     for k in range(1, 5):
         assert h.trigger().success
         assert h.spin_until(lambda: len(h.status) == k, 2)
-    assert values(h.status[3])['sensor'] == 'none'
-    assert 'serial link lost during cycle' in h.status[3].message
+    lost = reports(h)[3]
+    assert (lost.ok, lost.sensor) == (False, None)
+    assert 'serial link lost during cycle' in lost.reason
     res = h.trigger()
     assert not res.success and 'serial link is disconnected' in res.message, res.message
     assert not h.enable(True).success
@@ -337,7 +345,7 @@ def test_refusals_when_inactive_or_disconnected(harness, tmp_path):
     assert 'No such file' in res.message or 'could not open' in res.message, res.message
     res = h.enable(True)
     assert not res.success and 'disconnected' in res.message
-    assert h.node.core.counters['fired'] == 0 and h.status == []
+    assert h.node.core.counters['fired'] == 0 and h.status == h.fired == []
     assert h.spin_until(lambda: h.diags, 3)
     link = [s for s in h.diags[-1].status if s.name.endswith('serial link')][0]
     assert link.level == DiagnosticStatus.ERROR and 'open failed' in link.message
@@ -353,8 +361,9 @@ def test_busy_refusal_and_deactivate_abort(harness, emulator, link_path):
     h.spin_for(0.1)
     assert h.node.trigger_deactivate() == TransitionCallbackReturn.SUCCESS
     assert h.spin_until(lambda: h.status, 2)
-    assert h.status[0].message == 'aborted: node deactivated'
-    assert h.status[0].level == DiagnosticStatus.ERROR
+    (aborted,) = reports(h)
+    assert (aborted.seq, aborted.ok, aborted.reason) == (1, False, 'aborted: node deactivated')
+    assert h.status[0].outcome == CycleStatus.OUTCOME_FAILED
     assert h.spin_until(lambda: emu.records, 2)
     assert emu.records[0]['outcome'] == 'aborted'      # the controller got STOP
     res = h.trigger()

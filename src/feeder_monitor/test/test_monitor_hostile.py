@@ -18,19 +18,20 @@ Issue 20 (attack 3, deliverable 5): no message crashes the monitor; bad input is
 The real MonitorNode runs in-process (own context, own domain); each of its subscription
 callbacks (``proximity``, ``cycle_status``, ``cycle_fired``, the driver's ``transition_event``,
 found by topic among the node's subscriptions) is called with hypothesis-generated messages as
-a subscriber receives them (tests/hostile_messages.py). No exception may escape, the node's own
-count of bad input (/diagnostics) is exactly the number of messages the parsers refuse, and
-afterwards a valid cycle still gets its verdict.
+a subscriber receives them: cycle reports (feeder_interfaces/CycleStatus) with any value each
+field holds, Ranges and transition events (tests/hostile_messages.py). No exception may escape,
+the node's own count of bad input (/diagnostics) is exactly the number of messages the parsers
+refuse, and afterwards a valid cycle still gets its verdict.
 """
 
 import pathlib
 import time
 
+from builtin_interfaces.msg import Time
 from feeder_common import auth, messages
 # tests/ (test support in no package) is on sys.path by pytest.ini
 from feeder_testing import reserve_domain_id
-from hostile_messages import (KILLER_STAMP, ranges, statuses,
-                              TRANSITION_EVENTS, wire)
+from hostile_messages import ranges, TRANSITION_EVENTS, wire
 from hypothesis import given, HealthCheck, settings, strategies as st
 import pytest
 import rclpy
@@ -42,6 +43,38 @@ REPO = pathlib.Path(__file__).resolve().parents[3]
 
 TRIANGLE = str(REPO / 'scenes' / 'triangle.yaml')
 NS = '/hostile'
+# A driver that signs with another key than the monitor's (its reports are bad_mac).
+FORGER = messages.CycleSigner(bytes(32), f'{NS}/feeder_driver')
+TEXT = st.one_of(st.text(max_size=20), st.builds(lambda c, n: c * n, st.characters(),
+                                                 st.sampled_from((4096, 4097, 20000))))
+# Any value each CycleStatus field holds (a seq past 2**63, a Time before 1970 or with
+# nanosec past 1e9, any int8 sensor code, any outcome, texts, session and MAC).
+REPORT_FIELDS = {
+    'seq': st.one_of(st.integers(0, 2**63 - 1), st.integers(2**63, 2**64 - 1)),
+    'stamp': st.builds(Time, sec=st.integers(-2**31, 2**31 - 1),
+                       nanosec=st.integers(0, 2**32 - 1)),
+    'outcome': st.one_of(st.sampled_from(('fired', 'completed', 'failed')), TEXT),
+    'sensor': st.one_of(st.sampled_from((-1, 0, 1)), st.integers(-128, 127)),
+    'reason': TEXT, 'hardware_id': TEXT,
+    'session': st.one_of(st.text('0123456789abcdef', max_size=70), st.text(max_size=10)),
+    'mac': st.binary(max_size=40).map(list),
+}
+
+
+@st.composite
+def reports(draw):
+    """Draw a cycle report of a builder (forged, unsigned) with up to 3 fields set to anything."""
+    seq, stamp = draw(st.integers(0, 2**63 - 1)), draw(st.integers(0, 2**31 * 10**9 - 1))
+    which = draw(st.sampled_from(('fired', 'forged', 'unsigned')))
+    if which == 'fired':
+        msg = FORGER.cycle_fired(seq, stamp, 'forger')
+    else:
+        ok = draw(st.booleans())
+        build = FORGER.cycle_status if which == 'forged' else messages.cycle_status
+        msg = build(seq, ok, draw(TEXT), draw(st.booleans()) if ok else None, stamp, 'forger')
+    for name in draw(st.lists(st.sampled_from(sorted(REPORT_FIELDS)), max_size=3, unique=True)):
+        setattr(msg, name, draw(REPORT_FIELDS[name]))
+    return wire(msg)
 
 
 def spy(node, topic, parse=lambda msg: msg):
@@ -115,7 +148,7 @@ class Harness:
         seq, stamp = self.seq, time.time_ns()
         n = len(self.verdicts)
         self.proximity(wire(messages.proximity(stamp, True, 0.02)))
-        self.status(wire(self.signer.cycle_status(seq, True, 'completed', True, stamp, 'test')))
+        self.status(wire(self.signer.cycle_status(seq, True, '', True, stamp, 'test')))
         self.spin_until(lambda: any(v.seq == seq for v in self.verdicts[n:]), 2.0)
         return next((v for v in self.verdicts[n:] if v.seq == seq), None)
 
@@ -148,24 +181,38 @@ def _proximity_refused(msg):
         _refused(lambda m: messages.time_ns(m.header.stamp), msg)
 
 
-def test_the_killer_status_of_issue_20_is_counted_and_the_next_cycle_judged(harness):
+# Issue 20's killers in typed fields: numbers beyond every bound, codes no driver writes; the
+# change of a signed cycle_status, and of a signed cycle_fired.
+KILLERS = [
+    ({'stamp': Time(sec=-2**31, nanosec=2**32 - 1)},) * 2, ({'stamp': Time(sec=-1)},) * 2,
+    ({'stamp': Time(sec=5, nanosec=10**9)},) * 2, ({'seq': 2**64 - 1},) * 2,
+    ({'seq': 2**63},) * 2, ({'sensor': 127},) * 2, ({'sensor': -1}, {'sensor': 1}),
+    ({'outcome': 'fired'}, {'outcome': 'completed'}), ({'mac': [1] * 33},) * 2,
+    ({'session': 'AB12'},) * 2, ({'reason': 'x'}, {'reason': 'x'}),
+    ({'hardware_id': 'h' * 4097},) * 2]
+
+
+def _changed(msg, change):
+    for name, value in change.items():
+        setattr(msg, name, value)
+    return wire(msg)
+
+
+def test_the_killer_reports_of_issue_20_are_counted_and_the_next_cycle_judged(harness):
     # Before: OverflowError in stamps.ns_seconds out of the cycle_status callback: node dead.
-    for stamp in (KILLER_STAMP, KILLER_STAMP + '.000000000', '2147483648.000000000'):
-        msg = messages.cycle_status(7, True, 'completed', True, 0, 'forger')
-        msg.values[2].value = stamp
-        harness.status(wire(msg))
-    for seq in (' 12 ', '\u0661\u0662', '999999_0'):
-        msg = messages.cycle_status(7, True, 'completed', True, 0, 'forger')
-        msg.values[0].value = seq
-        harness.status(wire(msg))
-    assert harness.refused == 6
-    assert harness.bad_input() == 6
-    assert not [v for v in harness.verdicts if v.seq in (7, 12, 9999990)]
+    # Each is the signed report of a cycle (seq 7) with one field changed.
+    for status, fired in KILLERS:
+        harness.status(_changed(harness.signer.cycle_status(7, True, '', True, time.time_ns(),
+                                                            'test'), status))
+        harness.fired(_changed(harness.signer.cycle_fired(7, time.time_ns(), 'test'), fired))
+    assert harness.refused == 2 * len(KILLERS)
+    assert harness.bad_input() == 2 * len(KILLERS)
+    assert not [v for v in harness.verdicts if v.seq in (7, 2**63, 2**64 - 1)]
     assert harness.valid_cycle() is not None
 
 
-MESSAGES = st.lists(st.one_of(statuses().map(lambda m: ('status', m)),
-                              statuses().map(lambda m: ('fired', m)),
+MESSAGES = st.lists(st.one_of(reports().map(lambda m: ('status', m)),
+                              reports().map(lambda m: ('fired', m)),
                               ranges().map(lambda m: ('proximity', m)),
                               TRANSITION_EVENTS.map(lambda m: ('transition', m))),
                     min_size=1, max_size=6)

@@ -124,8 +124,8 @@ class Harness:
         seq, stamp, detected = self.seq, time.time_ns(), self.part.throw().detected
         on['cycle_fired'](wire(self.signer.cycle_fired(seq, stamp, 'test')))
         on['proximity'](wire(messages.proximity(stamp, detected, 0.02)))
-        on['cycle_status'](wire(self.signer.cycle_status(seq, True, 'completed', detected,
-                                                         stamp, 'test')))
+        on['cycle_status'](wire(self.signer.cycle_status(seq, True, '', detected, stamp,
+                                                         'test')))
         self.executor.spin_once(timeout_sec=0)
 
     def checked(self, msgs=None):

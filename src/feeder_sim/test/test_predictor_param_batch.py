@@ -62,7 +62,7 @@ class Predictor:
         self.published, publish = [], pub.publish
 
         def record(msg):
-            self.published.append(msg.data)
+            self.published.append(msg)
             publish(msg)
 
         pub.publish = record
@@ -133,7 +133,8 @@ def test_loading_the_parameter_file_costs_at_most_one_analysis(predictor, analys
     predictor.set_parameters(values)
     assert analyses[predictor.configured_analyses:] == [0.28]
     assert len(predictor.published) == published + 1
-    assert '0.28' in predictor.published[-1]
+    assert predictor.published[-1].sensor_radius == 0.28
+    assert predictor.published[-1].scene == 'triangle'
     # The same file again (nothing the analysis depends on changed): no analysis, no message.
     predictor.set_parameters(values)
     assert analyses[predictor.configured_analyses:] == [0.28]
