@@ -17,10 +17,9 @@
 feeder_common: the contract between the feeder's nodes, as code (docs/interfaces.md).
 
 ROS-free: :mod:`.params` (parameter specs, types, ranges), :mod:`.frames` (REP 103 frames and
-the conversion from the library's plane), :mod:`.stamps` (the exact stamp text of
-``cycle_status``). ROS glue: :mod:`.qos` (every QoS profile of the graph), :mod:`.parameters`
-(descriptors and the one validate-on-set gate), :mod:`.messages` (builders and parsers of
-``cycle_status``, ``proximity``, ``joint_states``), :mod:`.diagnostics` (periodic
-``/diagnostics``), :mod:`.node` (the run helper of every node's ``main``: clean exit on SIGINT,
-SIGTERM and lifecycle shutdown).
+the conversion from the library's plane). ROS glue: :mod:`.qos` (every QoS profile of the
+graph), :mod:`.parameters` (descriptors and the one validate-on-set gate), :mod:`.messages`
+(builders and parsers of the feeder_interfaces messages, ``proximity``, ``joint_states``;
+stamps as integer ns), :mod:`.diagnostics` (periodic ``/diagnostics``), :mod:`.node` (the run
+helper of every node's ``main``: clean exit on SIGINT, SIGTERM and lifecycle shutdown).
 """

@@ -52,11 +52,13 @@ from sensor_msgs.msg import JointState, Range
 
 from . import auth
 from .frames import ARM_JOINT, SENSOR_FRAME
-from .stamps import NS
 
 # A follower of cycle_status replays at most this many missed cycles; a longer jump of seq is
 # implausible (a forged or corrupt seq, or a driver that ran unseen for minutes): an anomaly.
 MAX_SEQ_JUMP = 1000
+NS = 1_000_000_000
+# builtin_interfaces/Time holds int32 sec; a sample stamp is never before 1970 (sec >= 0).
+MAX_STAMP_NS = (2**31 - 1) * NS + NS - 1
 # A seq is below 2**63 (an int64 holds it: a consumer in any language can count with it).
 MAX_SEQ = 2**63 - 1
 # The longest message, hardware_id or state text a parser takes (a port path, a reason).

@@ -218,14 +218,27 @@ def test_truth_log_file(scene_path, sensor_radius, link_path, tmp_path):
     assert set(lines[1]) >= {'edge', 'R', 'kind', 'bit', 'faults', 'outcome'}
 
 
-def _fire_all(cl, seqs, wait=0.03):
-    """Send FIREs one by one without waiting for their replies (some may be corrupted)."""
+def _fire_all(emu, cl, seqs, timeout=5.0):
+    """
+    Send FIREs one by one without waiting for their replies (some may be corrupted).
+
+    Each waits for the emulator to have logged the one before and to be idle (its cycle
+    time is no promise under load: a FIRE that overtook a slow cycle would be refused BUSY),
+    then every reply is read until the link has been quiet for 0.3 s.
+    """
+    ctl = emu.controller
     for seq in seqs:
+        logged = len(ctl.records)
         cl.send(p.Fire(seq))
-        time.sleep(wait)
-        cl.events.extend(cl.parser.feed(cl.ser.read(4096)))
-    time.sleep(0.1)
-    cl.events.extend(cl.parser.feed(cl.ser.read(4096)))
+        end = time.monotonic() + timeout
+        while (len(ctl.records) == logged or ctl.cycle is not None) and time.monotonic() < end:
+            cl.events.extend(cl.parser.feed(cl.ser.read(4096)))
+    quiet_since = time.monotonic()
+    while time.monotonic() - quiet_since < 0.3:
+        data = cl.ser.read(4096)
+        if data:
+            cl.events.extend(cl.parser.feed(data))
+            quiet_since = time.monotonic()
 
 
 def test_flaky_sensor_is_seeded_and_logged(scene_path, sensor_radius, link_path, tmp_path):
@@ -277,7 +290,7 @@ def test_bit_errors_are_refused_by_the_crc(scene_path, sensor_radius, link_path,
                         faults=Faults(bit_error_rate=0.02, seed=11),
                         truth_log=str(log)) as emu:
         cl = Client(link_path)
-        _fire_all(cl, range(1, 121))
+        _fire_all(emu, cl, range(1, 121))
         cl.close()
         flipped = emu.controller.faults.flipped['tx']
     recs = [json.loads(x) for x in log.read_text().splitlines()][1:]
@@ -301,9 +314,10 @@ def test_bit_errors_are_refused_by_the_crc(scene_path, sensor_radius, link_path,
 def test_host_bit_errors_refuse_the_fire(scene_path, sensor_radius, link_path, tmp_path):
     log = tmp_path / 'truth.jsonl'
     with EmulatorThread(scene_path, link_path, sensor_radius=sensor_radius, cycle_time=0.004,
-                        faults=Faults(host_bit_error_rate=1.0, seed=2), truth_log=str(log)):
+                        faults=Faults(host_bit_error_rate=1.0, seed=2),
+                        truth_log=str(log)) as emu:
         cl = Client(link_path)
-        _fire_all(cl, range(1, 6))
+        _fire_all(emu, cl, range(1, 6))
         cl.close()
     lines = [json.loads(x) for x in log.read_text().splitlines()][1:]
     assert lines and all(x['type'] == 'rx_bit_errors' for x in lines)

@@ -247,7 +247,9 @@ def test_joint_states_swing_between_cycle_events(harness, emulator, link_path):
     assert all(abs(p) <= 4 / 27 * w * 0.12 for p in positions)
     assert positions[-1] == 0.0
     gaps = [b - a for a, b in zip(stamps, stamps[1:])]
-    assert max(gaps) < 0.05, 'joint_states stopped between events'
+    # Events come 0.1 s apart: a gap this long means the swing was not published between
+    # them. (At 200 Hz the gaps are 5 ms; a loaded machine stretches a few to tens of ms.)
+    assert max(gaps) < 0.09, 'joint_states stopped between events'
     h.node.set_parameters([Parameter('joint_states_rate', value=0.0)])
     h.spin_for(0.05)
     before = len(h.joints)
