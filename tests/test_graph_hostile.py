@@ -31,10 +31,11 @@ import math
 from builtin_interfaces.msg import Time
 from feeder_common import qos
 from feeder_common.messages import cycle_status, proximity
-from feeder_interfaces.msg import CycleStatus
+from feeder_interfaces.msg import CycleStatus, PredictedState
 from feeder_nodes import (Diagnostics, monitor, PredictedStates, predictor, RELIABLE,
                           sim_as_hardware, watch_monitor)
 from hostile_messages import KILLER_STAMP, TRICKY
+from rclpy.duration import Duration
 from sensor_msgs.msg import Range
 from std_srvs.srv import Trigger
 
@@ -69,6 +70,32 @@ def garbage_statuses(seq, stamp):
     out += [report(**{name: value}) for name, value in HOSTILE_FIELDS]
     out += [report(**{name: text}) for name in ('outcome', 'reason', 'hardware_id', 'session')
             for text in TRICKY]
+    return out
+
+
+def garbage_predictions(seq, stamp):
+    """
+    Return PredictedStates no predictor writes, one hostile change each.
+
+    NaN or infinite r with an edge, an edge and r with kind lost, edges past int32's ends,
+    seqs past 2**63, bad stamps, a lost part that jogs, every tricky text as the kind.
+    """
+    sec, nsec = divmod(stamp, 10**9)
+    out = []
+    for fields in (
+            {'r': math.nan}, {'r': math.inf}, {'r': -math.inf}, {'r': 1e308},
+            {'throw_kind': 'lost'}, {'edge': -1}, {'edge': -2**31}, {'edge': 2**31 - 1},
+            {'seq': 2**64 - 1}, {'seq': 2**63}, {'stamp': Time(sec=-1)},
+            {'stamp': Time(sec=1, nanosec=2**32 - 1)},
+            {'edge': -1, 'r': math.nan, 'throw_kind': 'jog'}):
+        msg = PredictedState(seq=seq, stamp=Time(sec=sec, nanosec=nsec), edge=1, r=0.2,
+                             throw_kind='jog')
+        for name, value in fields.items():
+            setattr(msg, name, value)
+        out.append(msg)
+    for text in TRICKY:
+        out.append(PredictedState(seq=seq, stamp=Time(sec=sec, nanosec=nsec), edge=1, r=0.2,
+                                  throw_kind=text))
     return out
 
 
@@ -146,3 +173,31 @@ def test_the_killer_status_and_garbage_leave_monitor_and_predictor_judging(graph
                    "the predictor's count of bad statuses")
     log = graph.log(mon)
     assert 'ignored' in log and log.count('ignored') < 20, log[-3000:]
+
+
+def test_hostile_reports_and_predictions_leave_the_feed_node_up(graph, ros):
+    """
+    feed_node reads cycle_status and predicted/state (typed): garbage on both kills nothing.
+
+    Every hostile report of the monitor's test and every hostile prediction (NaN or infinite
+    r, edges past int32's ends, seqs past 2**63, bad stamps, tricky kinds) reach it; it stays
+    up and logs no traceback.
+    """
+    feed = graph.start('feeder_monitor', 'feed_node', '--ros-args', '-r', '__ns:=/feeder',
+                       name='feed')
+    status_pub = ros.node.create_publisher(CycleStatus, '/feeder/cycle_status',
+                                           qos.CYCLE_STATUS)
+    state_pub = ros.node.create_publisher(PredictedState, '/feeder/predicted/state',
+                                          qos.PREDICTED_STATE)
+    ros.spin_until(lambda: status_pub.get_subscription_count() >= 1 and
+                   state_pub.get_subscription_count() >= 1, 60.0, "the feed node's readers")
+    stamp = ros.node.get_clock().now().nanoseconds
+    for k, msg in enumerate(garbage_statuses(5, stamp) + garbage_predictions(5, stamp)):
+        (status_pub if isinstance(msg, CycleStatus) else state_pub).publish(msg)
+        if k % 10 == 0:
+            ros.spin_for(0.01)
+    assert status_pub.wait_for_all_acked(Duration(seconds=10))
+    assert state_pub.wait_for_all_acked(Duration(seconds=10))
+    ros.spin_for(1.0)
+    assert feed.poll() is None, f'feed_node exited with {feed.returncode}:\n{graph.log(feed)}'
+    assert 'Traceback' not in graph.log(feed), graph.log(feed)[-3000:]
