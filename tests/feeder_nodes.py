@@ -20,8 +20,7 @@ from typing import Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from feeder_common.diagnostics import local_name
-from feeder_common.messages import (check_verdict, parse_cycle_fired, parse_cycle_status,
-                                    parse_predicted_state)
+from feeder_common.messages import check_verdict, parse_cycle_status, parse_predicted_state
 from feeder_interfaces.msg import CycleStatus, PredictedState, Verdict
 import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -209,17 +208,6 @@ class CycleStatuses(Collector):
     @property
     def seqs(self):
         return [s.seq for s in self.parsed]
-
-
-class CyclesFired(Collector):
-    """The driver's (or stand-in's) cycle_fired announcements (CycleStatus, outcome fired)."""
-
-    def __init__(self, ros, topic='/feeder/cycle_fired', qos=RELIABLE):
-        super().__init__(ros, CycleStatus, topic, qos)
-
-    @property
-    def parsed(self):
-        return [parse_cycle_fired(m) for m in self.msgs]
 
 
 def wait_for_monitor(ros, ready):
