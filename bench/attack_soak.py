@@ -292,14 +292,14 @@ def reconcile(out):
             fields = auth.cycle_fields(DRIVER, st.session, st.seq, st.stamp_ns,
                                        'completed' if st.ok else 'failed',
                                        {True: '1', False: '0', None: 'none'}[st.sensor],
-                                       st.message)
+                                       st.reason)
             if st.mac and auth.mac_ok(key, auth.CYCLE_LABEL, fields, st.mac):
                 if st.seq in genuine:
                     count['genuine reports seen again (replays)'] += 1
                     continue
                 genuine[st.seq] = st
                 if not st.ok:
-                    failures[st.message.split(' (')[0].split(':')[0][:60]] += 1
+                    failures[st.reason.split(' (')[0].split(':')[0][:60]] += 1
             else:
                 count['forged reports in the bag'] += 1
         elif topic == f'{NS}/cycle_fired':

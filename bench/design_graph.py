@@ -62,13 +62,12 @@ class Listener(BenchNode):
     prog = 'design_graph'
 
     def __init__(self, procs):
-        from diagnostic_msgs.msg import DiagnosticStatus
-        from feeder_interfaces.msg import Verdict
+        from feeder_interfaces.msg import CycleStatus, Verdict
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         super().__init__('feeder_design_graph', procs)
         qos = QoSProfile(depth=10_000, reliability=ReliabilityPolicy.RELIABLE)
         self.statuses, self.verdicts = [], []
-        self.status_sub = self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
+        self.status_sub = self.node.create_subscription(CycleStatus, '/feeder/cycle_status',
                                                         self.statuses.append, qos)
         self.verdict_sub = self.node.create_subscription(Verdict, '/feeder/edge1_verdict',
                                                          self.verdicts.append, qos)

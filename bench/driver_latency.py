@@ -36,8 +36,8 @@ REPO = pathlib.Path(__file__).resolve().parents[1]
 # The harness (tests/feeder_testing.py); the packages from the colcon install
 sys.path.insert(0, str(REPO / 'tests'))
 
-from diagnostic_msgs.msg import DiagnosticStatus  # noqa: E402
 from feeder_driver.driver_node import DriverNode  # noqa: E402
+from feeder_interfaces.msg import CycleStatus  # noqa: E402
 from feeder_testing import EmulatorThread, reserve_domain_id  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.context import Context  # noqa: E402
@@ -67,7 +67,7 @@ def main():
     node = DriverNode(context=ctx, parameter_overrides=overrides)
     probe = rclpy.create_node('bench_probe', context=ctx)
     got = []
-    probe.create_subscription(DiagnosticStatus, 'cycle_status',
+    probe.create_subscription(CycleStatus, 'cycle_status',
                               lambda m: got.append(time.perf_counter()),
                               QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
     trig = probe.create_client(Trigger, 'feeder_driver/trigger_cycle')

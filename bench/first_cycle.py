@@ -79,8 +79,7 @@ class Probe:
 
     def __init__(self):
         import rclpy
-        from diagnostic_msgs.msg import DiagnosticStatus
-        from feeder_interfaces.msg import Verdict
+        from feeder_interfaces.msg import CycleStatus, Verdict
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from std_srvs.srv import SetBool
         self.rclpy = rclpy
@@ -88,7 +87,7 @@ class Probe:
         self.node = rclpy.create_node('feeder_first_cycle_bench')
         qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
         self.first = {}
-        self.node.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
+        self.node.create_subscription(CycleStatus, '/feeder/cycle_status',
                                       lambda m: self._seen('cycle_status', _seq(m)), qos)
         self.node.create_subscription(Verdict, '/feeder/edge1_verdict',
                                       lambda m: self._seen('edge1_verdict', m.seq), qos)
@@ -115,7 +114,8 @@ class Probe:
 
 
 def _seq(msg):
-    return next((int(kv.value) for kv in msg.values if kv.key == 'seq'), None)
+    """Return the seq of a cycle_status (feeder_interfaces/CycleStatus)."""
+    return int(msg.seq)
 
 
 def stop(procs):

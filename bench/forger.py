@@ -28,7 +28,12 @@ makes the next attack of this round, in turn:
   if it saw an ended run (else counted as skipped);
 * ``fired_unsigned`` / ``fired_bad_mac``: a forged ``cycle_fired`` notice for the next seq;
 * ``rogue_ready``: a rogue writer on ``edge1_ready`` publishes an unsigned
-  ``Verdict(ready=True)`` for the last seen seq.
+  ``Verdict(ready=True)`` for the last seen seq;
+* ``malformed``: a ``cycle_status`` (feeder_interfaces/CycleStatus) for the next seq, signed
+  with a wrong key, with one field set to a value the type holds and no driver writes (a seq
+  of 2**64 - 1 or 2**63, an unknown outcome or sensor code, a stamp before 1970 or with
+  nanosec past 1e9, texts of 5000 and 100000 characters, a session that is not hex, a MAC of
+  31 bytes), the next of :data:`MALFORMED` each time.
 
 Each attack sent is one JSON line in ``--log`` (time, kind, seq, stamp; for a hit and run,
 whether every reader acknowledged it before it left: it waits at most 1 s); on SIGINT or
@@ -48,7 +53,14 @@ import sys
 import time
 
 ATTACKS = ('hit_unsigned', 'replay_fresh', 'fired_unsigned', 'hit_bad_mac', 'replay_stale',
-           'rogue_ready', 'fired_bad_mac', 'replay_old_run')
+           'rogue_ready', 'fired_bad_mac', 'replay_old_run', 'malformed')
+# The hostile field values of the ``malformed`` attack, in turn: (field, value).
+MALFORMED = (
+    ('seq', 2**64 - 1), ('outcome', 'Completed'), ('sensor', 7), ('stamp', (-1, 0)),
+    ('reason', 'x' * 5000), ('session', 'NOT-HEX'), ('mac', b'\xff' * 31), ('seq', 2**63),
+    ('outcome', '1' + '0' * 400), ('sensor', -128), ('stamp', (1, 2**32 - 1)),
+    ('hardware_id', 'x' * 100_000),
+)
 STALE_MIN_S, STALE_MAX_S = 2.0, 5.0     # a stale replay: recorded this long ago
 HISTORY = 2000                          # genuine reports kept
 HIT_ACK_WAIT_S = 1.0    # a hit and run leaves once every reader acknowledged, or after this
@@ -59,9 +71,8 @@ class Forger:
 
     def __init__(self, rclpy, ns, log):
         """Join the graph in a context of its own; ``log``: the JSON lines file or None."""
-        from diagnostic_msgs.msg import DiagnosticStatus
         from feeder_common import qos
-        from feeder_interfaces.msg import Verdict
+        from feeder_interfaces.msg import CycleStatus, Verdict
         self.rclpy = rclpy
         self.ns = ns.rstrip('/')
         self.driver = f'{self.ns}/feeder_driver'
@@ -69,7 +80,7 @@ class Forger:
         rclpy.init(context=self.ctx)
         self.node = rclpy.create_node('feeder_forger', context=self.ctx)
         self.qos = qos
-        self.Status = DiagnosticStatus
+        self.Status = CycleStatus
         self.Verdict = Verdict
         self.wrong_key = secrets.token_bytes(32)
         self._ack_wait = rclpy.duration.Duration(seconds=HIT_ACK_WAIT_S)
@@ -83,11 +94,11 @@ class Forger:
         self.counts = collections.Counter()
         self.acked = collections.Counter()
         self.log = open(log, 'a', encoding='utf-8') if log else None
-        self.node.create_subscription(DiagnosticStatus, f'{self.ns}/cycle_status',
+        self.node.create_subscription(CycleStatus, f'{self.ns}/cycle_status',
                                       self._on_status, qos.CYCLE_STATUS)
-        self.replay_pub = self.node.create_publisher(DiagnosticStatus, f'{self.ns}/cycle_status',
+        self.replay_pub = self.node.create_publisher(CycleStatus, f'{self.ns}/cycle_status',
                                                      qos.CYCLE_STATUS)
-        self.fired_pub = self.node.create_publisher(DiagnosticStatus, f'{self.ns}/cycle_fired',
+        self.fired_pub = self.node.create_publisher(CycleStatus, f'{self.ns}/cycle_fired',
                                                     qos.CYCLE_FIRED)
         self.ready_pub = self.node.create_publisher(Verdict, f'{self.ns}/edge1_ready',
                                                     qos.edge1_ready(1.0))
@@ -147,8 +158,8 @@ class Forger:
         self.own_stamps.append(stamp_ns)
         if signed:
             return CycleSigner(self.wrong_key, self.driver, self.session).cycle_status(
-                seq, True, 'completed', True, stamp_ns, self.hardware_id)
-        return cycle_status(seq, True, 'completed', True, stamp_ns, self.hardware_id)
+                seq, True, '', True, stamp_ns, self.hardware_id)
+        return cycle_status(seq, True, '', True, stamp_ns, self.hardware_id)
 
     def hit_and_run(self, signed):
         """Publish one forged report from a new participant, wait for the acks, and leave."""
@@ -205,18 +216,31 @@ class Forger:
 
     def fired(self, signed):
         """Publish a forged fired notice for the next seq (unsigned or with a wrong key)."""
-        from diagnostic_msgs.msg import KeyValue
-        from feeder_common.messages import CycleSigner
+        from feeder_common.messages import CycleSigner, time_msg
         seq, stamp = self.last_seq + 1, self._now_ns()
         if signed:
             msg = CycleSigner(self.wrong_key, self.driver, self.session).cycle_fired(
                 seq, stamp, self.hardware_id)
         else:
-            msg = self.Status(level=self.Status.OK, name='cycle_fired', message='firing',
-                              values=[KeyValue(key='seq', value=str(seq)),
-                                      KeyValue(key='stamp', value=f'{stamp / 1e9:.9f}')])
+            msg = self.Status(seq=seq, stamp=time_msg(stamp), outcome=self.Status.OUTCOME_FIRED,
+                              sensor=self.Status.SENSOR_NONE, hardware_id=self.hardware_id)
         self.fired_pub.publish(msg)
         self._record('fired_bad_mac' if signed else 'fired_unsigned', seq, stamp)
+
+    def malformed(self):
+        """Publish a report for the next seq with one hostile field (the next of MALFORMED)."""
+        from builtin_interfaces.msg import Time
+        name, value = MALFORMED[self.counts['malformed'] % len(MALFORMED)]
+        seq, stamp = self.last_seq + 1, self._now_ns()
+        msg = self._forged_status(seq, stamp, True)
+        if name == 'stamp':
+            msg.stamp = Time(sec=value[0], nanosec=value[1])
+        elif name == 'mac':
+            msg.mac = list(value)
+        else:
+            setattr(msg, name, value)
+        self.replay_pub.publish(msg)
+        self._record('malformed', seq, stamp, note=f'{name} {str(value)[:24]}')
 
     def rogue_ready(self):
         """Publish an unsigned Verdict(ready=True) on edge1_ready."""
@@ -235,7 +259,7 @@ class Forger:
          'replay_fresh': self.replay_fresh, 'replay_stale': self.replay_stale,
          'replay_old_run': self.replay_old_run,
          'fired_unsigned': lambda: self.fired(False), 'fired_bad_mac': lambda: self.fired(True),
-         'rogue_ready': self.rogue_ready}[kind]()
+         'rogue_ready': self.rogue_ready, 'malformed': self.malformed}[kind]()
 
     def summary(self):
         """Return the counts: {kind: sent}, and the hit and runs every reader acknowledged."""

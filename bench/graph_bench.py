@@ -65,10 +65,8 @@ def cpu_seconds(pid):
 
 
 def _seq(msg):
-    for kv in msg.values:
-        if kv.key == 'seq':
-            return int(kv.value)
-    return None
+    """Return the seq of a cycle_status (feeder_interfaces/CycleStatus)."""
+    return int(msg.seq)
 
 
 def _ready_of(readies, verdict_info):
@@ -97,9 +95,8 @@ class Probe(BenchNode):
     """The benchmark's node: subscriptions with receive timestamps, service calls."""
 
     def __init__(self, procs=None):
-        from diagnostic_msgs.msg import DiagnosticStatus
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-        from feeder_interfaces.msg import Verdict
+        from feeder_interfaces.msg import CycleStatus, Verdict
         from sensor_msgs.msg import Range
         super().__init__('feeder_bench', procs)
         reliable = QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE)
@@ -112,7 +109,7 @@ class Probe(BenchNode):
             'edge1_ready': self.node.create_subscription(
                 Verdict, '/feeder/edge1_ready', lambda m, i: self.ready.append(i), latched),
             'cycle_status': self.node.create_subscription(
-                DiagnosticStatus, '/feeder/cycle_status',
+                CycleStatus, '/feeder/cycle_status',
                 lambda m, i: self.status.append((_seq(m), i)), reliable)}
         # The monitor publishes edge1_ready, then the cycle's edge1_verdict (the same signed
         # Verdict, with its seq); it also republishes edge1_ready while idle (and lowers it when

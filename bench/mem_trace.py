@@ -82,8 +82,8 @@ def main():
     ex.add_node(node)
     ex.add_node(ctl)
     seq = {'n': 0}
-    from diagnostic_msgs.msg import DiagnosticStatus
-    ctl.create_subscription(DiagnosticStatus, '/feeder/cycle_status',
+    from feeder_interfaces.msg import CycleStatus
+    ctl.create_subscription(CycleStatus, '/feeder/cycle_status',
                             lambda m: seq.__setitem__('n', seq['n'] + 1), 1000)
 
     def spin(seconds):

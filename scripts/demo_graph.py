@@ -101,10 +101,10 @@ def main():
 
 def run(args, scene_path, out, procs, t0, key):
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+    from diagnostic_msgs.msg import DiagnosticArray
     from feeder_common.diagnostics import local_name
-    from feeder_common.messages import check_verdict, parse_predicted_state
-    from feeder_interfaces.msg import Verdict
+    from feeder_common.messages import check_verdict, parse_cycle_status, parse_predicted_state
+    from feeder_interfaces.msg import CycleStatus, PredictedState, Verdict
     from throwmap import analyse, load_scene, sees
 
     reliable = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
@@ -129,8 +129,8 @@ def run(args, scene_path, out, procs, t0, key):
             if local_name(s.name) == 'feeder_driver: actuator':
                 actuator.append(s)
 
-    node.create_subscription(DiagnosticStatus, '/feeder/cycle_status', keep('status'), reliable)
-    node.create_subscription(DiagnosticStatus, '/feeder/predicted/state', keep('predicted'),
+    node.create_subscription(CycleStatus, '/feeder/cycle_status', keep('status'), reliable)
+    node.create_subscription(PredictedState, '/feeder/predicted/state', keep('predicted'),
                              reliable)
     monitor = '/feeder/feeder_monitor'
 
@@ -179,10 +179,12 @@ def run(args, scene_path, out, procs, t0, key):
     printed = {'next': 0, 'seqs': set()}
 
     def status_value(msg, key):
+        """Return a value of a /diagnostics status."""
         return {kv.key: kv.value for kv in msg.values}.get(key)
 
     def seq_of(msg):
-        return int(status_value(msg, 'seq'))
+        """Return the seq of a cycle_status (feeder_interfaces/CycleStatus)."""
+        return parse_cycle_status(msg).seq
 
     def signed(msg):
         return check_verdict(msg, key, monitor, 0, max_age_s=float('inf')).authentic
@@ -260,23 +262,22 @@ def run(args, scene_path, out, procs, t0, key):
     first = judged[0] if judged else n      # cycles before it are ones the monitor missed
     rows, false_ready, missed, goal_seen, unpredicted = [], 0, 0, 0, 0
     known = states()
-    for k, status in enumerate(got['status']):
-        values = {kv.key: kv.value for kv in status.values}
-        predicted = known.get(int(values['seq']))
+    for k, status in enumerate(map(parse_cycle_status, got['status'])):
+        predicted = known.get(status.seq)
         if predicted is None:
             unpredicted += 1    # cannot be judged: the predictor must follow every cycle
             continue
         edge, R, kind = predicted.edge, predicted.R, predicted.throw_kind
         seen = edge >= 0 and bool(sees(scene.part, edge, R, radius, an.sensor.footprint))
-        bit = values.get('sensor') == '1'
+        bit = status.sensor is True
         j = k - first
-        verdict = verdict_of.get(int(values['seq']))
+        verdict = verdict_of.get(status.seq)
         if verdict and not (seen and edge == goal):
             false_ready += 1
         if bit and edge == goal and j + 1 >= first_ready:
             goal_seen += 1
             missed += verdict is False
-        rows.append((int(values['seq']), edge, '' if R is None else R, kind, int(bit),
+        rows.append((status.seq, edge, '' if R is None else R, kind, int(bit),
                      '' if verdict is None else int(verdict), int(seen)))
     with open(out / 'cycles.csv', 'w', newline='') as fh:
         w = csv.writer(fh)

@@ -20,9 +20,8 @@ from typing import Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from feeder_common.diagnostics import local_name
-from feeder_common.messages import check_verdict, parse_predicted_state
-from feeder_common.stamps import parse_stamp_text
-from feeder_interfaces.msg import Verdict
+from feeder_common.messages import check_verdict, parse_cycle_status, parse_predicted_state
+from feeder_interfaces.msg import CycleStatus, PredictedState, Verdict
 import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Range
@@ -181,18 +180,34 @@ class Verdicts(Statements):
 
 
 class PredictedStates(Collector):
-    """The predictor's per-cycle states (predicted/state), parsed."""
+    """The predictor's per-cycle states (predicted/state, PredictedState), parsed."""
 
     def __init__(self, ros, ns='/feeder'):
-        super().__init__(ros, DiagnosticStatus, f'{ns}/predicted/state')
+        super().__init__(ros, PredictedState, f'{ns}/predicted/state')
 
     @property
     def parsed(self):
         return [parse_predicted_state(m) for m in self.msgs]
 
 
-def status_values(msg):
-    return {kv.key: kv.value for kv in msg.values}
+class CycleStatuses(Collector):
+    """
+    The driver's (or stand-in's) cycle reports on cycle_status (CycleStatus), in order.
+
+    ``parsed``: each as feeder_common.messages.parse_cycle_status reads it (a ValueError if
+    the driver wrote one the contract does not take).
+    """
+
+    def __init__(self, ros, topic='/feeder/cycle_status', qos=RELIABLE):
+        super().__init__(ros, CycleStatus, topic, qos)
+
+    @property
+    def parsed(self):
+        return [parse_cycle_status(m) for m in self.msgs]
+
+    @property
+    def seqs(self):
+        return [s.seq for s in self.parsed]
 
 
 def wait_for_monitor(ros, ready):
@@ -253,7 +268,7 @@ def watch_monitor(ros):
     """
     ready = Statements(ros)
     verdicts = Verdicts(ros)
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    statuses = CycleStatuses(ros)
     wait_for_monitor(ros, ready)
     # cycle_status: the monitor's reader and ours; proximity, cycle_fired: the monitor's.
     wait_reports_matched(ros, status_readers=2, proximity_readers=1)
@@ -353,7 +368,7 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready, comple
 
     ready = Statements(ros)
     verdict_stream = Verdicts(ros)
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    statuses = CycleStatuses(ros)
     prox = Collector(ros, Range, '/feeder/proximity')
     states = PredictedStates(ros)
     diags = Diagnostics(ros)
@@ -371,16 +386,18 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready, comple
     ros.spin_for(1.5)                           # let the monitor finish the last cycles
     n = len(statuses)
     assert n >= first_ready + cycles
-    seqs = [int(status_values(s)['seq']) for s in statuses.msgs]
+    reports = statuses.parsed
+    seqs = [s.seq for s in reports]
     assert seqs == list(range(seqs[0], seqs[0] + n))
-    assert all(s.level == DiagnosticStatus.OK for s in statuses.msgs)
+    assert all(s.ok and s.reason == '' for s in reports)
+    assert all(m.outcome == CycleStatus.OUTCOME_COMPLETED for m in statuses.msgs)
     predicted = states.parsed
     assert len(prox) == n and [p.seq for p in predicted] == seqs
 
     # The sim's sensor bit is the sensor geometry applied to its predicted state.
     truth = [bool(sees(sc.part, p.edge, p.R, radius, footprint)) for p in predicted]
     assert [p.range == float('-inf') for p in prox.msgs] == truth
-    assert [status_values(s)['sensor'] == '1' for s in statuses.msgs] == truth
+    assert [s.sensor for s in reports] == truth
     for p in prox.msgs:
         assert p.radiation_type == Range.INFRARED and p.header.frame_id == 'feeder_sensor'
         assert p.min_range == p.max_range == pytest.approx(0.02, rel=1e-6)     # float32
@@ -391,8 +408,7 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready, comple
     missed = n - len(parsed)
     assert 0 <= missed <= 3, f'{len(parsed)} verdicts for {n} cycles'
     assert [v.seq for v in parsed] == seqs[missed:]
-    assert [v.stamp_ns for v in parsed] == [parse_stamp_text(status_values(s)['stamp'])
-                                            for s in statuses.msgs[missed:]]
+    assert [v.stamp_ns for v in parsed] == [s.stamp_ns for s in reports[missed:]]
     assert all(v.authentic for v in parsed), [v.reason for v in parsed if not v.authentic][:3]
     assert len({v.session for v in parsed} | {c.session for c in ready.checked}) == 1
     verdicts = [v.ready for v in parsed]

@@ -17,16 +17,21 @@ Hypothesis strategies of hostile messages: anything a node on the graph can publ
 
 Every message goes through :func:`wire` (serialize, deserialize) before a test hands it to a
 parser or a callback: a subscriber sees exactly that (strings are UTF-8 with invalid bytes
-replaced and cut at a NUL, numbers have their field's width). The texts mix what the builders
-write with the forms issue 20 found accepted (``' 12 '``, Arabic-Indic digits, ``999999_0``,
-a ``1`` followed by 400 zeros), boundaries (2**31 s, 2**63), floats' spellings (``1e400``,
-``nan``) and arbitrary unicode, some of it huge.
+replaced and cut at a NUL, numbers have their field's width). The typed reports
+(feeder_interfaces/CycleStatus on cycle_status and cycle_fired, PredictedState on
+predicted/state) get every value their fields hold: a seq up to 2**64 - 1, stamps before 1970
+or with nanosec past 1e9, outcome and sensor codes no driver writes, NaN and infinite contact
+points, edges past int32's middle, MACs of any length, sessions that are not hex, and texts
+that mix what the builders write with the forms issue 20 found accepted (``' 12 '``,
+Arabic-Indic digits, ``999999_0``, a ``1`` followed by 400 zeros), boundaries, floats'
+spellings and arbitrary unicode, some of it huge.
 """
 
+import math
+
 from builtin_interfaces.msg import Time
-from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from feeder_common import messages as m
-from feeder_interfaces.msg import Verdict
+from feeder_interfaces.msg import CycleStatus, PredictedState, Verdict
 from hypothesis import strategies as st
 from lifecycle_msgs.msg import State, Transition, TransitionEvent
 from rclpy.serialization import deserialize_message, serialize_message
@@ -44,61 +49,85 @@ TRICKY = (
     'jog', 'flip', 'lost', 'Jog', 'ready', 'anomaly', 'cycle', '\x00', '1\x002', '\ufffd',
     '\U0001f600', '\u00df', '\u212a', 'x' * 100_000,
 )
-KEYS = ('seq', 'sensor', 'stamp', 'ready', 'state', 'edge', 'R', 'throw_kind')
-NAMES = ('cycle', 'edge1_verdict', 'predicted_state', 'Cycle', 'cycle ', '')
-LEVELS = (DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR,
-          DiagnosticStatus.STALE)
-INT32 = st.integers(-2**31, 2**31 - 1)
-UINT32 = st.integers(0, 2**32 - 1)
-
-# Values the builders write, to make near-valid messages frequent.
-VALID_TEXT = st.one_of(
-    st.integers(0, 2**63 - 1).map(str),
-    st.integers(0, 2**31 * 10**9 - 1).map(lambda ns: f'{ns // 10**9}.{ns % 10**9:09d}'),
-    st.sampled_from(('1', '0', 'none', 'true', 'false', 'jog', 'flip', 'lost', '-1')),
-    st.floats(allow_nan=False, allow_infinity=False).map(repr),
-    st.integers(-1, 5).map(str))
-# Numbers beyond every bound: a seq past 2**63, a stamp past what a Time holds (issue 20's
-# stamp is '1' and 400 zeros).
-BEYOND_TEXT = st.one_of(
-    st.integers(2**63 - 2, 10**420).map(str),
-    st.integers(2**31 - 2, 10**420).map(lambda sec: f'{sec}.000000000'),
-    st.integers(2**31 - 2, 10**420).map(str))
-HUGE_TEXT = st.builds(lambda c, n: c * n, st.characters(codec='utf-8'), st.integers(0, 20_000))
-TEXT = st.one_of(st.sampled_from(TRICKY), VALID_TEXT, BEYOND_TEXT, st.text(max_size=40),
-                 st.text(alphabet='0123456789.-+_ eEnaif\u0661\u0663', max_size=30), HUGE_TEXT)
-KEY = st.one_of(st.sampled_from(KEYS), st.sampled_from(KEYS).map(lambda k: k + ' '),
-                st.text(max_size=12))
-# Per key: the builder's form of a value beyond what a parser may take (a seq past 2**63, a
-# stamp past Time's int32 seconds, an edge past int32, R past the largest float).
-BEYOND = {
-    'seq': st.integers(2**63, 10**420).map(str),
-    'stamp': st.integers(2**31, 10**420).map(lambda sec: f'{sec}.000000000'),
-    'edge': st.integers(2**31, 10**420).map(str),
-    'R': st.sampled_from(('1e400', '-1e400', '1' + '0' * 400 + '.0', 'inf', 'nan')),
-}
-VALUES = st.lists(st.builds(KeyValue, key=KEY, value=TEXT), max_size=9)
-
-
 def wire(msg):
     """Return ``msg`` as a subscriber receives it: serialized and deserialized."""
     return deserialize_message(serialize_message(msg), type(msg))
 
 
+INT8 = st.integers(-2**7, 2**7 - 1)
+INT32 = st.integers(-2**31, 2**31 - 1)
+UINT32 = st.integers(0, 2**32 - 1)
+UINT64 = st.integers(0, 2**64 - 1)
+
+# Texts the builders write, to make near-valid messages frequent.
+VALID_TEXT = st.one_of(
+    st.integers(0, 2**63 - 1).map(str),
+    st.sampled_from(('completed', 'failed', 'fired', 'jog', 'flip', 'lost', 'sim', '', '1',
+                     '0', 'none', 'aborted: interrupted (SIGTERM)', 'no reply from the board')),
+    st.text(alphabet='0123456789abcdef', max_size=64))
+HUGE_TEXT = st.builds(lambda c, n: c * n, st.characters(codec='utf-8'), st.integers(0, 20_000))
+TEXT = st.one_of(st.sampled_from(TRICKY), VALID_TEXT, st.text(max_size=40),
+                 st.text(alphabet='0123456789.-+_ eEnaif\u0661\u0663', max_size=30), HUGE_TEXT)
+# Outcomes: the three a topic may carry, their near misses and anything else.
+OUTCOMES = st.one_of(
+    st.sampled_from((CycleStatus.OUTCOME_FIRED, CycleStatus.OUTCOME_COMPLETED,
+                     CycleStatus.OUTCOME_FAILED, 'Completed', 'completed ', ' fired', 'FAILED',
+                     'ok', 'complete', 'completed\x00', 'fired\x00x', '')),
+    TEXT)
+# Sensor codes: the three valid ones often, any int8 else.
+SENSORS = st.one_of(st.sampled_from((CycleStatus.SENSOR_NONE, CycleStatus.SENSOR_CLEAR,
+                                     CycleStatus.SENSOR_DETECTED)), INT8)
+# Seqs: the valid range, its ends, and what only a uint64 holds (>= 2**63, up to 2**64 - 1).
+SEQS_ANY = st.one_of(st.sampled_from((0, 1, 2**63 - 1, 2**63, 2**64 - 1)), UINT64)
+# Times: any sec (negative: before 1970; 2**31 - 1: the end) and any nanosec (>= 1e9 invalid).
+TIMES = st.builds(Time, sec=st.one_of(st.sampled_from((-1, -2**31, 0, 2**31 - 1)), INT32),
+                  nanosec=st.one_of(st.sampled_from((0, 999_999_999, 10**9, 2**32 - 1)),
+                                    UINT32)).map(wire)
+# Sessions: lowercase hex of the signer's lengths and beyond, and any text.
+SESSIONS = st.one_of(st.text(alphabet='0123456789abcdef', max_size=80),
+                     st.sampled_from(('ABCDEF', 'g', ' ab', 'ab\x00cd', '0x12')), TEXT)
+# MACs: 32 bytes (the right length), none, or any other length.
+MACS = st.one_of(st.binary(min_size=32, max_size=32), st.just(b''), st.binary(max_size=100))
+# Contact points: any float64, infinities and NaN often.
+FLOATS = st.one_of(st.sampled_from((math.nan, math.inf, -math.inf, -0.0, 1e308, 5e-324)),
+                   st.floats())
+KINDS_ANY = st.one_of(st.sampled_from((PredictedState.THROW_JOG, PredictedState.THROW_FLIP,
+                                       PredictedState.THROW_LOST, 'Jog', 'lost ', '')), TEXT)
+EDGES_ANY = st.one_of(st.integers(-3, 6), INT32)
+
+# What a hostile change may set, per field of CycleStatus.
+REPORT_FIELDS = {
+    'seq': SEQS_ANY, 'stamp': TIMES, 'outcome': OUTCOMES, 'sensor': SENSORS, 'reason': TEXT,
+    'hardware_id': TEXT, 'session': SESSIONS, 'mac': MACS.map(list),
+}
+# ... and of PredictedState.
+STATE_FIELDS = {'seq': SEQS_ANY, 'stamp': TIMES, 'edge': EDGES_ANY, 'r': FLOATS,
+                'throw_kind': KINDS_ANY}
+
+
 SEQS = st.integers(0, 2**63 - 1)
 STAMPS = st.integers(0, 2**31 * 10**9 - 1)
 KINDS = st.sampled_from(('jog', 'flip'))
+# A signer of the forger's own (a key no node uses), as a forger can have one.
+FORGER = m.CycleSigner(b'forger-key-' * 3, '/feeder/feeder_driver', session='f0f0')
 
 
 @st.composite
-def canonical(draw):
-    """Draw a status one of feeder_common.messages' builders writes, with any valid fields."""
-    which = draw(st.sampled_from(('cycle', 'predicted')))
-    if which == 'cycle':
-        ok = draw(st.booleans())
-        return m.cycle_status(draw(SEQS), ok, draw(st.text(max_size=30)),
-                              draw(st.sampled_from((True, False))) if ok else None,
-                              draw(STAMPS), draw(st.text(max_size=30)))
+def canonical_report(draw):
+    """Draw a cycle report a builder writes (cycle_status or cycle_fired), maybe signed."""
+    which = draw(st.sampled_from(('status', 'signed status', 'fired')))
+    seq, stamp, hardware_id = draw(SEQS), draw(STAMPS), draw(st.text(max_size=30))
+    if which == 'fired':
+        return FORGER.cycle_fired(seq, stamp, hardware_id)
+    ok = draw(st.booleans())
+    args = (seq, ok, draw(st.text(max_size=30)),
+            draw(st.sampled_from((True, False))) if ok else None, stamp, hardware_id)
+    return FORGER.cycle_status(*args) if which == 'signed status' else m.cycle_status(*args)
+
+
+@st.composite
+def canonical_state(draw):
+    """Draw a predicted/state predicted_state writes, with any valid fields."""
     stamp = draw(st.one_of(st.none(), STAMPS))
     edge = draw(st.integers(-1, 5))
     return m.predicted_state(draw(SEQS), stamp, edge,
@@ -107,52 +136,50 @@ def canonical(draw):
                              'lost' if edge < 0 else draw(KINDS))
 
 
-@st.composite
-def mutated(draw):
-    """Draw a builder's status with up to three hostile changes (none in about a quarter)."""
-    msg = draw(canonical())
-    values = list(msg.values)
+def _mutate(draw, msg, fields):
+    """Set up to three fields of ``msg`` to hostile values (none in about a quarter)."""
     for _ in range(draw(st.integers(0, 3))):
-        op = draw(st.sampled_from(('value', 'value', 'beyond', 'beyond', 'drop', 'twice', 'add',
-                                   'name', 'level', 'message')))
-        k = draw(st.integers(0, max(0, len(values) - 1)))
-        if op == 'value' and values:
-            values[k] = KeyValue(key=values[k].key, value=draw(TEXT))
-        elif op == 'beyond' and values:
-            key = values[k].key
-            values[k] = KeyValue(key=key, value=draw(BEYOND.get(key, TEXT)))
-        elif op == 'drop' and values:
-            del values[k]
-        elif op == 'twice' and values:
-            values.append(KeyValue(key=values[k].key, value=draw(TEXT)))
-        elif op == 'add':
-            values.append(draw(st.builds(KeyValue, key=KEY, value=TEXT)))
-        elif op == 'name':
-            msg.name = draw(st.one_of(st.sampled_from(NAMES), st.text(max_size=20)))
-        elif op == 'level':
-            msg.level = draw(st.one_of(st.sampled_from(LEVELS),
-                                       st.binary(min_size=1, max_size=1)))
-        elif op == 'message':
-            msg.message = draw(TEXT)
-    msg.values = values
+        name = draw(st.sampled_from(sorted(fields)))
+        setattr(msg, name, draw(fields[name]))
     return wire(msg)
 
 
 @st.composite
-def arbitrary(draw, names=NAMES):
-    """Draw a DiagnosticStatus of any name, level, texts and values (the keys often known)."""
-    keys = draw(st.permutations(KEYS))[:draw(st.integers(0, len(KEYS)))]
-    values = [KeyValue(key=k, value=draw(TEXT)) for k in keys] + draw(VALUES)
-    values = draw(st.permutations(values))
-    return wire(DiagnosticStatus(
-        level=draw(st.one_of(st.sampled_from(LEVELS), st.binary(min_size=1, max_size=1))),
-        name=draw(st.one_of(st.sampled_from(names), st.text(max_size=20))),
-        message=draw(TEXT), hardware_id=draw(TEXT), values=values))
+def mutated(draw):
+    """Draw a builder's CycleStatus with up to three hostile field values."""
+    return _mutate(draw, draw(canonical_report()), REPORT_FIELDS)
+
+
+@st.composite
+def arbitrary(draw):
+    """Draw a CycleStatus with every field any value it holds."""
+    return wire(CycleStatus(**{name: draw(values) for name, values in REPORT_FIELDS.items()}))
 
 
 def statuses():
-    """Draw any DiagnosticStatus: mostly a builder's with hostile changes, else arbitrary."""
+    """
+    Draw any CycleStatus (what cycle_status and cycle_fired can carry).
+
+    Mostly a builder's report with hostile changes, else arbitrary fields.
+    """
     return st.one_of(mutated(), arbitrary())
+
+
+@st.composite
+def mutated_state(draw):
+    """Draw a builder's PredictedState with up to three hostile field values."""
+    return _mutate(draw, draw(canonical_state()), STATE_FIELDS)
+
+
+@st.composite
+def arbitrary_state(draw):
+    """Draw a PredictedState with every field any value it holds."""
+    return wire(PredictedState(**{name: draw(values) for name, values in STATE_FIELDS.items()}))
+
+
+def predicted_states():
+    """Draw any PredictedState (what predicted/state can carry)."""
+    return st.one_of(mutated_state(), arbitrary_state())
 
 
 FLOAT32 = st.floats(width=32)
@@ -172,8 +199,6 @@ def ranges(draw):
                                FLOAT32))
     return wire(rng)
 
-
-TIMES = st.builds(Time, sec=INT32, nanosec=UINT32).map(wire)
 
 VERDICT_STATES = st.one_of(st.sampled_from(('ready', 'tracking', 'warming up', 'anomaly',
                                            'cycling')), st.text(max_size=20))

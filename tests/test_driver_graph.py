@@ -29,10 +29,9 @@ import json
 import os
 import time
 
-from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_interfaces.msg import Verdict
-from feeder_nodes import (check_statements, Collector, Diagnostics, monitor, monitor_rules,
-                          STARTUP_TIMEOUT, Statements, status_values, TRIANGLE, Verdicts,
+from feeder_interfaces.msg import CycleStatus, Verdict
+from feeder_nodes import (check_statements, Collector, CycleStatuses, Diagnostics, monitor,
+                          monitor_rules, STARTUP_TIMEOUT, Statements, TRIANGLE, Verdicts,
                           wait_for_monitor, wait_reports_matched)
 from sensor_msgs.msg import Range
 from std_srvs.srv import SetBool
@@ -94,7 +93,7 @@ def run_driver_graph(graph, ros, tmp_path, emulator_faults, cycles, faults):
 
     ready = Statements(ros)
     verdict_stream = Verdicts(ros)
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    statuses = CycleStatuses(ros)
     prox = Collector(ros, Range, '/feeder/proximity')
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
@@ -123,30 +122,32 @@ def run_driver_graph(graph, ros, tmp_path, emulator_faults, cycles, faults):
 
     # --- every fired cycle: exactly one cycle_status, in seq order --------------------------
     n = len(statuses)
-    vals = [status_values(s) for s in statuses.msgs]
-    seqs = [int(v['seq']) for v in vals]
+    vals = statuses.parsed          # each as the contract reads it (parse_cycle_status)
+    seqs = [v.seq for v in vals]
     assert seqs == list(range(1, n + 1))
-    ok = [s.level == DiagnosticStatus.OK for s in statuses.msgs]
-    assert all(s.level in (DiagnosticStatus.OK, DiagnosticStatus.ERROR) for s in statuses.msgs)
+    ok = [v.ok for v in vals]
+    assert all(s.outcome in (CycleStatus.OUTCOME_COMPLETED, CycleStatus.OUTCOME_FAILED)
+               for s in statuses.msgs)
+    assert all(v.hardware_id == str(link) and v.session and len(v.mac) == 32 for v in vals)
 
     # --- against the emulator's truth ----------------------------------------------------------
     header, fires = read_truth(truth_path)
     goal, warmup = header['goal_edge'], header['warmup_throws']
     assert set(fires) <= set(seqs), 'the emulator saw a FIRE the driver never reported'
     injected = set()
-    for seq, v, good, st in zip(seqs, vals, ok, statuses.msgs):
+    for seq, v, good in zip(seqs, vals, ok):
         recs = fires.get(seq % 65536, [])
         for r in recs:
             injected.update(r['faults'])
         if good:
             (rec,) = recs
             assert rec['outcome'] == 'completed', (seq, rec)
-            assert v['sensor'] == str(rec['bit']), (seq, v, rec)
+            assert v.sensor == bool(rec['bit']) and v.reason == '', (seq, v, rec)
         else:
-            assert v['sensor'] == 'none' and st.message and st.message != 'completed'
-            assert all(r['outcome'] != 'completed' or r['faults'] for r in recs), (st.message,
+            assert v.sensor is None and v.reason, (seq, v)
+            assert all(r['outcome'] != 'completed' or r['faults'] for r in recs), (v.reason,
                                                                                    recs)
-    failed = [st.message for st, good in zip(statuses.msgs, ok) if not good]
+    failed = [v.reason for v, good in zip(vals, ok) if not good]
     if faults:
         assert injected == {'drop_ack', 'garbage', 'drop_sens', 'delay', 'reset', 'unplug'}
         reasons = ' | '.join(failed)
@@ -162,9 +163,8 @@ def run_driver_graph(graph, ros, tmp_path, emulator_faults, cycles, faults):
     by_stamp = {p.header.stamp.sec * 10 ** 9 + p.header.stamp.nanosec: p for p in prox.msgs}
     for v, good in zip(vals, ok):
         if good:
-            sec, frac = v['stamp'].split('.')
-            p = by_stamp[int(sec) * 10 ** 9 + int(frac)]
-            assert (p.range == float('-inf')) == (v['sensor'] == '1')
+            p = by_stamp[v.stamp_ns]
+            assert (p.range == float('-inf')) == v.sensor
 
     # --- the monitor: one signed verdict per fired cycle on edge1_verdict, naming its seq -----
     parsed = verdict_stream.parsed

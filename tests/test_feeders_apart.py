@@ -23,8 +23,8 @@ the recorder's own code), holds only its feeder's topics plus ``/diagnostics``; 
 
 import pathlib
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from feeder_nodes import Collector, sim_as_hardware, STARTUP_TIMEOUT
+from diagnostic_msgs.msg import DiagnosticArray
+from feeder_nodes import Collector, CycleStatuses, sim_as_hardware, STARTUP_TIMEOUT
 from mcap.reader import make_reader
 from rclpy.serialization import deserialize_message
 from std_srvs.srv import SetBool
@@ -58,7 +58,7 @@ def test_each_feeders_recorder_takes_only_its_namespace(graph, ros, tmp_path):
         recorders[ns] = graph.start('feeder_monitor', 'bag_recorder', tmp_path / ns[1:],
                                     '--discovery-period', '0.2', '--ros-args', '-r',
                                     f'__ns:={ns}', name=f'recorder_{ns[1:]}')
-        statuses[ns] = Collector(ros, DiagnosticStatus, f'{ns}/cycle_status')
+        statuses[ns] = CycleStatuses(ros, f'{ns}/cycle_status')
     live = Collector(ros, DiagnosticArray, '/diagnostics')
     for ns in SPACES:       # the stand-in's cycle_status matched the recorder's reader and ours
         ros.wait_remote_matched(f'{ns}/feeder_driver', readers={f'{ns}/cycle_status': 2})

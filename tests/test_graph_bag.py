@@ -12,18 +12,26 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""(c) A bag of the running graph, recorded by bag_recorder and read back."""
+"""
+(c) A bag of the running graph, recorded by bag_recorder and read back.
 
-import json
+Read back three ways: with rosbags (the recorder's own library) and rclpy's deserializer, and
+with an independent reader (the ``mcap`` and ``mcap-ros2-support`` packages) that decodes every
+message from nothing but the schema text in the bag, so the feeder's own types
+(feeder_interfaces: CycleStatus, PredictedState, LimitSet, Analysis, Verdict) must come with
+their full definitions, the types they nest included.
+"""
+
+import hashlib
 import math
 import signal
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from feeder_common.messages import check_verdict, parse_cycle_fired, parse_predicted_state
-from feeder_common.stamps import parse_stamp_text
-from feeder_interfaces.msg import Verdict
-from feeder_nodes import (Collector, MONITOR, monitor, predictor, sim_as_hardware, Statements,
-                          STARTUP_TIMEOUT, status_values, TRIANGLE, Verdicts, wait_for_monitor,
+from diagnostic_msgs.msg import DiagnosticArray
+from feeder_common.messages import (check_verdict, parse_cycle_fired, parse_cycle_status,
+                                    parse_predicted_state)
+from feeder_interfaces.msg import Analysis, CycleStatus, LimitSet, PredictedState, Verdict
+from feeder_nodes import (CycleStatuses, MONITOR, monitor, predictor, sim_as_hardware,
+                          Statements, STARTUP_TIMEOUT, TRIANGLE, Verdicts, wait_for_monitor,
                           wait_for_publishers)
 from geometry_msgs.msg import PoseStamped
 import pytest
@@ -31,7 +39,6 @@ from rclpy.serialization import deserialize_message
 from rosbags.interfaces import QosDurability, QosReliability
 from rosbags.rosbag2 import Reader
 from sensor_msgs.msg import JointState, Range
-from std_msgs.msg import Float64MultiArray, String
 from std_srvs.srv import Trigger
 from throwmap import load_scene
 from visualization_msgs.msg import MarkerArray
@@ -41,14 +48,14 @@ N = 20
 # topic -> (type, expected count with N triggered cycles; None: at least one)
 EXPECTED = {
     '/feeder/proximity': (Range, N),
-    '/feeder/cycle_status': (DiagnosticStatus, N),
+    '/feeder/cycle_status': (CycleStatus, N),
     '/feeder/joint_states': (JointState, 2 * N),
-    '/feeder/predicted/state': (DiagnosticStatus, N),
+    '/feeder/predicted/state': (PredictedState, N),
     '/feeder/predicted/part_pose': (PoseStamped, N),
-    '/feeder/predicted/limit_set': (Float64MultiArray, 1),      # latched, once
-    '/feeder/predicted/analysis': (String, 1),                  # latched, once
+    '/feeder/predicted/limit_set': (LimitSet, 1),               # latched, once
+    '/feeder/predicted/analysis': (Analysis, 1),                # latched, once
     '/feeder/markers': (MarkerArray, None),     # latched + at most one per markers_period
-    '/feeder/cycle_fired': (DiagnosticStatus, N),               # one per fired cycle
+    '/feeder/cycle_fired': (CycleStatus, N),                    # one per fired cycle
     # latched statement + one per cycle (N cycles are all within the settling: never ready, so
     # no "cycling" statement either)
     '/feeder/edge1_ready': (Verdict, N + 1),
@@ -103,6 +110,104 @@ def check_mcap_as_rosbag2_writes_it(path, meta):
             'publish_time must be the send time, not log_time'
 
 
+# The schema text of each of our types names every type it nests (rosbag2's concatenated
+# .msg definitions, one "MSG: pkg/Type" section per nested type).
+NESTED = {
+    'feeder_interfaces/msg/CycleStatus': {'builtin_interfaces/Time'},
+    'feeder_interfaces/msg/PredictedState': {'builtin_interfaces/Time'},
+    'feeder_interfaces/msg/LimitSet': {'feeder_interfaces/EdgeBand'},
+    'feeder_interfaces/msg/Analysis': {
+        'feeder_interfaces/LimitSet', 'feeder_interfaces/EdgeBand', 'feeder_interfaces/EdgeDesign',
+        'feeder_interfaces/Escape', 'feeder_interfaces/BasinOutcome'},
+    'feeder_interfaces/msg/Verdict': {'builtin_interfaces/Time'},
+}
+
+
+def same_fields(msg, decoded, path=''):
+    """
+    Assert that the independent reader's ``decoded`` message equals rclpy's ``msg``.
+
+    Field by field as rclpy names them, recursing into nested messages and their sequences
+    (NaN equals NaN; a uint8[] compares as bytes, a byte as its value).
+    """
+    for name in msg.get_fields_and_field_types():
+        a, b = getattr(msg, name), getattr(decoded, name)
+        where = f'{path}.{name}'
+        if hasattr(a, 'get_fields_and_field_types'):
+            same_fields(a, b, where)
+        elif isinstance(a, (list, tuple)) and a and hasattr(a[0], 'get_fields_and_field_types'):
+            assert len(a) == len(b), where
+            for k, (x, y) in enumerate(zip(a, b)):
+                same_fields(x, y, f'{where}[{k}]')
+        elif isinstance(a, float):
+            assert a == b or (math.isnan(a) and math.isnan(b)), (where, a, b)
+        elif isinstance(a, bytes) and isinstance(b, int):     # a byte field: rclpy's b'\x01'
+            assert a == bytes([b]), (where, a, b)
+        elif isinstance(a, (bytes, bytearray)) or getattr(a, 'typecode', None) == 'B':
+            assert bytes(a) == bytes(b), where
+        elif not isinstance(a, (str, int, bool)):
+            assert list(a) == pytest.approx(list(b), nan_ok=True), where
+        else:
+            assert a == b, (where, a, b)
+
+
+def check_mcap_decodes_every_message(path, meta, msgs):
+    """
+    Decode every message of the bag with mcap-ros2-support, from the bag's schemas alone.
+
+    The count is the bag's; each message equals what rclpy deserialized (``msgs``: by topic,
+    in order); our types' schemas carry their nested definitions; and the typed topics come
+    out with their fields as the contract reads them.
+    """
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+    decoded = {}
+    with open(path, 'rb') as fh:
+        reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+        schemas = reader.get_summary().schemas
+        for name, nested in NESTED.items():
+            (schema,) = [sc for sc in schemas.values() if sc.name == name]
+            text = schema.data.decode()
+            assert {line[len('MSG: '):].strip() for line in text.splitlines()
+                    if line.startswith('MSG: ')} == nested, (name, text)
+        count = 0
+        for _, channel, _, message in reader.iter_decoded_messages():
+            decoded.setdefault(channel.topic, []).append(message)
+            count += 1
+    assert count == meta['message_count']
+    for topic, live in msgs.items():
+        assert len(decoded[topic]) == len(live), topic
+        for k, (msg, dec) in enumerate(zip(live, decoded[topic])):
+            same_fields(msg, dec, f'{topic}[{k}]')
+
+    # The typed topics, as read by the independent reader.
+    statuses = decoded['/feeder/cycle_status']
+    assert [d.seq for d in statuses] == list(range(1, N + 1))
+    assert all(d.outcome == 'completed' and d.sensor in (0, 1) and d.reason == ''
+               and d.hardware_id == 'sim' and len(d.mac) == 32 for d in statuses)
+    assert all(d.stamp.sec > 0 for d in statuses)
+    fired = decoded['/feeder/cycle_fired']
+    assert [(d.seq, d.outcome, d.sensor) for d in fired] == \
+        [(k, 'fired', -1) for k in range(1, N + 1)]
+    states = decoded['/feeder/predicted/state']
+    assert [d.seq for d in states] == list(range(1, N + 1))
+    assert all(d.edge >= 0 and 0 < d.r < 1 and d.throw_kind in ('jog', 'flip') for d in states)
+    assert [(d.stamp.sec, d.stamp.nanosec) for d in states] == \
+        [(d.stamp.sec, d.stamp.nanosec) for d in statuses]
+    (ls,) = decoded['/feeder/predicted/limit_set']
+    (an,) = decoded['/feeder/predicted/analysis']
+    assert len(ls.pattern) >= 2 and list(an.limit_set.pattern) == list(ls.pattern)
+    assert [(b.edge, b.r_min, b.r_max, b.jogs_min, b.jogs_max) for b in an.limit_set.bands] == \
+        [(b.edge, b.r_min, b.r_max, b.jogs_min, b.jogs_max) for b in ls.bands]
+    assert sorted(b.edge for b in ls.bands) == sorted(set(ls.pattern))
+    assert all(0 < b.r_min <= b.r_max for b in ls.bands)
+    assert an.goal_edge == 1 and an.sensor_feasible and an.edges
+    assert all(e.r_min <= e.r_flip for e in an.edges)
+    for topic in ('/feeder/edge1_ready', '/feeder/edge1_verdict'):
+        assert all(len(d.mac) == 32 and d.sent.sec > 0 for d in decoded[topic]), topic
+    return decoded
+
+
 def shipped_type_hash(cls):
     """RIHS01 hash from the type description (.json) installed with the message package."""
     import json
@@ -127,7 +232,7 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     monitor(graph, 'ready_deadline:=60')       # no idle republishing within the test
     ready = Statements(ros)
     verdicts = Verdicts(ros)
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    statuses = CycleStatuses(ros)
     wait_for_monitor(ros, ready)
     verdicts.wait_matched()
     wait_for_publishers(ros, '/feeder/predicted/state', 1)
@@ -199,13 +304,17 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
             msgs.setdefault(conn.topic, []).append(
                 deserialize_message(raw, EXPECTED[conn.topic][0]))
 
+    # Every message, decoded by an independent reader from the bag's schemas alone.
+    check_mcap_decodes_every_message(bag / 'run.mcap', meta, msgs)
+
     # Contents: what the test saw live, and what the interface promises.
-    bits = [status_values(s)['sensor'] == '1' for s in msgs['/feeder/cycle_status']]
-    assert bits == [status_values(s)['sensor'] == '1' for s in statuses.msgs]
+    reports = [parse_cycle_status(s) for s in msgs['/feeder/cycle_status']]
+    bits = [r.sensor for r in reports]
+    assert bits == [s.sensor for s in statuses.parsed]
     assert [r.range == -math.inf for r in msgs['/feeder/proximity']] == bits
     assert all(math.isinf(r.range) for r in msgs['/feeder/proximity'])
-    assert [int(status_values(s)['seq']) for s in msgs['/feeder/cycle_status']] == \
-        list(range(1, N + 1))
+    assert [r.seq for r in reports] == list(range(1, N + 1))
+    assert all(r.ok and r.reason == '' and len(r.mac) == 32 for r in reports)
     # The signed statements and verdicts read back as sent: every one still verifies under the
     # run's key (a bag is evidence), seq by seq as the test saw them live.
 
@@ -225,16 +334,16 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     assert all(len(f.mac) == 32 for f in fired)
     velocities = [js.velocity[0] for js in msgs['/feeder/joint_states']]
     assert velocities[1::2] == [0.0] * N and all(v > 0 for v in velocities[::2])
-    ls = msgs['/feeder/predicted/limit_set'][0]
-    assert [d.label for d in ls.layout.dim] == ['edges', 'fields']
-    rows, fields = ls.layout.dim[0].size, ls.layout.dim[1].size
-    assert fields == 5 and len(ls.data) == rows * fields and rows >= 2
-    for r in range(rows):
-        assert ls.data[r * 5 + 1] <= ls.data[r * 5 + 2]
-    analysis = json.loads(msgs['/feeder/predicted/analysis'][0].data)
-    assert analysis['sensor']['goal_edge'] == 1
-    assert sorted(int(e) for e in analysis['limit_set']['bands']) == \
-        [int(ls.data[r * 5]) for r in range(rows)]
+    (ls,) = msgs['/feeder/predicted/limit_set']
+    assert len(ls.bands) >= 2 and all(b.r_min <= b.r_max for b in ls.bands)
+    assert [b.edge for b in ls.bands] == sorted(set(ls.pattern))
+    (analysis,) = msgs['/feeder/predicted/analysis']
+    scene = load_scene(TRIANGLE)
+    assert analysis.scene == scene.name and analysis.goal_edge == 1
+    with open(TRIANGLE, 'rb') as scene_file:
+        digest = hashlib.sha256(scene_file.read()).digest()
+    assert analysis.scene_hash == int.from_bytes(digest[:8], 'big')
+    assert analysis.limit_set == ls       # the latched limit set is the analysis' own
     assert 2 <= len(msgs['/feeder/markers']) <= N + 1
     markers = msgs['/feeder/markers'][-1].markers
     assert {'arm', 'part', 'sensor', 'limit_set'} <= {m.ns for m in markers}
@@ -244,10 +353,8 @@ def test_bag_of_the_graph_reads_back(graph, ros, tmp_path):
     outline = next(m for m in markers if (m.ns, m.id) == ('part', 0))
     states = [parse_predicted_state(m) for m in msgs['/feeder/predicted/state']]
     assert [p.seq for p in states] == list(range(1, N + 1))
-    assert [p.stamp_ns for p in states] == \
-        [parse_stamp_text(status_values(s)['stamp']) for s in msgs['/feeder/cycle_status']]
+    assert [p.stamp_ns for p in states] == [r.stamp_ns for r in reports]
     edge, R = states[-1].edge, states[-1].R
-    scene = load_scene(TRIANGLE)
     expected = scene.part.pose_vertices(edge, R, scene.h)
     got = [c for p in outline.points[:-1] for c in (p.x, p.z)]
     assert got == pytest.approx(expected.ravel().tolist())

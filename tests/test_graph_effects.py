@@ -14,10 +14,13 @@
 
 """Scenes with effects on real DDS: the paper's experiment, a part lost off the arm's end."""
 
+import math
+
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_nodes import (check_ready_correctness, Collector, Diagnostics, EXPERIMENT, monitor,
-                          PredictedStates, predictor, PREDICTOR, REPO, run_cycles, SHORT_ARM,
-                          sim_as_hardware, Statements, status_values, wait_for_monitor,
+from feeder_interfaces.msg import CycleStatus, PredictedState
+from feeder_nodes import (check_ready_correctness, Collector, CycleStatuses, Diagnostics,
+                          EXPERIMENT, monitor, PredictedStates, predictor, PREDICTOR, REPO,
+                          run_cycles, SHORT_ARM, sim_as_hardware, Statements, wait_for_monitor,
                           wait_reports_matched)
 from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import Range
@@ -88,7 +91,7 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     predictor(graph, *start, scene=SHORT_ARM)
     monitor(graph, 'settle_cycles:=0', 'diagnostics_period:=0.2', scene=SHORT_ARM)
     ready = Statements(ros)
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    statuses = CycleStatuses(ros)
     prox = Collector(ros, Range, '/feeder/proximity')
     pred = Predictions(ros, '/feeder')
     diags = Diagnostics(ros)
@@ -100,17 +103,22 @@ def test_a_part_lost_off_the_arm_end_is_reported(graph, ros):
     # 40 cycles: the part is lost in the first; the arm keeps cycling empty.
     cycles = 40
     run_cycles(ros, cycles, statuses, PERIOD)
-    last_seq = int(status_values(statuses.msgs[-1])['seq'])
+    last_seq = statuses.parsed[-1].seq
     ros.spin_until(lambda: len(pred) == len(statuses) and ready.checked[-1].seq == last_seq,
                    10.0, 'the predictor and the monitor to follow')
     n = len(statuses)
-    assert [status_values(s)['sensor'] for s in statuses.msgs] == ['0'] * n
-    assert all(s.level == DiagnosticStatus.OK and s.message == 'completed'
-               for s in statuses.msgs)
+    reports = statuses.parsed
+    assert [s.sensor for s in reports] == [False] * n
+    assert all(s.ok and s.reason == '' for s in reports)
+    assert all((m.outcome, m.sensor) == (CycleStatus.OUTCOME_COMPLETED, CycleStatus.SENSOR_CLEAR)
+               for m in statuses.msgs)
     assert len(prox) == n and all(p.range == float('inf') for p in prox.msgs)
-    assert [p.seq for p in pred.states.parsed] == \
-        [int(status_values(s)['seq']) for s in statuses.msgs]
+    assert [p.seq for p in pred.states.parsed] == [s.seq for s in reports]
     assert pred.last(n) == ([-1] * n, ['lost'] * n)
+    # On the wire: EDGE_LOST, r NaN, THROW_LOST, each matched to its cycle's sample stamp.
+    assert all((m.edge, m.throw_kind) == (PredictedState.EDGE_LOST, PredictedState.THROW_LOST)
+               and math.isnan(m.r) for m in pred.states.msgs)
+    assert [p.stamp_ns for p in pred.states.parsed] == [s.stamp_ns for s in reports]
     assert pred.radii == [] and len(pred.pose) == 0    # no NaN, no made-up pose
     for node in ('feeder_driver', 'feeder_sim'):
         wait_for_prediction_status(ros, diags, node, DiagnosticStatus.ERROR,

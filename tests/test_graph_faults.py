@@ -31,10 +31,10 @@ import time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from feeder_common import auth, qos
 from feeder_common.messages import check_verdict, cycle_status
-from feeder_interfaces.msg import Verdict
-from feeder_nodes import (Collector, Diagnostics, DRIVER, LATCHED, MONITOR, monitor,
+from feeder_interfaces.msg import CycleStatus, Verdict
+from feeder_nodes import (CycleStatuses, Diagnostics, DRIVER, LATCHED, MONITOR, monitor,
                           PredictedStates, predictor, STARTUP_TIMEOUT, sim_as_hardware,
-                          Statements, status_values, TRIANGLE, Verdicts, wait_for_monitor,
+                          Statements, TRIANGLE, Verdicts, wait_for_monitor,
                           wait_reports_matched, watch_monitor)
 import pytest
 from rclpy.duration import Duration
@@ -53,7 +53,7 @@ FORGED = 50
 FORGER = """
 import sys, time
 import rclpy
-from diagnostic_msgs.msg import DiagnosticStatus
+from feeder_interfaces.msg import CycleStatus
 from rclpy.duration import Duration
 from sensor_msgs.msg import Range
 from feeder_common import auth, qos
@@ -63,7 +63,7 @@ first, count, readers = int(first), int(count), int(readers)
 rclpy.init()
 node = rclpy.create_node('forger')
 # the driver's own QoS (the monitor's reader asks for a liveliness lease of 1 s)
-status_pub = node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
+status_pub = node.create_publisher(CycleStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
 prox_pub = node.create_publisher(Range, '/feeder/proximity', qos.PROXIMITY)
 end = time.monotonic() + 30
 while status_pub.get_subscription_count() < readers or prox_pub.get_subscription_count() < 1:
@@ -77,7 +77,7 @@ t0 = node.get_clock().now().nanoseconds
 for k in range(count):
     t = t0 + k * 1000
     prox_pub.publish(proximity(t, True, 0.02))
-    args = (first + k, True, 'completed', True, t, 'forged')
+    args = (first + k, True, '', True, t, 'forged')
     status_pub.publish(signer.cycle_status(*args) if signer else cycle_status(*args))
 acked = status_pub.wait_for_all_acked(Duration(seconds=10))
 print(f'forger: {count} reports from seq {first}, acknowledged: {acked}', flush=True)
@@ -136,7 +136,7 @@ def test_a_forger_without_the_key_that_leaves_at_once_never_makes_a_ready(graph,
     monitor(graph)
     ready, verdicts, statuses = watch_monitor(ros)
     last = trigger_until_ready(ros, verdicts)
-    session = status_values(statuses.msgs[-1])['session']
+    session = statuses.parsed[-1].session
     assert ready.checked[-1].ready_now
     n_verdicts = len(verdicts)
 
@@ -171,10 +171,10 @@ def test_a_replayed_report_is_refused_and_a_replayed_ready_reads_stale(graph, ro
     monitor(graph)
     ready, verdicts, statuses = watch_monitor(ros)
     last = trigger_until_ready(ros, verdicts)
-    genuine = next(m for m in statuses.msgs if int(status_values(m)['seq']) == last.seq)
+    genuine = next(m for m in statuses.msgs if m.seq == last.seq)     # signed, as sent
     ready_stmt = next(m for m, c in zip(ready.msgs, ready.checked)
                       if c.ready_now and c.seq == last.seq)
-    pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
+    pub = ros.node.create_publisher(CycleStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
     ros.spin_until(lambda: pub.get_subscription_count() >= 2, 20.0, 'the monitor')
 
     # At once: the same seq again (a duplicate) is refused.
@@ -282,17 +282,18 @@ def test_a_huge_seq_does_not_hang_the_predictor(graph, ros):
     """
     A seq of 2**62 after seq 1: an anomaly in /diagnostics, and the next cycle is followed.
 
-    A seq of 2**63 or more is no seq at all (feeder_common.messages): a bad status, counted.
+    A seq of 2**63 or more (the uint64 field holds up to 2**64 - 1) is no seq at all
+    (feeder_common.messages): a bad status, counted.
     """
     pred = predictor(graph)
     states = PredictedStates(ros)
     diags = Diagnostics(ros)
-    pub = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
+    pub = ros.node.create_publisher(CycleStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
     ros.spin_until(lambda: pub.get_subscription_count() >= 1, 60.0, 'the predictor')
     ros.spin_for(0.5)
     stamp = ros.node.get_clock().now().nanoseconds
-    for k, seq in enumerate((1, 2 ** 70, 2 ** 62, 2 ** 62 + 1)):
-        pub.publish(cycle_status(seq, True, 'completed', False, stamp + k, 'test'))
+    for k, seq in enumerate((1, 2 ** 64 - 1, 2 ** 62, 2 ** 62 + 1)):
+        pub.publish(cycle_status(seq, True, '', False, stamp + k, 'test'))
     ros.spin_until(lambda: len(states) >= 2, 10.0, 'predictions of seq 1 and 2**62 + 1')
     name = 'feeder_sim: sensor agreement'
     ros.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR
@@ -340,33 +341,36 @@ def fire_the_first_cycle(ros):
 def test_the_cycle_a_signal_aborts_reaches_cycle_status(graph, ros, tmp_path, sig):
     """The driver sends STOP and reports the aborted cycle before it leaves (issue 10, item 6)."""
     emu, drv = start_emulator_and_driver(graph, tmp_path, '--cycle-time', '20')
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    statuses = CycleStatuses(ros)
     fire_the_first_cycle(ros)            # it takes 20 s (--cycle-time)
     ros.spin_for(0.3)
     drv.send_signal(sig)
     assert drv.wait(10) == 0, graph.log(drv)
     ros.spin_until(lambda: statuses.msgs, 5.0, 'the aborted cycle')
-    (st,) = statuses.msgs
-    assert status_values(st)['seq'] == '1' and st.level == DiagnosticStatus.ERROR
-    assert st.message == f'aborted: interrupted ({sig.name})'
+    (st,) = statuses.parsed
+    assert (st.seq, st.ok, st.sensor) == (1, False, None)
+    assert statuses.msgs[0].outcome == CycleStatus.OUTCOME_FAILED
+    assert st.reason == f'aborted: interrupted ({sig.name})'
     assert emu.poll() is None
 
 
 # A reliable reader in a process of its own (so that it can be stopped): one line per
-# message it takes, the message text of a cycle_status or of each status of a /diagnostics.
+# message it takes, the reason of a cycle_status or the message of each status of a
+# /diagnostics.
 # Deep, so that nothing is lost on its side while it catches up.
 SLOW_READER = """
 import sys
 import rclpy
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticArray
+from feeder_interfaces.msg import CycleStatus
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 rclpy.init()
 node = rclpy.create_node('slow_reader')
 topic = sys.argv[1]
 def on(msg):
-    for status in (msg.status if topic == '/diagnostics' else [msg]):
-        print(status.message, flush=True)
-node.create_subscription(DiagnosticArray if topic == '/diagnostics' else DiagnosticStatus,
+    for text in ([s.message for s in msg.status] if topic == '/diagnostics' else [msg.reason]):
+        print(text, flush=True)
+node.create_subscription(DiagnosticArray if topic == '/diagnostics' else CycleStatus,
                          topic, on, QoSProfile(depth=5000,
                                                reliability=ReliabilityPolicy.RELIABLE))
 try:
@@ -482,7 +486,7 @@ def test_an_error_that_lasted_one_period_reaches_a_slow_diagnostics_reader(ros, 
 def test_a_signal_while_cycling_reports_every_fired_cycle(graph, ros, tmp_path, sig):
     """At 100 Hz, a signal aborts the cycle in flight: it is the last cycle_status."""
     emu, drv = start_emulator_and_driver(graph, tmp_path, '--cycle-time', '0.05')
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    statuses = CycleStatuses(ros)
     ros.wait_remote_matched(DRIVER, readers={'/feeder/cycle_status': 1})    # ours
     wait_for_handshake(ros)
     ros.set_parameters('/feeder/feeder_driver', {'cycle_period': 0.01})
@@ -492,7 +496,9 @@ def test_a_signal_while_cycling_reports_every_fired_cycle(graph, ros, tmp_path, 
     drv.send_signal(sig)
     assert drv.wait(10) == 0, graph.log(drv)
     ros.spin_for(1.0)
-    seqs = [int(status_values(s)['seq']) for s in statuses.msgs]
+    reports = statuses.parsed
+    seqs = [s.seq for s in reports]
     assert seqs == list(range(1, len(seqs) + 1))
-    last = statuses.msgs[-1]
-    assert last.message == f'aborted: interrupted ({sig.name})', (last.message, graph.log(drv))
+    last = reports[-1]
+    assert (last.ok, last.reason) == (False, f'aborted: interrupted ({sig.name})'), \
+        (last, graph.log(drv))

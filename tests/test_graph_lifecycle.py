@@ -19,10 +19,9 @@ The sim's services refuse until it is active; the monitor judges and states a re
 active, says false on deactivate, and a scene it cannot run fails its configure.
 """
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_interfaces.msg import Verdict
-from feeder_nodes import (Collector, Diagnostics, monitor, REPO, SHORT_ARM, sim_as_hardware,
-                          Statements, TRIANGLE, Verdicts, wait_for_monitor)
+from feeder_nodes import (Collector, CycleStatuses, Diagnostics, monitor, REPO, SHORT_ARM,
+                          sim_as_hardware, Statements, TRIANGLE, Verdicts, wait_for_monitor)
 from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
 from sensor_msgs.msg import Range
@@ -44,7 +43,7 @@ def test_services_follow_the_lifecycle(graph, ros):
     graph.start('feeder_sim', 'standin_node', '--ros-args', '-r', '__ns:=/feeder', '-r',
                 '__node:=feeder_driver', '-p', 'autostart:=false',
                 '-p', f'scene:={TRIANGLE}', '-p', 'cycle_period:=0.05')
-    edges = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    edges = CycleStatuses(ros)
     prox = Collector(ros, Range, '/feeder/proximity')
     assert state(ros) == 'unconfigured'
     res = ros.call(Trigger, f'{NODE}/trigger_cycle', Trigger.Request())
@@ -97,7 +96,7 @@ def test_the_monitor_states_a_ready_only_while_active(graph, ros):
     mon = monitor(graph, 'autostart:=false')
     ready = Statements(ros)
     verdicts = Verdicts(ros)
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    statuses = CycleStatuses(ros)
     diags = Diagnostics(ros)
     # Unconfigured: no analysis, nothing judged, nothing said; the cycles go on.
     assert state(ros, MONITOR) == 'unconfigured'

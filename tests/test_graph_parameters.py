@@ -14,10 +14,9 @@
 
 """(d) Bad parameters are rejected with a reason, through the parameter services."""
 
-from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_nodes import (Collector, Diagnostics, monitor, PredictedStates, predictor, REPO,
-                          sim_as_hardware, Statements, status_values, TRIANGLE,
-                          wait_for_monitor, wait_for_publishers)
+from feeder_nodes import (CycleStatuses, Diagnostics, monitor, PredictedStates, predictor, REPO,
+                          sim_as_hardware, Statements, TRIANGLE, wait_for_monitor,
+                          wait_for_publishers)
 from std_srvs.srv import Trigger
 from throwmap import analyse, load_scene, sees
 import yaml
@@ -40,7 +39,7 @@ def test_bad_values_are_rejected_and_good_ones_applied(graph, ros):
     monitor(graph)
     ready = Statements(ros)
     states = PredictedStates(ros)
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    statuses = CycleStatuses(ros)
     wait_for_monitor(ros, ready)
     wait_for_publishers(ros, '/feeder/predicted/state', 1)
 
@@ -74,7 +73,7 @@ def test_bad_values_are_rejected_and_good_ones_applied(graph, ros):
     edge, R, _ = scene.model.f(1, 0.15)
     assert (states.parsed[0].edge, states.parsed[0].R) == (edge, R)
     sensor = analyse(scene).sensor
-    assert (status_values(statuses.msgs[0])['sensor'] == '1') == \
+    assert statuses.parsed[0].sensor == \
         bool(sees(scene.part, edge, R, sensor.radius, sensor.footprint))
 
     # monitor: the proven warm-up, ranges, read-only (the key file too: a node never changes

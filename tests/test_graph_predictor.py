@@ -23,9 +23,9 @@ sensor bits the hardware sent.
 import math
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_common.stamps import parse_stamp_text
-from feeder_nodes import (Collector, Diagnostics, DRIVER, PredictedStates, predictor, PREDICTOR,
-                          sim_as_hardware, status_values, TRIANGLE)
+from feeder_common.messages import time_ns
+from feeder_nodes import (Collector, CycleStatuses, Diagnostics, DRIVER, PredictedStates,
+                          predictor, PREDICTOR, sim_as_hardware, TRIANGLE)
 from geometry_msgs.msg import PoseStamped
 import pytest
 from std_srvs.srv import Trigger
@@ -39,7 +39,7 @@ def test_predictor_follows_the_hardware(graph, ros):
     predictor(graph, 'diagnostics_period:=0.2')
     states = PredictedStates(ros)
     poses = Collector(ros, PoseStamped, '/feeder/predicted/part_pose')
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    statuses = CycleStatuses(ros)
     diags = Diagnostics(ros)
     # The stand-in's cycle_status matched the predictor's reader and ours, the predictor's
     # writers ours.
@@ -64,23 +64,23 @@ def test_predictor_follows_the_hardware(graph, ros):
     predicted = states.parsed
     assert [(p.edge, p.R, p.throw_kind) for p in predicted] == expected     # to the bit
     # Each state names its cycle: the seq and the sample stamp of its cycle_status.
-    assert [(p.seq, p.stamp_ns) for p in predicted] == \
-        [(int(status_values(s)['seq']), parse_stamp_text(status_values(s)['stamp']))
-         for s in statuses.msgs]
+    reports = statuses.parsed
+    assert [(p.seq, p.stamp_ns) for p in predicted] == [(s.seq, s.stamp_ns) for s in reports]
+    # ... the same fields on the wire (PredictedState's stamp is CycleStatus's).
+    assert [(m.seq, m.stamp) for m in states.msgs] == [(m.seq, m.stamp) for m in statuses.msgs]
     assert len({e for e, _, _ in expected}) >= 2         # it did flip
     # The hardware's sensor bits are what the sensor sees of that state.
-    bits = [status_values(s)['sensor'] == '1' for s in statuses.msgs]
+    bits = [s.sensor for s in reports]
     assert bits == [bool(sees(scene.part, e, r, an.sensor.radius, an.sensor.footprint))
                     for e, r, _ in expected]
     # Poses in feeder_base (REP 103: z up), stamped like the hardware's samples.
-    for pose, (e, r, _), status in zip(poses.msgs, expected, statuses.msgs):
+    for pose, (e, r, _), status in zip(poses.msgs, expected, reports):
         assert pose.header.frame_id == 'feeder_base'
         assert pose.pose.position.x == r and pose.pose.position.y == 0.0
         assert pose.pose.position.z == pytest.approx(scene.h + scene.part.d[e])
         q = pose.pose.orientation
         assert q.x == 0.0 and q.z == 0.0 and math.isclose(q.y ** 2 + q.w ** 2, 1.0)
-        stamp = f'{pose.header.stamp.sec}.{pose.header.stamp.nanosec:09d}'
-        assert stamp == status_values(status)['stamp']
+        assert time_ns(pose.header.stamp) == status.stamp_ns
 
     name = 'feeder_sim: sensor agreement'
 

@@ -15,8 +15,8 @@
 """(a) The sim as hardware and the monitor over a few hundred cycles on real DDS."""
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_nodes import (check_ready_correctness, Collector, Diagnostics, monitor, run_cycles,
-                          sim_as_hardware, Statements, TRIANGLE, wait_for_monitor,
+from feeder_nodes import (check_ready_correctness, CycleStatuses, Diagnostics, monitor,
+                          run_cycles, sim_as_hardware, Statements, TRIANGLE, wait_for_monitor,
                           wait_reports_matched)
 
 PERIOD = 0.01
@@ -31,7 +31,7 @@ def test_a_misplaced_sensor_shows_as_an_anomaly(graph, ros):
     sim_as_hardware(graph, f'cycle_period:={PERIOD}', 'sensor_radius:=0.21')
     monitor(graph, 'settle_cycles:=0')
     ready = Statements(ros)
-    statuses = Collector(ros, DiagnosticStatus, '/feeder/cycle_status')
+    statuses = CycleStatuses(ros)
     diags = Diagnostics(ros)
     wait_for_monitor(ros, ready)
     wait_reports_matched(ros, status_readers=2, proximity_readers=1, verdict_readers=0)

@@ -27,10 +27,9 @@ import os
 import signal
 import time
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from feeder_common import auth, qos
 from feeder_common.messages import signed_verdict
-from feeder_interfaces.msg import Verdict
+from feeder_interfaces.msg import CycleStatus, Verdict
 from feeder_nodes import (DRIVER, monitor, sim_as_hardware, Statements, STARTUP_TIMEOUT,
                           TRIANGLE, Verdicts, wait_for_monitor, wait_reports_matched)
 from std_srvs.srv import SetBool, Trigger
@@ -192,8 +191,7 @@ def test_attack_8_another_live_writer_does_not_hide_a_dead_driver(graph, ros):
     wait_for_monitor(ros, ready)
     wait_reports_matched(ros, status_readers=1, proximity_readers=1,       # the monitor's
                          verdict_readers=0)
-    forger = ros.node.create_publisher(DiagnosticStatus, '/feeder/cycle_status',
-                                       qos.CYCLE_STATUS)
+    forger = ros.node.create_publisher(CycleStatus, '/feeder/cycle_status', qos.CYCLE_STATUS)
     ros.spin_until(lambda: forger.get_subscription_count() >= 1, STARTUP_TIMEOUT,
                    "the monitor's reader to match the forger's writer")
     kill_when_ready_and_time_the_drop(ros, ready, sim)

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-The real ``ros2 launch``, ``ros2 param load``, and several feeders side by side.
+The real ``ros2`` CLI (launch, param load, interface show, topic echo); feeders side by side.
 
 The ``ros2`` tests run where the CLI exists (tests/ros_cli.py) and are skipped elsewhere with
 the reason; three feeders side by side also run as plain processes everywhere.
@@ -24,12 +24,18 @@ import re
 import signal
 import time
 
-from diagnostic_msgs.msg import DiagnosticStatus
-from feeder_nodes import (Collector, monitor, predictor, REPO, sim_as_hardware, Statements,
-                          STARTUP_TIMEOUT, status_values, TRIANGLE, Verdicts)
+from builtin_interfaces.msg import Time
+from feeder_common import auth
+from feeder_common.messages import (check_verdict, parse_cycle_fired, parse_cycle_status,
+                                    parse_predicted_state)
+from feeder_interfaces.msg import CycleStatus, PredictedState, Verdict
+from feeder_nodes import (CycleStatuses, DRIVER, MONITOR, monitor, predictor, REPO,
+                          sim_as_hardware, Statements, STARTUP_TIMEOUT, TRIANGLE, Verdicts,
+                          wait_for_monitor)
 import pytest
 import ros_cli
 from std_srvs.srv import SetBool, Trigger
+import yaml
 
 SHARE = REPO / 'ros2_ws' / 'install'
 
@@ -137,7 +143,7 @@ def test_hardware_launch_with_the_emulator(cli, ros, tmp_path, launches):
                     f'emulator_link:={tmp_path / "tty"}', 'namespace:=hw')
     launches.append(launch)
     wait_nodes(ros, ['/hw/feeder_driver', '/hw/feeder_sim', '/hw/feeder_monitor'])
-    statuses = Collector(ros, DiagnosticStatus, '/hw/cycle_status')
+    statuses = CycleStatuses(ros, '/hw/cycle_status')
     deadline = time.monotonic() + 30
     while True:     # the driver connects once the emulator's pty is there
         res = ros.call(Trigger, '/hw/feeder_driver/trigger_cycle', Trigger.Request())
@@ -146,7 +152,7 @@ def test_hardware_launch_with_the_emulator(cli, ros, tmp_path, launches):
         ros.spin_for(0.3)
     assert res.success, res.message
     ros.spin_until(lambda: len(statuses) == 1, 10.0, 'the cycle')
-    assert statuses.msgs[0].level == DiagnosticStatus.OK
+    assert statuses.parsed[0].ok and statuses.parsed[0].sensor is not None
     param_load(cli, '/hw/feeder_driver', SHARE / 'feeder_driver' / 'share' / 'feeder_driver' /
                'config' / 'driver.yaml')
     assert launch.stop() == 0, launch.log
@@ -206,7 +212,7 @@ def check_feeders_apart(ros, spaces, cycles=40):
     naming that cycle (none for the idle one), signed by its own monitor; its predictor
     followed exactly those.
     """
-    statuses = {ns: Collector(ros, DiagnosticStatus, f'{ns}/cycle_status') for ns in spaces}
+    statuses = {ns: CycleStatuses(ros, f'{ns}/cycle_status') for ns in spaces}
     ready = {ns: Statements(ros, f'{ns}/edge1_ready', monitor=f'{ns}/feeder_monitor')
              for ns in spaces}
     verdicts = {ns: Verdicts(ros, f'{ns}/edge1_verdict', monitor=f'{ns}/feeder_monitor')
@@ -231,12 +237,12 @@ def check_feeders_apart(ros, spaces, cycles=40):
                         SetBool.Request(data=False)).success
     ros.spin_for(1.5)
     for ns in spaces:
-        seqs = [int(status_values(s)['seq']) for s in statuses[ns].msgs]
+        seqs = statuses[ns].seqs
         assert seqs == list(range(1, len(seqs) + 1)), ns
         assert [v.seq for v in verdicts[ns].parsed] == seqs, ns
         assert all(v.authentic for v in verdicts[ns].parsed), ns
         assert all(c.authentic for c in ready[ns].checked), ns
-        assert all(s.hardware_id == 'sim' for s in statuses[ns].msgs)
+        assert all(s.hardware_id == 'sim' for s in statuses[ns].parsed)
     assert not statuses[spaces[1]].msgs
     assert len(crossed) == len(verdicts[spaces[0]]) and \
         not any(v.authentic for v in crossed.parsed)
@@ -292,3 +298,128 @@ def test_the_feed_action_through_ros2_action_send_goal(cli, ros, tmp_path, launc
     cycles = int(re.search(r'detail: ready at cycle seq \d+ after (\d+) cycles', out).group(1))
     assert cycles > 87, out       # the settling after a new part
     assert launch.stop() == 0, launch.log
+
+
+# ---- the feeder's own message types, as a ROS user sees them -------------------------------
+
+def interface_lines(cli, *argv):
+    """Return the lines of ``ros2 interface show ARGV`` without comments (indented)."""
+    status, out = ros_cli.run(['interface', 'show', *argv], cli)
+    assert status == 0, out
+    return {line.split('#')[0].rstrip() for line in out.splitlines()} - {''}
+
+
+def test_ros2_interface_show_of_the_typed_messages(cli):
+    """Show the installed definitions, nested types expanded (one tab per level)."""
+    lines = interface_lines(cli, 'feeder_interfaces/msg/CycleStatus')
+    assert {'string OUTCOME_FIRED = "fired"', 'string OUTCOME_COMPLETED = "completed"',
+            'string OUTCOME_FAILED = "failed"', 'int8 SENSOR_NONE = -1', 'int8 SENSOR_CLEAR = 0',
+            'int8 SENSOR_DETECTED = 1', 'uint64 seq', 'builtin_interfaces/Time stamp',
+            '\tint32 sec', '\tuint32 nanosec', 'string outcome', 'int8 sensor', 'string reason',
+            'string hardware_id', 'string session', 'uint8[] mac'} <= lines, sorted(lines)
+    lines = interface_lines(cli, 'feeder_interfaces/msg/PredictedState')
+    assert {'string THROW_LOST = "lost"', 'int32 EDGE_LOST = -1', 'uint64 seq',
+            '\tuint32 nanosec', 'int32 edge', 'float64 r', 'string throw_kind'} <= lines
+    # Analysis -> LimitSet -> EdgeBand, and the other nested sequences. (Without
+    # --all-comments, ros2interface 0.36.1 cuts a nested line at the first occurrence of its
+    # comment's text: EdgeBand's "float64 r_min  # m" shows as "float64 r". The full
+    # comments show every field whole.)
+    nested = {'LimitSet limit_set', '\tint32[] pattern', '\tEdgeBand[] bands', '\t\tint32 edge',
+              '\t\tint32 jogs_min', '\t\tint32 jogs_max', '\tbool periodic',
+              '\tfloat64 cycle_length_mean', 'EdgeDesign[] edges', '\tfloat64 r_grasp',
+              '\tfloat64 r_flip', 'Escape[] escapes', '\tint32 to_edge', 'BasinOutcome[] basin',
+              '\tstring pattern', '\tuint32 starts', 'string scene', 'uint64 scene_hash',
+              'int32 goal_edge', 'bool sensor_feasible', 'float64 worst_normal_force'}
+    lines = interface_lines(cli, 'feeder_interfaces/msg/Analysis')
+    assert nested <= lines, sorted(nested - lines)
+    lines = interface_lines(cli, '--all-comments', 'feeder_interfaces/msg/Analysis')
+    assert nested | {'\t\tfloat64 r_min', '\t\tfloat64 r_max'} <= lines, sorted(lines)
+
+
+def echo_once(cli, topic):
+    """Return the message ``ros2 topic echo --once TOPIC`` printed, as YAML data."""
+    status, out = ros_cli.run(['topic', 'echo', '--once', '--no-daemon', '--spin-time', '5',
+                               topic], cli, timeout=90)
+    assert status == 0 and '\n---' in out, (topic, out)
+    return yaml.safe_load(out.split('\n---')[0])
+
+
+def report_of(printed):
+    """Rebuild the CycleStatus the CLI printed from its fields."""
+    return CycleStatus(seq=printed['seq'], stamp=Time(**printed['stamp']),
+                       outcome=printed['outcome'], sensor=printed['sensor'],
+                       reason=printed['reason'], hardware_id=printed['hardware_id'],
+                       session=printed['session'], mac=printed['mac'])
+
+
+def test_ros2_topic_echo_prints_the_typed_fields(cli, graph, ros):
+    """
+    Echo each typed topic of the sim graph once with ``ros2 topic echo``, field by field.
+
+    What it prints is the message: the cycle reports and the verdict rebuilt from the printed
+    fields parse (feeder_common.messages) and their MACs verify under the run's key; the
+    latched limit set is the analysis' own.
+    """
+    sim_as_hardware(graph, 'cycle_period:=0.1')
+    predictor(graph)
+    monitor(graph)
+    ready = Statements(ros)
+    wait_for_monitor(ros, ready)
+    ros.wait_active(DRIVER)
+    assert ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True)).success
+    try:
+        printed = {topic: echo_once(cli, f'/feeder/{topic}') for topic in (
+            'cycle_status', 'cycle_fired', 'predicted/state', 'predicted/limit_set',
+            'predicted/analysis', 'edge1_verdict')}
+    finally:
+        ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=False))
+
+    got = printed['cycle_status']
+    assert list(got) == ['seq', 'stamp', 'outcome', 'sensor', 'reason', 'hardware_id',
+                         'session', 'mac'], got
+    status = parse_cycle_status(report_of(got))
+    assert (got['outcome'], status.ok, status.reason, status.hardware_id) == \
+        ('completed', True, '', 'sim')
+    assert got['sensor'] in (0, 1) and status.seq >= 1 and len(status.mac) == 32
+    assert auth.mac_ok(ros.key, auth.CYCLE_LABEL, auth.cycle_fields(
+        DRIVER, status.session, status.seq, status.stamp_ns, 'completed',
+        str(got['sensor']), ''), status.mac)
+
+    got = printed['cycle_fired']
+    fired = parse_cycle_fired(report_of(got))
+    assert (got['outcome'], got['sensor'], got['reason']) == ('fired', -1, '')
+    assert fired.session == status.session
+    assert auth.mac_ok(ros.key, auth.FIRED_LABEL, auth.fired_fields(
+        DRIVER, fired.session, fired.seq, fired.stamp_ns), fired.mac)
+
+    got = printed['predicted/state']
+    assert list(got) == ['seq', 'stamp', 'edge', 'r', 'throw_kind'], got
+    state = parse_predicted_state(PredictedState(
+        seq=got['seq'], stamp=Time(**got['stamp']), edge=got['edge'], r=got['r'],
+        throw_kind=got['throw_kind']))
+    assert state.seq >= 1 and state.edge in (0, 1, 2) and 0 < state.R < 0.4
+    assert state.throw_kind in ('jog', 'flip')
+
+    limit_set = printed['predicted/limit_set']
+    assert list(limit_set) == ['pattern', 'bands', 'periodic', 'transient', 'cycle_length_min',
+                               'cycle_length_mean', 'cycle_length_max'], limit_set
+    assert limit_set['pattern'] == [0, 2, 1] and limit_set['periodic'] is True
+    assert [b['edge'] for b in limit_set['bands']] == [0, 1, 2]
+    assert all(list(b) == ['edge', 'r_min', 'r_max', 'jogs_min', 'jogs_max'] and
+               0 < b['r_min'] <= b['r_max'] for b in limit_set['bands'])
+    analysis = printed['predicted/analysis']
+    assert analysis['scene'] == 'triangle' and analysis['goal_edge'] == 1
+    assert analysis['limit_set'] == limit_set
+    assert [e['edge'] for e in analysis['edges']] == [0, 1, 2]
+    assert all(e['r_grasp'] <= e['r_flip'] for e in analysis['edges'])
+    assert analysis['basin'] == [{'pattern': '0-2-1', 'starts': analysis['basin'][0]['starts']}]
+    assert analysis['invariant'] is True and analysis['escapes'] == []
+
+    got = printed['edge1_verdict']
+    assert list(got) == ['seq', 'stamp', 'ready', 'state', 'anomaly', 'session', 'sent', 'mac']
+    verdict = Verdict(seq=got['seq'], stamp=Time(**got['stamp']), ready=got['ready'],
+                      state=got['state'], anomaly=got['anomaly'], session=got['session'],
+                      sent=Time(**got['sent']), mac=got['mac'])
+    check = check_verdict(verdict, ros.key, MONITOR, ros.node.get_clock().now().nanoseconds,
+                          max_age_s=3600.0)
+    assert check.authentic and check.seq >= 1, check
