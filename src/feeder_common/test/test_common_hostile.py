@@ -33,7 +33,8 @@ from feeder_common import auth, messages
 from feeder_interfaces.msg import CycleStatus as CycleStatusMsg
 from feeder_interfaces.msg import PredictedState as PredictedStateMsg
 # tests/ (test support in no package) is on sys.path by pytest.ini
-from hostile_messages import ranges, TIMES, verdicts, wire
+from hostile_messages import (ranges, REPORT_FIELDS, STATE_FIELDS, TIMES, verdicts,
+                              wire)
 from hypothesis import example, given, settings, strategies as st
 import pytest
 
@@ -48,44 +49,7 @@ NS = messages.NS
 MAX_SEQ = messages.MAX_SEQ
 MAX_TEXT = messages.MAX_TEXT
 
-# ---- strategies: any value each field holds, the builders' values frequent ---------------
-
-INT32 = st.integers(-2**31, 2**31 - 1)
-UINT32 = st.integers(0, 2**32 - 1)
-SEQS = st.one_of(st.integers(0, MAX_SEQ), st.integers(0, 2**64 - 1),
-                 st.sampled_from((0, MAX_SEQ, MAX_SEQ + 1, 2**64 - 1)))
-TIME_FIELDS = st.one_of(
-    st.tuples(st.integers(0, 2**31 - 1), st.integers(0, NS - 1)),
-    st.tuples(INT32, UINT32),
-    st.tuples(st.sampled_from((0, -1, 2**31 - 1, -2**31)),
-              st.sampled_from((0, NS - 1, NS, 2**32 - 1))))
-STAMPS = TIME_FIELDS.map(lambda t: Time(sec=t[0], nanosec=t[1]))
-OUTCOMES = st.one_of(
-    st.sampled_from((CycleStatusMsg.OUTCOME_FIRED, CycleStatusMsg.OUTCOME_COMPLETED,
-                     CycleStatusMsg.OUTCOME_FAILED)),
-    st.sampled_from(('Completed', 'completed ', ' failed', 'FIRED', 'ok', 'error', '',
-                     'completed\x00x', 'c\u00f6mpleted')),
-    st.text(max_size=12))
-SENSORS = st.one_of(st.sampled_from((-1, 0, 1)), st.integers(-128, 127))
-TEXTS = st.one_of(
-    st.just(''), st.text(max_size=30),
-    st.builds(lambda c, n: c * n, st.characters(codec='utf-8'),
-              st.sampled_from((MAX_TEXT - 1, MAX_TEXT, MAX_TEXT + 1, 3 * MAX_TEXT))))
-HEX = '0123456789abcdef'
-SESSIONS = st.one_of(st.just(''), st.text(HEX, min_size=1, max_size=64),
-                     st.text(HEX, min_size=65, max_size=70),
-                     st.text(HEX + 'ABCDEFg \u0661', max_size=66), st.text(max_size=20))
-MACS = st.one_of(st.just(b''), st.binary(min_size=32, max_size=32), st.binary(max_size=70))
-REPORT_FIELDS = {'seq': SEQS, 'stamp': STAMPS, 'outcome': OUTCOMES, 'sensor': SENSORS,
-                 'reason': TEXTS, 'hardware_id': TEXTS, 'session': SESSIONS,
-                 'mac': MACS.map(list)}
-
-EDGES = st.one_of(st.integers(-1, 5), INT32, st.sampled_from((-2, -2**31, 2**31 - 1)))
-RS = st.one_of(st.floats(allow_nan=False, allow_infinity=False), st.floats(),
-               st.sampled_from((math.nan, -math.nan, math.inf, -math.inf, -0.0, 5e-324)))
-KINDS = st.one_of(st.sampled_from(messages.THROW_KINDS),
-                  st.sampled_from(('Jog', 'flip ', 'lost\x00x', '', 'none')), st.text(max_size=10))
-STATE_FIELDS = {'seq': SEQS, 'stamp': STAMPS, 'edge': EDGES, 'r': RS, 'throw_kind': KINDS}
+# ---- strategies: any value each field holds (tests/hostile_messages.py), builders' often --
 
 BUILT_TEXT = st.one_of(st.text(max_size=30), st.text(max_size=3).map(lambda t: t * 2000))
 
