@@ -36,7 +36,6 @@ import argparse
 import os
 import pathlib
 import shutil
-import signal
 import subprocess
 import sys
 import tempfile
@@ -46,7 +45,8 @@ REPO = pathlib.Path(__file__).resolve().parents[1]
 INSTALL = REPO / 'ros2_ws' / 'install'
 sys.path.insert(0, str(REPO / 'tests'))
 
-from feeder_testing import claim_domain_id, dds_env, install_env  # noqa: E402
+from feeder_testing import (claim_domain_id, dds_env, install_env, Probe,  # noqa: E402
+                            Processes)
 
 # The graph's processes: name -> (package, executable, arguments before the common ones).
 # Every one also gets: --ros-args -r __ns:=/feeder -p scene:=SCENE, and key_file:=KEY those
@@ -74,107 +74,55 @@ def parse_args():
     return p.parse_args()
 
 
-class Probe:
-    """The bench's node: first cycle_status and edge1_verdict, the enable calls."""
-
-    def __init__(self):
-        import rclpy
-        from feeder_interfaces.msg import CycleStatus, Verdict
-        from rclpy.qos import QoSProfile, ReliabilityPolicy
-        from std_srvs.srv import SetBool
-        self.rclpy = rclpy
-        self.SetBool = SetBool
-        self.node = rclpy.create_node('feeder_first_cycle_bench')
-        qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
-        self.first = {}
-        self.node.create_subscription(CycleStatus, '/feeder/cycle_status',
-                                      lambda m: self._seen('cycle_status', _seq(m)), qos)
-        self.node.create_subscription(Verdict, '/feeder/edge1_verdict',
-                                      lambda m: self._seen('edge1_verdict', m.seq), qos)
-        self.client = self.node.create_client(SetBool, '/feeder/feeder_driver/enable')
-
-    def _seen(self, what, seq):
-        self.first.setdefault(what, (time.monotonic(), seq))
-
-    def spin(self, seconds):
-        self.rclpy.spin_once(self.node, timeout_sec=seconds)
-
-    def enable(self):
-        """Call enable once (if the service is there); True when it answered success."""
-        if not self.client.service_is_ready():
-            return False
-        fut = self.client.call_async(self.SetBool.Request(data=True))
-        end = time.monotonic() + 5.0
-        while not fut.done() and time.monotonic() < end:
-            self.spin(0.02)
-        return fut.done() and fut.result().success
-
-    def close(self):
-        self.node.destroy_node()
-
-
-def _seq(msg):
-    """Return the seq of a cycle_status (feeder_interfaces/CycleStatus)."""
-    return int(msg.seq)
-
-
-def stop(procs):
-    for p in procs.values():
-        if p.poll() is None:
-            os.killpg(p.pid, signal.SIGINT)
-    for p in procs.values():
-        for sig in (signal.SIGTERM, signal.SIGKILL):
-            try:
-                p.wait(timeout=5.0)
-                break
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, sig)
-        p.wait()
-
-
 def run(args, scene, env, key, log_dir):
     """
     One start of the graph; return {event: (seconds after the start, seq)} (None: not seen).
 
-    It waits for both: a probe that matched the stand-in late misses its first cycle_status
-    (its seq then says so).
+    The processes and the bench's node are the test harness's (tests/feeder_testing.py:
+    Processes, Probe); enable is called until it answers success (the stand-in refuses it
+    until it is active). It waits for the first cycle_status and edge1_verdict: a probe that
+    matched the stand-in late misses its first cycle_status (its seq then says so).
     """
-    probe = Probe()
-    procs = {}
+    from feeder_interfaces.msg import CycleStatus, Verdict
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from std_srvs.srv import SetBool
+    procs = Processes(log_dir / f'{scene.stem}-{time.monotonic_ns()}', env=env, error=SystemExit,
+                      prog='first_cycle')
+    probe = Probe('feeder_first_cycle_bench', procs=procs, watch=True, error=SystemExit)
+    first = {}
+    qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    for msg_type, topic in ((CycleStatus, 'cycle_status'), (Verdict, 'edge1_verdict')):
+        probe.node.create_subscription(
+            msg_type, f'/feeder/{topic}',
+            lambda m, topic=topic: first.setdefault(topic, (time.monotonic(), int(m.seq))), qos)
     t0 = time.monotonic()
     times = {'enable': None, 'cycle_status': None, 'edge1_verdict': None}
     try:
         if args.design:
             subprocess.run([sys.executable, '-m', 'throwmap.cli', 'design', '--json', '--quiet',
-                            str(scene)], env=env, check=True, stdout=subprocess.DEVNULL)
+                            str(scene)], env=install_env(INSTALL, env), check=True,
+                           stdout=subprocess.DEVNULL)
         for name, (pkg, exe, extra) in NODES.items():
-            cmd = [str(INSTALL / pkg / 'lib' / pkg / exe), '--ros-args', '-r', '__ns:=/feeder',
-                   *extra, '-p', f'scene:={scene}']
+            argv = ['--ros-args', '-r', '__ns:=/feeder', *extra, '-p', f'scene:={scene}']
             if name in KEY_NODES:
-                cmd += ['-p', f'key_file:={key}']
+                argv += ['-p', f'key_file:={key}']
             if name in PERIOD_NODES:
-                cmd += ['-p', f'cycle_period:={args.period}']
-            log = open(log_dir / f'{scene.stem}-{name}.log', 'w')
-            procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env,
-                                           cwd=REPO, start_new_session=True)
-            log.close()
+                argv += ['-p', f'cycle_period:={args.period}']
+            procs.start(pkg, exe, *argv, name=name)
         end = t0 + args.timeout
-        waiting = ('cycle_status', 'edge1_verdict')
-        while time.monotonic() < end and any(times[w] is None for w in waiting):
-            for name, p in procs.items():
-                if p.poll() is not None:
-                    tail = (log_dir / f'{scene.stem}-{name}.log').read_text()[-1500:]
-                    raise SystemExit(f'first_cycle: {name} exited ({p.returncode}):\n{tail}')
-            if times['enable'] is None and probe.enable():
-                times['enable'] = time.monotonic() - t0
-            probe.spin(0.05)
-            for what in ('cycle_status', 'edge1_verdict'):
-                if times[what] is None and what in probe.first:
-                    at, seq = probe.first[what]
-                    times[what] = (at - t0, seq)
+        while not probe.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True),
+                             startup_timeout=max(1.0, end - time.monotonic())).success:
+            probe.spin_for(0.1)
+        times['enable'] = time.monotonic() - t0
+        probe.spin_until(lambda: len(first) == 2, max(1.0, end - time.monotonic()),
+                         'the first cycle_status and edge1_verdict')
+    except SystemExit as exc:
+        print(exc, file=sys.stderr, flush=True)
     finally:
-        stop(procs)
+        procs.stop_all()
         probe.close()
+    for what, (at, seq) in first.items():
+        times[what] = (at - t0, seq)
     return times
 
 
@@ -185,9 +133,7 @@ def main():
         raise SystemExit('first_cycle: --modes takes cold, warm, off')
     domain, lock = claim_domain_id()
     os.environ.update(dds_env(domain))
-    import rclpy
     from feeder_common import auth
-    rclpy.init()
     work = pathlib.Path(tempfile.mkdtemp(prefix='feeder-first-cycle-'))
     key = work / 'hmac.key'
     auth.ensure_key(key)
@@ -201,7 +147,7 @@ def main():
             scene = scene.resolve()
             cache = work / f'cache-{scene.stem}'
             for mode in [m for m in modes for _ in range(args.repeat)]:
-                env = install_env(INSTALL, dds_env(domain))
+                env = dds_env(domain)
                 env['THROWMAP_CACHE_DIR'] = str(cache)
                 if mode == 'cold':
                     shutil.rmtree(cache, ignore_errors=True)
@@ -220,7 +166,6 @@ def main():
                       f'{fmt(times["cycle_status"]):>13} {fmt(times["edge1_verdict"]):>14}',
                       flush=True)
     finally:
-        rclpy.shutdown()
         lock.close()
 
 
