@@ -187,13 +187,19 @@ def test_every_shipped_config_loads_at_start_up_and_at_run_time(graph, ros):
 
 # ---- 3: clean exits ----------------------------------------------------------------------
 
-def stop_and_time_gone(ros, graph, proc, fqn, sig):
-    """Send ``sig``; return (exit status, seconds until ``fqn`` left the graph)."""
-    t0 = time.monotonic()
+# A node that exits cleanly leaves the graph at once (typically 0.1-0.3 s: its participant
+# announces that it leaves); one that does not is dropped only when its DDS lease runs out,
+# 17-20 s after its last announcement (Fast DDS: 20 s lease, announcements every 3 s). The
+# bound lies between the two, with room for a loaded machine (one run beside two busy loops
+# and another suite took more than 5 s).
+LEAVE_BOUND_S = 15.0
+
+
+def stop_and_wait_gone(ros, proc, fqn, sig):
+    """Send ``sig``, wait until ``fqn`` left the graph (LEAVE_BOUND_S); return the exit status."""
     proc.send_signal(sig)
-    ros.spin_until(lambda: fqn not in nodes_on_graph(ros), 10.0, f'{fqn} off the graph')
-    gone = time.monotonic() - t0
-    return proc.wait(timeout=10), gone
+    ros.spin_until(lambda: fqn not in nodes_on_graph(ros), LEAVE_BOUND_S, f'{fqn} off the graph')
+    return proc.wait(timeout=10)
 
 
 @pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM])
@@ -214,11 +220,9 @@ def test_every_node_exits_0_and_leaves_the_graph_at_once(graph, ros, tmp_path, s
     assert ros.call(SetBool, '/feeder/feeder_driver/enable', SetBool.Request(data=True)).success
     ros.spin_for(1.0)
     for fqn, proc in procs.items():
-        status, gone = stop_and_time_gone(ros, graph, proc, fqn, sig)
+        status = stop_and_wait_gone(ros, proc, fqn, sig)
         log = graph.log(proc)
         assert status == 0 and 'Traceback' not in log, log
-        # (typically 0.1-0.3 s; the bound separates "at once" from the 20 s DDS lease)
-        assert gone < 5.0, f'{fqn} stayed on the graph {gone:.1f} s'
     assert 'stopped: interrupted' in graph.log(procs['/feeder/feeder_bag_recorder'])
 
 
@@ -250,8 +254,7 @@ def test_a_lifecycle_shutdown_ends_the_process(graph, ros, role):
     req = ChangeState.Request(transition=Transition(id=Transition.TRANSITION_ACTIVE_SHUTDOWN))
     assert ros.call(ChangeState, f'{fqn}/change_state', req).success
     assert proc.wait(timeout=10) == 0, graph.log(proc)
-    # (typically 0.1-0.3 s; the bound separates "at once" from the 20 s DDS lease)
-    ros.spin_until(lambda: fqn not in nodes_on_graph(ros), 5.0, f'{fqn} off the graph')
+    ros.spin_until(lambda: fqn not in nodes_on_graph(ros), LEAVE_BOUND_S, f'{fqn} off the graph')
     assert 'Traceback' not in graph.log(proc)
 
 
