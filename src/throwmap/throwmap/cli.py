@@ -551,6 +551,30 @@ def _search_options(args):
                             f'{args.robust_stride}')
     if args.workers is not None and not 1 <= args.workers <= 256:
         raise ThrowmapError(f'--workers: 1 to 256 threads, got {args.workers}')
+    if args.objective not in OBJECTIVE_NAMES:
+        raise ThrowmapError(f'--objective: expected one of {", ".join(OBJECTIVE_NAMES)}, got '
+                            f'{args.objective!r}')
+    if args.arrival is not None:
+        args.arrival = _arrival(args.arrival)
+
+
+# --objective's names on the command line and the search's objectives they select.
+OBJECTIVE_NAMES = {'part-time': 'part_time', 'ready-rate': 'ready_rate'}
+
+
+def _arrival(text):
+    """Parse --arrival EDGE:RMIN:RMAX (m) into (edge, R lo, R hi); the scene checks the rest."""
+    parts = text.split(':')
+    try:
+        if len(parts) != 3:
+            raise ValueError
+        edge, r_lo, r_hi = int(parts[0]), float(parts[1]), float(parts[2])
+    except ValueError:
+        raise ThrowmapError(f'--arrival: expected EDGE:RMIN:RMAX (an edge and R in m, e.g. '
+                            f'1:0.10:0.14), got {text!r}') from None
+    if not (math.isfinite(r_lo) and math.isfinite(r_hi) and r_lo <= r_hi):
+        raise ThrowmapError(f'--arrival: need finite RMIN <= RMAX (m), got {text!r}')
+    return edge, r_lo, r_hi
 
 
 def _search_ranges(scene, args):
@@ -579,6 +603,8 @@ def _cand_row(c):
             'sensor (cm)': _fmt_cm(f['sensor_radius']),
             'readies/throw': f'{f["readies_per_throw"]:.4f}',
             'readies/s': f'{f["readies_per_second"]:.4f}',
+            's/part mean/p95': f'{f["part_seconds_mean"]:.1f}/{f["part_seconds_p95"]:.1f}',
+            'parts/min': f'{f["parts_per_minute"]:.2f}',
             'first ready mean/p95/max': f'{f["first_ready_mean"]:.1f}/'
                                         f'{f["first_ready_p95"]:.0f}/{f["first_ready_max"]:.0f}',
             'robust s': f'{rb.get("joint_fraction", math.nan):.4f}',
@@ -591,10 +617,13 @@ def cmd_design_search(scene, args, out):
     h, w = _search_ranges(scene, args)
     goals = [args.goal_edge] if args.goal_edge is not None else None
     fractions = _fractions(args.sensor_fraction)
+    objective = OBJECTIVE_NAMES[args.objective]
     res = design_search.search(scene, h, w, n_h, n_w, goals=goals, fractions=fractions,
                                floor=args.robust, top=args.top, workers=args.workers,
-                               options=design_kernel.eval_options(scene, throws=args.throws),
-                               progress=Progress('design-search', args.quiet))
+                               options=design_kernel.eval_options(scene, throws=args.throws,
+                                                                  arrival=args.arrival),
+                               progress=Progress('design-search', args.quiet),
+                               objective=objective)
     g = res.grid
     if args.vertex_tolerance:
         for cand in (res.chosen, res.reference):
@@ -630,15 +659,22 @@ def cmd_design_search(scene, args, out):
     elig = int(design_search.eligible(g).any(axis=(1, 2)).sum())
     out.write(f'  {elig} designs: every start reaches one limit set holding the goal edge, '
               'sensor fits\n')
+    what = design_search.OBJECTIVES[objective]
+    starts = ('the grid of starts' if g.arrival is None else
+              f'{g.arrival[3]} arrivals on edge {g.arrival[0]}, R uniform in '
+              f'{g.arrival[1] * 100:.2f}..{g.arrival[2] * 100:.2f} cm')
+    ties = ', p95 breaking ties' if objective == 'part_time' else ''
+    out.write(f'  ranked by {what}{ties} (--objective {args.objective}); first readies (throws, '
+              f"s/part = throws x the limit set's mean cycle) from {starts}\n")
     cols = ['stage', 'h (cm)', 'speed (deg/s)', 'goal', 'sensor (cm)', 'readies/throw',
-            'readies/s', 'first ready mean/p95/max', 'robust s', 'dw alone (deg/s)',
-            'dh alone (mm)']
-    out.write('  Pareto front (feed rate against robustness):\n')
+            'readies/s', 'first ready mean/p95/max', 's/part mean/p95', 'parts/min',
+            'robust s', 'dw alone (deg/s)', 'dh alone (mm)']
+    out.write(f'  Pareto front ({what} against robustness):\n')
     _table([_cand_row(c) for c in res.pareto], cols, out)
     out.write("  the scene's own design:\n")
     _table([_cand_row(res.reference)], cols, out)
     if res.chosen is not None:
-        out.write(f'  chosen (best feed rate with robustness >= {args.robust}):\n')
+        out.write(f'  chosen (best {what} with robustness >= {args.robust}):\n')
         _table([_cand_row(res.chosen)], cols, out)
     for cand, what in ((res.chosen, 'chosen'), (res.reference, 'scene design')):
         rb = (cand.robustness or {}) if cand is not None else {}
@@ -667,12 +703,16 @@ def cmd_catalogue(args, out):
     for sc in scenes:
         design_kernel.check_scene(sc)     # refused here, before any worker starts
     n_h, n_w = _grid(args.grid)
+    if args.arrival is not None:
+        raise ThrowmapError("--arrival: a chute drops parts on one part's edge; a catalogue "
+                            'has many parts: search its scenes one by one')
     ranges = [_search_ranges(sc, args) for sc in scenes]
     t0 = time.perf_counter()
     results = design_search.run_catalogue(paths, ranges, n_h, n_w,
                                           _fractions(args.sensor_fraction), args.robust,
                                           args.top, scheduler=args.scheduler,
-                                          workers=args.workers or 2, throws=args.throws)
+                                          workers=args.workers or 2, throws=args.throws,
+                                          objective=OBJECTIVE_NAMES[args.objective])
     seconds = time.perf_counter() - t0
     if args.json:
         _dump({'catalogue': args.scene, 'seconds': seconds, 'results': results}, out)
@@ -683,7 +723,9 @@ def cmd_catalogue(args, out):
         c = r['chosen']
         text = ('no design meets the floor' if c is None else
                 f'h {c["h"] * 100:.3f} cm, {c["release_speed_deg"]:.1f} deg/s, goal '
-                f'{c["goal_edge"]}, {c["figures"]["readies_per_second"]:.4f} readies/s, '
+                f'{c["goal_edge"]}, {c["figures"]["part_seconds_mean"]:.1f} s/part (p95 '
+                f'{c["figures"]["part_seconds_p95"]:.1f}), '
+                f'{c["figures"]["readies_per_second"]:.4f} readies/s, '
                 f'robust s {c["robustness"]["joint_fraction"]:.4f}')
         out.write(f'  {r["scene"]}: {r["designs"]} designs, {r["seconds"]:.2f} s: {text}\n')
     return 0
@@ -728,8 +770,15 @@ def build_parser():
     p.add_argument('--out', default='plots', help='output directory (default: plots)')
     p.add_argument('--throws', type=int, default=100, help='throws per basin start')
     p.add_argument('--orbit-throws', type=int, default=300, help='throws in the orbit plot')
-    p = add('design-search', 'search h, release speed, goal edge and sensor position: feed rate '
-            'under a robustness floor (SCENE may be a folder of scenes: a catalogue on Dask)')
+    p = add('design-search', 'search h, release speed, goal edge and sensor position: seconds '
+            'per part (or readies per second) under a robustness floor (SCENE may be a folder '
+            'of scenes: a catalogue on Dask)')
+    p.add_argument('--objective', default='part-time', help='rank by part-time (mean seconds '
+                   "from a part's arrival to its first proven ready, p95 breaks ties; default) "
+                   'or ready-rate (proven readies per second in the limit set)')
+    p.add_argument('--arrival', help='EDGE:RMIN:RMAX: parts arrive from a chute on edge EDGE '
+                   'with R uniform in [RMIN, RMAX] m; first readies from there instead of the '
+                   'grid of starts')
     p.add_argument('--h', help='arm offsets A:B, m (default: -0.95..-0.05 d_min)')
     p.add_argument('--speed', help="release speeds A:B, rad/s (default: 0.5..1.5 x the scene's)")
     p.add_argument('--grid', default='40x40', help='offsets x speeds (default 40x40)')

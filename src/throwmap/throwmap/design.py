@@ -21,9 +21,11 @@ throwmap.basins.design_radii finds it but with fewer samples), a reference limit
 orbit), a basin over every stable edge x radii (which starts reach the reference, which reach
 another attractor), and, per goal edge and sensor position, the sensor design of
 throwmap.sensor (guarantee and reach radius, the warm-up, the detection rate), the throws from
-each start to its first proven ready and the feed rate under the cycle-time model
-(:class:`CycleTime`). The kernel releases the GIL, so :func:`evaluate_grid` runs chunks of
-designs on threads, one per core. docs/design.md has the method and the measured figures.
+each start to its first proven ready, the seconds that takes per part and the feed rate under
+the cycle-time model (:class:`CycleTime`). The starts are the basin's grid, or a chute's
+arrival (``eval_options(arrival=...)``: one edge, R uniform in a range). The kernel releases
+the GIL, so :func:`evaluate_grid` runs chunks of designs on threads, one per core.
+docs/design.md has the method and the measured figures.
 
 The base model only: a scene with effects has a throw map that is not this kernel's
 (:func:`check_scene` says so).
@@ -59,6 +61,10 @@ EvalOptions = namedtuple('EvalOptions', [
     'settle_time',          # s, cycle-time model
     'reset_time',           # s, cycle-time model
     'mu',                   # friction coefficient of the grasp bounds (inf: none given)
+    'arrival_edge',         # edge a chute drops parts on (-1: the grid of starts instead)
+    'arrival_r_lo',         # m, the chute's range of R (uniform in [lo, hi])
+    'arrival_r_hi',
+    'arrival_starts',       # arrival starts (midpoints of equal bins of [lo, hi])
 ])
 
 # Per-design results (columns of ``design``).
@@ -67,16 +73,22 @@ D_STATUS, D_R_HI, D_SHARE, D_ATTRACTORS, D_FLIP_MASK, D_EDGE_MASK, D_TRANSIENT, 
 D_COLS = ('status', 'r_hi', 'share', 'attractors', 'flip_mask', 'edge_mask', 'transient_max',
           'mean_flight_time', 'errors', 'ref_edge', 'ref_R')
 # Per-(design, goal edge, sensor position) results (columns of ``sensor``).
+# The part_* columns are what a cell sees: seconds from a fresh part's arrival (a start) to its
+# first proven ready, and parts per minute = 60 / the mean.
 S_GOAL_IN, S_FEASIBLE, S_GUARANTEE, S_REACH, S_RADIUS, S_RATE, S_WARMUP, S_READY_MEAN, \
-    S_READY_P95, S_READY_MAX, S_NEVER, S_FITS, S_PER_SECOND = range(13)
+    S_READY_P95, S_READY_MAX, S_NEVER, S_FITS, S_PER_SECOND, S_PART_MEAN, S_PART_P95, \
+    S_PARTS_PER_MINUTE = range(16)
 S_COLS = ('goal_in', 'feasible', 'guarantee_radius', 'reach_radius', 'sensor_radius',
           'readies_per_throw', 'warmup', 'first_ready_mean', 'first_ready_p95',
-          'first_ready_max', 'never_ready', 'sensor_fits', 'readies_per_second')
+          'first_ready_max', 'never_ready', 'sensor_fits', 'readies_per_second',
+          'part_seconds_mean', 'part_seconds_p95', 'parts_per_minute')
 # Design status codes.
-ST_OK, ST_NO_GRASP, ST_THROW_ERROR, ST_NO_Z = 0, 1, 2, 3
+ST_OK, ST_NO_GRASP, ST_THROW_ERROR, ST_NO_Z, ST_ARRIVAL_OUTSIDE = 0, 1, 2, 3, 4
 STATUS_TEXT = {ST_OK: 'ok', ST_NO_GRASP: 'no start in the domain of f',
                ST_THROW_ERROR: 'a throw left the domain of f (below R_grasp or a toe stub)',
-               ST_NO_Z: 'R_max does not converge (Z of Prop. IV.4 is not bounded)'}
+               ST_NO_Z: 'R_max does not converge (Z of Prop. IV.4 is not bounded)',
+               ST_ARRIVAL_OUTSIDE: 'the arrival range starts below R_min of its edge at this '
+                                   'h (outside the domain of f)'}
 
 
 @dataclass(frozen=True)
@@ -198,10 +210,12 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     """
     Evaluate one design (module docstring); every buffer is the caller's (no allocation).
 
-    edge_buf: (4, n); work_*: (starts, throws + 1); ref_*: (ref_throws + 1,); labels, scratch:
-    (starts,);
+    edge_buf: (4, n); work_*: (rows, throws + 1); ref_*: (ref_throws + 1,); labels, scratch:
+    (rows,);
     out_design: (D_COLS,); out_sensor: (goals, fractions, S_COLS); out_bands: (n, 2) R band per
-    edge of the reference limit set (NaN where absent); out_starts: (starts, 2) edge and R.
+    edge of the reference limit set (NaN where absent); out_starts: (rows, 2) edge and R.
+    rows = the grid's starts, then opt.arrival_starts arrival starts when opt.arrival_edge >= 0
+    (the first readies then come from those; the basin and the warm-up cover the grid's too).
     """
     n = part.n
     nan = math.nan
@@ -240,6 +254,17 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
             out_starts[s, 1] = k * step + a if k < m - 1 else top    # as np.linspace
             s += 1
     starts = s
+    rows = starts
+    # An arrival below f's domain at this h: the design is evaluated (its limit set, sensor and
+    # rates are still figures to show) but gets no first readies and is not eligible.
+    outside = opt.arrival_edge >= 0 and opt.arrival_r_lo < lo[opt.arrival_edge]
+    if opt.arrival_edge >= 0 and not outside:
+        na = opt.arrival_starts
+        for k in range(na):
+            out_starts[starts + k, 0] = opt.arrival_edge
+            out_starts[starts + k, 1] = opt.arrival_r_lo + (k + 0.5) / na * (
+                opt.arrival_r_hi - opt.arrival_r_lo)
+        rows = starts + na
     # Reference limit set: from the first stable edge of the goals at 1.5 R_min (the scene's
     # default start), the second half of a long orbit.
     e0 = goals[0]
@@ -311,6 +336,14 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
             transient_max = max(transient_max, transient)
         else:
             labels[s] = own | (1 << 62)
+    # Arrival starts: only their first readies (and the warm-up) use them; an orbit that
+    # leaves the domain of f gets no ready (never_ready), as a failing grid start would.
+    for s in range(starts, rows):
+        done = _orbit(int(out_starts[s, 0]), out_starts[s, 1], T, w, g, h, r_grasp, part, knobs,
+                      rec, work_e[s], work_r[s], work_rot[s], work_t[s])
+        for k in range(done + 1, T + 1):
+            work_e[s, k] = -1
+    first_row = starts if rows > starts else 0
     # Distinct attractors: the reference (if reached) plus every other label.
     others = 0
     for s in range(starts):
@@ -327,6 +360,8 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     out_design[D_TRANSIENT] = transient_max
     out_design[D_ERRORS] = errors
     out_design[D_STATUS] = ST_OK if errors == 0 else ST_THROW_ERROR
+    if outside:
+        out_design[D_STATUS] = ST_ARRIVAL_OUTSIDE
     cycle = flight + opt.settle_time + opt.reset_time
     for gi in range(goals.shape[0]):
         goal = goals[gi]
@@ -376,16 +411,18 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
             row[S_RATE] = rate
             row[S_PER_SECOND] = rate / cycle
             warmup = 0
-            for s in range(starts):
+            for s in range(rows):
                 for k in range(T + 1):
                     e = work_e[s, k]
                     if e >= 0 and e != goal and _sees(part, e, work_r[s, k], x, opt.footprint):
                         warmup = max(warmup, k + 1)
             row[S_WARMUP] = warmup
+            if outside:
+                continue
             never = 0
             got = 0
             total = 0.0
-            for s in range(starts):
+            for s in range(first_row, rows):
                 first = -1
                 for k in range(warmup, T + 1):
                     if work_e[s, k] == goal and _sees(part, goal, work_r[s, k], x,
@@ -408,6 +445,17 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
                 row[S_READY_MEAN] = total / got
                 row[S_READY_P95] = scratch[min(got - 1, int(math.ceil(0.95 * got)) - 1)]
                 row[S_READY_MAX] = scratch[got - 1] if never == 0 else math.inf
+                # Seconds per part: throws to the first ready x the limit set's mean cycle
+                # (flight + settle + reset), the same cycle as readies_per_second, so the two
+                # objectives price a throw alike. Fair for settle and reset (every throw's);
+                # it ignores that the throws before the first ready are partly the transient,
+                # whose flights differ from the limit set's: on the triangle it overstates the
+                # orbits' own flight times by 3-14 % (docs/design.md section 2). It leaves out
+                # the chute's drop and the cell's pick.
+                row[S_PART_MEAN] = row[S_READY_MEAN] * cycle
+                row[S_PART_P95] = row[S_READY_P95] * cycle
+                row[S_PARTS_PER_MINUTE] = (60.0 / row[S_PART_MEAN] if row[S_PART_MEAN] > 0
+                                           else math.inf)
 
 
 @njit
@@ -434,9 +482,10 @@ class GridResult:
     design: np.ndarray          # (designs, D_COLS)
     sensor: np.ndarray          # (designs, goals, fractions, S_COLS)
     bands: np.ndarray           # (designs, n, 2)
-    starts: np.ndarray          # (designs, starts, 2)
+    starts: np.ndarray          # (designs, rows, 2): the grid's starts, then the arrival's
     seconds: float
     throws: int                 # throws done (an upper bound: failing orbits stop early)
+    arrival: tuple = None       # (edge, R lo, R hi, starts): first readies from these
 
     def column(self, name, goal_index=None, fraction_index=None):
         if name in D_COLS:
@@ -457,26 +506,89 @@ def check_scene(scene):
 
 
 def eval_options(scene, radii_per_edge=20, throws=120, ref_throws=1500, zmax_samples=48,
-                 cycle=None):
-    """Return the kernel's EvalOptions for ``scene`` (its footprint, arm length, mu, cycle)."""
+                 cycle=None, arrival=None, arrival_starts=None):
+    """
+    Return the kernel's EvalOptions for ``scene`` (its footprint, arm length, mu, cycle).
+
+    ``arrival``: (edge, R lo, R hi), a chute that drops parts on that stable edge with R
+    uniform in [lo, hi] m: the first readies come from ``arrival_starts`` starts there
+    (default: as many as the grid has) instead of the grid of starts. Whether the range lies
+    in the domain of f depends on h: :func:`evaluate_grid` checks it per design.
+    """
+    n_grid = int(np.count_nonzero(scene.part.stable)) * radii_per_edge \
+        if isinstance(radii_per_edge, int) else 0
+    arrival_starts = arrival_starts if arrival_starts is not None else max(1, n_grid)
     # The upper limits keep the per-thread orbit buffers (starts x throws) far below memory.
     for name, value, least, most in (('radii_per_edge', radii_per_edge, 2, 1000),
                                      ('throws', throws, 10, 10000),
                                      ('ref_throws', ref_throws, 20, 100000),
-                                     ('zmax_samples', zmax_samples, 8, 10000)):
+                                     ('zmax_samples', zmax_samples, 8, 10000),
+                                     ('arrival_starts', arrival_starts, 1, 100000)):
         if isinstance(value, bool) or not isinstance(value, int) or not least <= value <= most:
             raise InputError(name, f'must be an integer in [{least}, {most}], got {value!r}',
                              f'give {least} to {most}')
     cycle = cycle or CycleTime.from_scene(scene)
     mu = scene.model.mu
     arm = scene.arm_length if scene.arm_length is not None else math.inf
+    edge, r_lo, r_hi = check_arrival(scene, arrival) if arrival is not None else (-1, 0.0, 0.0)
     return EvalOptions(int(radii_per_edge), int(throws), int(ref_throws), int(zmax_samples),
                        float(scene.sensor_footprint), float(arm), float(cycle.settle_time),
-                       float(cycle.reset_time), math.inf if mu is None else float(mu))
+                       float(cycle.reset_time), math.inf if mu is None else float(mu),
+                       int(edge), float(r_lo), float(r_hi), int(arrival_starts))
+
+
+def check_arrival(scene, arrival):
+    """Return (edge, R lo, R hi) of an arrival, or raise InputError saying what is wrong."""
+    part = scene.part
+    try:
+        edge, r_lo, r_hi = arrival
+    except (TypeError, ValueError):
+        raise InputError('arrival', f'expected (edge, R lo, R hi), got {arrival!r}',
+                         'give EDGE:RMIN:RMAX, e.g. 1:0.10:0.14') from None
+    if isinstance(edge, bool) or not isinstance(edge, (int, np.integer)) \
+            or edge not in part.stable_edges:
+        raise InputError('arrival', f'edge {edge!r} is not a stable edge',
+                         f'drop parts on one of {part.stable_edges}')
+    if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+               for x in (r_lo, r_hi)) or not r_lo <= r_hi:
+        raise InputError('arrival', f'R range [{r_lo!r}, {r_hi!r}] m is not finite numbers '
+                         'with RMIN <= RMAX', 'give e.g. 1:0.10:0.14 (m)')
+    arm = scene.arm_length
+    if arm is not None and r_hi > arm:
+        raise InputError('arrival', f'R up to {r_hi} m lies beyond the arm ({arm} m)',
+                         'drop parts on the arm')
+    return int(edge), float(r_lo), float(r_hi)
+
+
+def arrival_domain(part, opt, hs):
+    """
+    Return (R_min, R_grasp) of the arrival edge at each h: the lower end of f's domain there.
+
+    Raise InputError naming that domain when the arrival range starts below it at every h
+    (no design could take the chute's parts); a design below it alone is marked
+    ST_ARRIVAL_OUTSIDE by the kernel (not eligible).
+    """
+    edge = opt.arrival_edge
+    lows = np.array([_r_min(edge, float(h), opt.mu, part.arrays) for h in hs]).reshape(-1, 2)
+    if lows.size and not (lows[:, 0] <= opt.arrival_r_lo).any():
+        k = int(np.argmin(lows[:, 0]))
+        where = (f'at h = {hs[k]:.5g} m' if len(hs) == 1 else
+                 f'at every design h ({np.min(hs):.5g}..{np.max(hs):.5g} m; lowest at h = '
+                 f'{hs[k]:.5g} m)')
+        raise InputError('arrival', f'R from {opt.arrival_r_lo} m on edge {edge} lies outside '
+                         f'the domain of f: R_min of edge {edge} is {lows[k, 0]:.5g} m '
+                         f'(R_grasp {lows[k, 1]:.5g} m) {where}',
+                         f'give an RMIN of at least {lows[k, 0]:.5g} m')
+    return lows
+
+
+def _rows(part, opt):
+    starts = int(np.count_nonzero(part.stable)) * opt.radii_per_edge
+    return starts + (opt.arrival_starts if opt.arrival_edge >= 0 else 0)
 
 
 def _buffers(part, opt):
-    starts = int(np.count_nonzero(part.stable)) * opt.radii_per_edge
+    starts = _rows(part, opt)
     T = opt.throws
     work = (np.full((starts, T + 1), -1, dtype=np.int64), np.full((starts, T + 1), np.nan),
             np.zeros((starts, T + 1)), np.zeros((starts, T + 1)))
@@ -488,13 +600,15 @@ def _buffers(part, opt):
 
 
 def evaluate_grid(scene, hs, ws, goals=None, fractions=(0.25,), options=None, workers=None,
-                  chunk=64, progress=None):
+                  chunk=64, progress=None, refuse_arrival_outside=True):
     """
     Evaluate designs (hs[k], ws[k]) of ``scene``'s part (base model) on ``workers`` threads.
 
     ``goals``: goal edges to design the sensor for (default: the scene's goal edge, else every
     stable edge); the reference orbit starts on the first. ``progress(done, total)`` after
-    each chunk.
+    each chunk. With an arrival (``options``) below f's domain at every design's h: InputError
+    (:func:`arrival_domain`), unless ``refuse_arrival_outside`` is false (then those designs
+    are marked ST_ARRIVAL_OUTSIDE like any other outside it).
     """
     check_scene(scene)
     part = scene.part
@@ -518,7 +632,9 @@ def evaluate_grid(scene, hs, ws, goals=None, fractions=(0.25,), options=None, wo
     knobs = compiled_knobs(scene.model.accuracy, None, scene.model.settle_rule)
     g = float(scene.model.g)
     nd = hs.size
-    starts = int(np.count_nonzero(part.stable)) * opt.radii_per_edge
+    if opt.arrival_edge >= 0 and refuse_arrival_outside:
+        arrival_domain(part, opt, np.unique(hs))
+    starts = _rows(part, opt)
     out_design = np.full((nd, len(D_COLS)), np.nan)
     out_sensor = np.full((nd, goals.size, fractions.size, len(S_COLS)), np.nan)
     out_bands = np.full((nd, part.n, 2), np.nan)
@@ -552,5 +668,7 @@ def evaluate_grid(scene, hs, ws, goals=None, fractions=(0.25,), options=None, wo
                     progress(done, nd)
     seconds = time.perf_counter() - t0
     throws = nd * (starts * opt.throws + opt.ref_throws)
+    arrival = ((opt.arrival_edge, opt.arrival_r_lo, opt.arrival_r_hi, opt.arrival_starts)
+               if opt.arrival_edge >= 0 else None)
     return GridResult(hs, ws, goals, fractions, out_design, out_sensor, out_bands, out_starts,
-                      seconds, int(throws))
+                      seconds, int(throws), arrival)

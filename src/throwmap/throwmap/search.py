@@ -13,13 +13,16 @@
 # limitations under the License.
 
 """
-Design search: a (h, speed) grid, then refinement; ranked by feed rate under a robustness floor.
+Design search: a (h, speed) grid, then refinement; ranked by an objective under a robustness floor.
 
 :func:`search` evaluates the grid with throwmap.design's compiled kernel (every goal edge and
 sensor position at once), keeps the designs whose every start reaches one limit set that holds
 the goal edge with a sensor that fits, computes the robustness (throwmap.robustness) of the
 best ``top`` of them and of the scene's own design, refines around the best that meets the
-floor, and returns the ranking and the Pareto front of feed rate against robustness.
+floor, and returns the ranking and the Pareto front of the objective against robustness. The
+objective (:data:`OBJECTIVES`) is the feed a cell sees, mean seconds from a part's arrival to
+its first proven ready (``part_time``, the default), or proven readies per second in the limit
+set (``ready_rate``), which counts the same part detected again and again.
 :func:`design_scene` writes the chosen design as a scene file. :func:`run_catalogue` runs a
 folder of scenes on Dask (a local cluster on 127.0.0.1, or a scheduler's address).
 """
@@ -43,6 +46,36 @@ from .scene import load_scene, Scene
 from .sensor import sensor_design
 
 
+# What a design is ranked by: the figure a user chooses, as the output and the plots name it
+# (docs/design.md section 4). part_time's ties go to the smaller p95.
+OBJECTIVES = {
+    'part_time': 'mean seconds from arrival to first proven ready',
+    'ready_rate': 'proven readies per second in the limit set',
+}
+
+
+def check_objective(objective):
+    """Return ``objective`` or raise InputError naming the choices."""
+    if objective not in OBJECTIVES:
+        raise InputError('objective', f'unknown objective {objective!r}',
+                         f'choose one of {", ".join(OBJECTIVES)}')
+    return objective
+
+
+def merit(figures, objective):
+    """
+    Return a design's merit under ``objective`` as a tuple, larger is better.
+
+    A figure that is not a number (no ready, no sensor) ranks last.
+    """
+    def signed(name, sign):
+        x = figures.get(name)
+        return -math.inf if x is None or math.isnan(x) else sign * float(x)
+    if objective == 'part_time':
+        return (signed('part_seconds_mean', -1), signed('part_seconds_p95', -1))
+    return (signed('readies_per_second', 1),)
+
+
 @dataclass
 class Candidate:
     """One design (h, speed, goal edge, sensor position) with its figures."""
@@ -57,6 +90,14 @@ class Candidate:
 
     def feed(self):
         return float(self.figures['readies_per_second'])
+
+    def merit(self, objective):
+        return merit(self.figures, objective)
+
+    def score(self, objective):
+        """Return the objective's figure as plotted: s per part, or readies per second."""
+        return float(self.figures['part_seconds_mean' if objective == 'part_time'
+                                  else 'readies_per_second'])
 
     def robust(self):
         return -1.0 if self.robustness is None else float(self.robustness['joint_fraction'])
@@ -78,6 +119,7 @@ class SearchResult:
     floor: float
     refined: D.GridResult = None
     notes: list = field(default_factory=list)
+    objective: str = 'part_time'
 
 
 def _figures(res, k, gi, fi):
@@ -98,8 +140,10 @@ def eligible(res):
 
 def limit_spec(scene, cand, opt):
     """Return the LimitSpec of a candidate: its limit set's bands and flips, its sensor."""
+    # The bands need no arrival (and a design outside the arrival's domain still has them).
     res = D.evaluate_grid(scene, [cand.h], [cand.w], goals=[cand.goal],
-                          fractions=[cand.fraction], options=opt, workers=1)
+                          fractions=[cand.fraction], options=opt._replace(arrival_edge=-1),
+                          workers=1)
     f = cand.figures
     model = ThrowModel(scene.part, cand.h, cand.w, scene.model.g, mu=scene.model.mu)
     e, _, rot = model.orbit_arrays(int(f['ref_edge']), f['ref_R'], opt.ref_throws)
@@ -128,32 +172,44 @@ def assess(scene, cand, opt, cells=120):
     return cand
 
 
-def _best(res, mask, top):
-    """Return the indices (k, gi, fi) of the ``top`` eligible entries by feed rate, best first."""
+def _best(res, mask, top, objective='part_time'):
+    """Return the indices (k, gi, fi) of the ``top`` eligible entries by objective, best first."""
+    if objective == 'part_time':
+        mean = np.where(mask, res.sensor[..., D.S_PART_MEAN], np.inf)
+        p95 = np.where(mask, res.sensor[..., D.S_PART_P95], np.inf)
+        mean = np.where(np.isnan(mean), np.inf, mean)
+        # Smallest mean first, then smallest p95 (lexsort is stable: then the grid's order).
+        order = np.lexsort((p95.ravel(), mean.ravel()))[:top]
+        return [np.unravel_index(i, mean.shape) for i in order if np.isfinite(mean.flat[i])]
     feed = np.where(mask, res.sensor[..., D.S_PER_SECOND], -np.inf)
     order = np.argsort(-feed, axis=None, kind='stable')[:top]
     return [np.unravel_index(i, feed.shape) for i in order if np.isfinite(feed.flat[i])]
 
 
-def pareto_front(cands):
-    """Candidates not beaten on both feed rate and robustness (best feed first)."""
+def pareto_front(cands, objective='part_time'):
+    """Candidates not beaten on both the objective and robustness (best by objective first)."""
     front = []
-    for c in sorted(cands, key=lambda c: (-c.feed(), -c.robust())):
+    for c in sorted(cands, key=lambda c: tuple(-x for x in c.merit(objective))
+                    + (-c.robust(),)):
         if all(c.robust() > f.robust() for f in front):
             front.append(c)
     return front
 
 
 def search(scene, h_range, w_range, n_h=40, n_w=40, goals=None, fractions=(0.25,), floor=0.0,
-           top=8, refine=5, options=None, workers=None, progress=None, cells=120, spread=12):
+           top=8, refine=5, options=None, workers=None, progress=None, cells=120, spread=12,
+           objective='part_time'):
     """
     Grid over h in h_range x speed in w_range, then refinement (module docstring).
 
     ``floor``: the smallest joint robustness s (every throw within +-s of the speed and +-s
     d_min of the offset) a design must have to be chosen. Robustness is computed for the
-    ``top`` eligible designs by feed rate and ``spread`` more spread evenly over the rest of
-    the eligible ones (so the Pareto front has points beyond the fastest designs).
+    ``top`` eligible designs by ``objective`` (:data:`OBJECTIVES`) and ``spread`` more spread
+    evenly over the rest of the eligible ones (so the Pareto front has points beyond the best
+    designs). ``options.arrival_edge`` >= 0 (eval_options' ``arrival``): first readies from
+    the chute's starts, not the grid's.
     """
+    check_objective(objective)
     opt = options or D.eval_options(scene)
     hs = np.linspace(h_range[0], h_range[1], n_h)
     ws = np.linspace(w_range[0], w_range[1], n_w)
@@ -162,7 +218,7 @@ def search(scene, h_range, w_range, n_h=40, n_w=40, goals=None, fractions=(0.25,
                           progress=progress)
     mask = eligible(res)
     cands = []
-    ranked = _best(res, mask, mask.size)
+    ranked = _best(res, mask, mask.size, objective)
     picks = ranked[:top]
     rest = ranked[top:]
     if rest and spread > 0:
@@ -171,9 +227,10 @@ def search(scene, h_range, w_range, n_h=40, n_w=40, goals=None, fractions=(0.25,
     for k, gi, fi in picks:
         cands.append(Candidate(float(res.h[k]), float(res.w[k]), int(res.goals[gi]),
                                float(res.fractions[fi]), _figures(res, k, gi, fi)))
-    # The scene's own design (the paper's, for the triangle).
+    # The scene's own design (the paper's, for the triangle); below an arrival's domain it is
+    # not eligible, as a grid design there is, rather than an error.
     own = D.evaluate_grid(scene, [scene.h], [scene.release_speed], res.goals[:1].tolist(),
-                          [fractions[0]], opt, 1)
+                          [fractions[0]], opt, 1, refuse_arrival_outside=False)
     reference = Candidate(float(scene.h), float(scene.release_speed), int(res.goals[0]),
                           float(fractions[0]), _figures(own, 0, 0, 0), stage='scene')
     for c in cands + [reference]:
@@ -182,7 +239,7 @@ def search(scene, h_range, w_range, n_h=40, n_w=40, goals=None, fractions=(0.25,
     refined = None
     ok = [c for c in cands if c.robust() >= floor]
     if ok and refine > 1 and n_h > 1 and n_w > 1:
-        best = max(ok, key=Candidate.feed)
+        best = max(ok, key=lambda c: c.merit(objective))
         dh, dw = hs[1] - hs[0], ws[1] - ws[0]
         rh = np.linspace(best.h - dh, best.h + dh, refine)
         rw = np.linspace(best.w - dw, best.w + dw, refine)
@@ -190,14 +247,14 @@ def search(scene, h_range, w_range, n_h=40, n_w=40, goals=None, fractions=(0.25,
         refined = D.evaluate_grid(scene, RH.ravel(), RW.ravel(), [best.goal], [best.fraction],
                                   opt, workers)
         rmask = eligible(refined)
-        for k, gi, fi in _best(refined, rmask, max(2, top // 2)):
+        for k, gi, fi in _best(refined, rmask, max(2, top // 2), objective):
             c = Candidate(float(refined.h[k]), float(refined.w[k]), best.goal, best.fraction,
                           _figures(refined, k, gi, fi), stage='refined')
             cands.append(assess(scene, c, opt, cells))
     allc = cands + [reference]
     ok = [c for c in allc if c.robust() >= floor and c.feed() > 0
           and c.figures.get('never_ready', 1) == 0]
-    chosen = max(ok, key=Candidate.feed) if ok else None
+    chosen = max(ok, key=lambda c: c.merit(objective)) if ok else None
     if chosen is not None:
         chosen.figures['library_guarantee_radius'] = library_guarantee(scene, chosen)
         if chosen.figures['library_guarantee_radius'] >= chosen.figures['sensor_radius']:
@@ -206,8 +263,13 @@ def search(scene, h_range, w_range, n_h=40, n_w=40, goals=None, fractions=(0.25,
     if chosen is None:
         notes.append(f'no design meets the robustness floor {floor}: lower --robust, or widen '
                      'the ranges')
-    return SearchResult(res, (n_h, n_w), cands, chosen, reference, pareto_front(allc), floor,
-                        refined, notes)
+    outside = res.design[:, D.D_STATUS] == D.ST_ARRIVAL_OUTSIDE
+    if outside.any():
+        notes.append(f'{int(outside.sum())} of {outside.size} designs not eligible: '
+                     f'{D.STATUS_TEXT[D.ST_ARRIVAL_OUTSIDE]} (h {res.h[outside].min() * 100:.3f}'
+                     f'..{res.h[outside].max() * 100:.3f} cm)')
+    return SearchResult(res, (n_h, n_w), cands, chosen, reference,
+                        pareto_front(allc, objective), floor, refined, notes, objective)
 
 
 def library_guarantee(scene, cand, throws=10_000):
@@ -349,11 +411,12 @@ def write_scene(data, path):
 
 # --------------------------------------------------------------------------------- catalogue
 def catalogue_task(path, h_range, w_range, n_h, n_w, fractions=(0.25,), floor=0.0, top=4,
-                   refine=3, throws=120):
+                   refine=3, throws=120, objective='part_time'):
     """Search one scene file (one Dask task; also the serial path): a JSON-ready summary."""
     scene = load_scene(path)
     res = search(scene, h_range, w_range, n_h, n_w, fractions=fractions, floor=floor, top=top,
-                 refine=refine, options=D.eval_options(scene, throws=throws), workers=1)
+                 refine=refine, options=D.eval_options(scene, throws=throws), workers=1,
+                 objective=objective)
     return summary(scene, res, path)
 
 
@@ -361,7 +424,12 @@ def summary(scene, res, path=None):
     """Return a search's result as plain data (what --json prints and the catalogue compares)."""
     def plain(c):
         return None if c is None else c.as_dict()
+    arrival = res.grid.arrival
     return {'scene': scene.name, 'path': path, 'grid': list(res.shape), 'floor': res.floor,
+            'objective': res.objective, 'objective_text': OBJECTIVES[res.objective],
+            'first_ready_from': 'grid of starts' if arrival is None else {
+                'arrival_edge': arrival[0], 'R_low': arrival[1], 'R_high': arrival[2],
+                'starts': arrival[3]},
             'designs': int(res.grid.h.size), 'throws': res.grid.throws,
             'seconds': res.grid.seconds, 'chosen': plain(res.chosen),
             'scene_design': plain(res.reference),
@@ -369,7 +437,7 @@ def summary(scene, res, path=None):
 
 
 def run_catalogue(paths, ranges, n_h, n_w, fractions=(0.25,), floor=0.0, top=4, refine=3,
-                  scheduler=None, workers=2, client=None, throws=120):
+                  scheduler=None, workers=2, client=None, throws=120, objective='part_time'):
     """
     Search every scene of ``paths`` on Dask: ``scheduler`` an address, else a LocalCluster.
 
@@ -389,7 +457,8 @@ def run_catalogue(paths, ranges, n_h, n_w, fractions=(0.25,), floor=0.0, top=4, 
             client = Client(own)
     try:
         futures = [client.submit(catalogue_task, p, tuple(hr), tuple(wr), n_h, n_w,
-                                 tuple(fractions), floor, top, refine, throws, pure=False)
+                                 tuple(fractions), floor, top, refine, throws, objective,
+                                 pure=False)
                    for p, (hr, wr) in zip(paths, ranges)]
         return client.gather(futures)
     finally:
@@ -442,16 +511,17 @@ def robustness_map(scene, res, shape, stride, floor_goal=0, opt=None, cells=120)
 
 
 def heat_maps(result, path, robust_map=None):
-    """Write feed rate (and robustness) over (h, speed) with the chosen and scene designs."""
+    """Write the objective (and robustness) over (h, speed) with the chosen and scene designs."""
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
     res = result.grid
     n_h, n_w = result.shape
-    feed = np.where(eligible(res)[:, 0, 0], res.sensor[:, 0, 0, D.S_PER_SECOND], np.nan)
+    col = D.S_PART_MEAN if result.objective == 'part_time' else D.S_PER_SECOND
+    feed = np.where(eligible(res)[:, 0, 0], res.sensor[:, 0, 0, col], np.nan)
     H = res.h.reshape(n_h, n_w) * 100
     W = np.degrees(res.w.reshape(n_h, n_w))
-    panels = [('proven readies per second (eligible designs)', H, W,
+    panels = [(f'{OBJECTIVES[result.objective]} (eligible designs)', H, W,
                feed.reshape(n_h, n_w))]
     if robust_map is not None:
         rh, rw, rs = robust_map
@@ -477,25 +547,27 @@ def heat_maps(result, path, robust_map=None):
 
 
 def pareto_plot(result, path):
-    """Write feed rate against robustness of every assessed design, the front joined."""
+    """Write the objective against robustness of every assessed design, the front joined."""
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
+    obj = result.objective
     fig, ax = plt.subplots(figsize=(6, 4.5))
     pts = [c for c in result.candidates if c.robustness is not None]
-    ax.plot([c.robust() for c in pts], [c.feed() for c in pts], '.', color='grey',
+    ax.plot([c.robust() for c in pts], [c.score(obj) for c in pts], '.', color='grey',
             label='assessed designs')
     front = sorted(result.pareto, key=Candidate.robust)
-    ax.plot([c.robust() for c in front], [c.feed() for c in front], '-o', label='Pareto front')
+    ax.plot([c.robust() for c in front], [c.score(obj) for c in front], '-o',
+            label='Pareto front')
     ref = result.reference
-    ax.plot([ref.robust()], [ref.feed()], 's', color='red', mfc='none', ms=10,
+    ax.plot([ref.robust()], [ref.score(obj)], 's', color='red', mfc='none', ms=10,
             label=f'scene design (h {ref.h * 100:.2f} cm, {math.degrees(ref.w):.0f} deg/s)')
     if result.chosen is not None:
-        ax.plot([result.chosen.robust()], [result.chosen.feed()], '*', color='red', ms=14,
+        ax.plot([result.chosen.robust()], [result.chosen.score(obj)], '*', color='red', ms=14,
                 label='chosen')
     ax.axvline(result.floor, color='k', lw=0.8, ls='--', label='robustness floor')
     ax.set_xlabel('joint robustness s')
-    ax.set_ylabel('proven readies per second')
+    ax.set_ylabel(OBJECTIVES[obj])
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
