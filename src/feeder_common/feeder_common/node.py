@@ -25,6 +25,7 @@ start-up parameter or a :class:`StartupError` prints one line ``<prog>: error: <
 returns 2.
 """
 
+import faulthandler
 import gc
 import os
 import signal
@@ -49,6 +50,11 @@ DEFAULT_EXECUTOR = 'events'
 
 # The longest wait of one spin_once: a wake-up (signal, work) ends it earlier.
 SPIN_TIMEOUT = 1.0
+# The middleware's teardown (rclpy shutdown, the DDS participant) takes milliseconds; once a
+# fresh-clone CI run beside another saw a node that had printed its start-up error still
+# running 60 s later. After this long the process ends anyway, with the status it had and the
+# stacks of its threads on stderr (to find where it hung).
+TEARDOWN_TIMEOUT = 10.0
 
 
 class StartupError(Exception):
@@ -257,7 +263,9 @@ def run_node(make_node, prog, args=None):
     try:
         with rclpy.init(args=args, context=context,
                         signal_handler_options=SignalHandlerOptions.NO):
-            return _run(make_node, prog, stop, context)
+            status = _run(make_node, prog, stop, context)
+            exit_after(TEARDOWN_TIMEOUT, status, prog)
+            return status
     finally:
         # Destroying the context ends the DDS participant, which tells every peer at once
         # that this process left (else they wait for its lease, 20 s, to run out).
@@ -266,6 +274,28 @@ def run_node(make_node, prog, args=None):
         # resets handlers it runs to the default, which would end the process by the signal).
         for s in (signal.SIGINT, signal.SIGTERM):
             signal.signal(s, signal.SIG_IGN)
+
+
+def exit_after(seconds, status, prog):
+    """
+    End the process with ``status`` if it is still running ``seconds`` from now.
+
+    For the teardown that follows a node's end: if it hangs, the threads' stacks go to stderr
+    and the process exits (os._exit: no more Python clean-up, which is what hangs).
+    """
+    def expire():
+        print(f'{prog}: teardown took more than {seconds:g} s; exiting with status {status} '
+              '(thread stacks follow)', file=sys.stderr, flush=True)
+        faulthandler.dump_traceback(file=sys.stderr, all_threads=True)
+        os._exit(status)
+
+    timer = threading.Timer(seconds, expire)
+    timer.daemon = True
+    timer.start()
+    # A hang that holds the GIL stops that timer too; faulthandler's own thread does not need
+    # it (it exits with status 1).
+    faulthandler.dump_traceback_later(2 * seconds, exit=True)
+    return timer
 
 
 def _run(make_node, prog, stop, context):
