@@ -32,6 +32,7 @@ import signal
 import socket
 import sys
 import threading
+import time
 
 import rclpy
 from rclpy.clock import Clock, ClockType
@@ -55,6 +56,10 @@ SPIN_TIMEOUT = 1.0
 # running 60 s later. After this long the process ends anyway, with the status it had and the
 # stacks of its threads on stderr (to find where it hung).
 TEARDOWN_TIMEOUT = 10.0
+# A node that ends itself (a lifecycle shutdown) has just handed its last answer, that of
+# change_state, to DDS; it spins this long before its participant goes, so that the answer is
+# delivered (once, beside a loaded machine, a caller never got it though the node exited 0).
+FINISH_LINGER = 0.5
 
 
 class StartupError(Exception):
@@ -298,6 +303,13 @@ def exit_after(seconds, status, prog):
     return timer
 
 
+def _linger(executor, seconds):
+    """Spin ``executor`` for ``seconds``: its callbacks still run."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        executor.spin_once(timeout_sec=min(0.05, max(0.0, end - time.monotonic())))
+
+
 def _run(make_node, prog, stop, context):
     try:
         node = make_node(context=context)
@@ -325,6 +337,7 @@ def _run(make_node, prog, stop, context):
             reason = finished()
             if reason:
                 stop['reason'] = reason
+                _linger(executor, FINISH_LINGER)
                 break
             # (The events executor's spin_once without a timeout does not wait: it spins.)
             executor.spin_once(timeout_sec=SPIN_TIMEOUT)
