@@ -187,9 +187,10 @@ def test_every_shipped_config_loads_at_start_up_and_at_run_time(graph, ros):
 
 # ---- 3: clean exits ----------------------------------------------------------------------
 
-# A node that exits cleanly leaves the graph at once (typically 0.1-0.3 s: its participant
-# announces that it leaves); one that does not is dropped only when its DDS lease runs out,
-# 17-20 s after its last announcement (Fast DDS: 20 s lease, announcements every 3 s). The
+# A node that exits cleanly leaves the graph at once (typically 0.1-0.3 s after a signal, 0.5 s
+# more after a lifecycle shutdown, run_node's linger: its participant announces that it
+# leaves); one that does not is dropped only when its DDS lease runs out, 17-20 s after its
+# last announcement (Fast DDS: 20 s lease, announcements every 3 s). The
 # bound lies between the two, with room for a loaded machine (one run beside two busy loops
 # and another suite took more than 5 s).
 LEAVE_BOUND_S = 15.0
