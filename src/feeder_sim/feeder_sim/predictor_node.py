@@ -32,8 +32,8 @@ import sys
 
 from feeder_common import qos
 from feeder_common.frames import BASE_FRAME, plane_point, plane_quaternion
-from feeder_common.messages import (analysis_msg, limit_set_msg, MAX_SEQ_JUMP,
-                                    parse_cycle_status, predicted_state, time_msg)
+from feeder_common.messages import (analysis_msg, MAX_SEQ_JUMP, parse_cycle_status,
+                                    predicted_state, time_msg)
 from feeder_common.node import run_node
 from feeder_interfaces.msg import Analysis, CycleStatus, LimitSet, PredictedState
 from geometry_msgs.msg import PoseStamped
@@ -231,10 +231,9 @@ class PredictorNode(PartNode):
     def _publish_latched(self):
         if not self._active:
             return
-        analysis = self._analysis.as_dict()
-        self._pubs['limit_set'].publish(limit_set_msg(analysis['limit_set']))
-        self._pubs['analysis'].publish(
-            analysis_msg(analysis, self._scene.name, self._scene_hash()))
+        analysis = analysis_msg(self._analysis.as_dict(), self._scene.name, self._scene_hash())
+        self._pubs['limit_set'].publish(analysis.limit_set)
+        self._pubs['analysis'].publish(analysis)
         self._publish_markers(force=True)
 
     def _scene_hash(self):
