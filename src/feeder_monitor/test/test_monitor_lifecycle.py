@@ -267,7 +267,7 @@ def test_a_scene_the_analysis_refuses_fails_the_configure_with_the_reason(make, 
     assert h.node.trigger_configure() == TransitionCallbackReturn.FAILURE
     assert h.node.lifecycle_state == 'unconfigured'
     assert h.node.configure_error.startswith('scene ') and str(lost) in h.node.configure_error
-    assert 'the part was lost (fell off the arm)' in h.node.configure_error
+    assert 'the part was lost at throw 1 (first contact at x' in h.node.configure_error
     assert h.callbacks() == {} and h.node.count_publishers(f'{NS}/edge1_ready') == 0
 
 

@@ -20,8 +20,8 @@ The lifecycle skeleton of feeder_sim's two nodes: a node that follows a part on 
 (``predictor_node``) share: the scene (loaded once), the parameter gate over the node's own
 table (feeder_sim.params), the analysis at the sensor in use (redone only when its input,
 ``sensor_radius``, changes), the part's state (throwmap.PartOnArm), the lifecycle
-transitions, the part lost off the arm's end, and the ``lifecycle`` and ``prediction``
-diagnostics. Each node adds its interface in the hooks
+transitions, the part lost (off the arm's end, or at rest below R_min), and the ``lifecycle``
+and ``prediction`` diagnostics. Each node adds its interface in the hooks
 :meth:`_part_options`, :meth:`_configure_own`, :meth:`_create_interface`, :meth:`_apply_own`,
 :meth:`_analysis_changed`, :meth:`_part_placed`, :meth:`_place_hint` and :meth:`_release_own`.
 """
@@ -64,7 +64,8 @@ class PartNode(FeederLifecycleNode):
         self._predictor = None          # throwmap.PartOnArm while configured
         self._pubs = {}
         self._last_throw = None
-        self._lost_seq = None           # cycle that lost the part off the arm's end
+        self._lost_seq = None           # cycle that lost the part (off the arm, or below R_min)
+        self._lost_reason = ''
         self._seq = 0
         self._counts = {'completed': 0, 'failed': 0}
         self._rate_mark = (0, self.get_clock().now())
@@ -219,10 +220,12 @@ class PartNode(FeederLifecycleNode):
         """Report the part lost if ``throw`` (of cycle ``seq``) is the one that lost it."""
         if throw.kind == LOST and throw.count == self._predictor.lost_at:
             self._lost_seq = seq
+            self._lost_reason = throw.lost_reason or "the part left the arm's end"
             self.get_logger().error(
-                f"part lost off the arm's end at cycle {seq} (thrown from edge {throw.edge0} "
-                f'at R {throw.R0:.4f} m; arm length {self._scene.arm_length:g} m); set '
-                f'start_edge / start_radius{self._place_hint()} when a part is back on the arm')
+                f'part lost at cycle {seq} (thrown from edge {throw.edge0} at R '
+                f'{throw.R0:.4f} m; arm length {self._scene.arm_length:g} m): '
+                f'{self._lost_reason}; set start_edge / start_radius{self._place_hint()} when '
+                'a part is back on the arm')
 
     def _place_hint(self):
         """Return the other ways to put a part back, for the lost-part message ('' if none)."""
@@ -260,6 +263,7 @@ class PartNode(FeederLifecycleNode):
             else 'unbounded'})
         if pred.lost:
             stat.add('lost_at_seq', self._lost_seq)
-            stat.summary('error', f"part lost off the arm's end at cycle {self._lost_seq}")
+            stat.add('lost_reason', self._lost_reason)
+            stat.summary('error', f'part lost at cycle {self._lost_seq}')
         else:
             stat.summary('ok', f'edge {edge}, R {100 * R:.2f} cm after {pred.count} throws')

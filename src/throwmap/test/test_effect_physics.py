@@ -244,11 +244,15 @@ def test_finite_carry_domain_is_the_interval_a_dense_wrench_cone_scan_finds():
         assert model.r_min(i) == got[0][0] and model.r_max(i) == got[0][1]
     # the lead's figures (cm): edge 0 [2.667, 78.377]
     assert model.domain_intervals(0)[0] == pytest.approx((0.02667, 0.78377), abs=2e-5)
-    # every layer accepts a state f computes, and refuses one past the upper end
+    # every layer accepts a state f computes, and refuses one past the upper end; this one
+    # is thrown back behind the pivot (edge 1, R -5.9 cm), outside the domain: lost there
+    # (issue 21 item 3), not a state the next throw would refuse
     assert model.domain_error(0, 0.405) is None
-    assert model.f(0, 0.405)[0] == 1
+    assert model.f(0, 0.405)[:3:2] == (-1, 'lost')
+    assert 'on edge 1 at R = -0.0591' in model.throw(0, 0.405).lost_reason
     edges, radii = model.orbits([0], [0.405], 1)[:2]
-    assert edges[0, 1] == 1
+    assert edges[0, 1] == -1
+    assert model.f(0, 0.2)[0] == 2 and model.domain_error(*model.f(0, 0.2)[:2]) is None
     err = model.domain_error(0, 0.9)
     assert err is not None and err.condition == 'carry_grasp' and '0.783' in str(err)
     with pytest.raises(ValueError, match='carry'):

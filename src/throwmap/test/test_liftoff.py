@@ -213,7 +213,10 @@ def test_no_energy_is_gained_through_a_slip_or_a_hop(mu):
         # energy never rises (to the integrator's 1e-9 relative).
         assert all(b <= a + 1e-9 * abs(energies[0]) for a, b in zip(energies, energies[1:])), \
             (e, r, kinds, energies)
-        assert res.edge in base.part.stable_edges
+        # At rest on a stable edge, or (low mu: a slip inwards) outside the domain of f, which
+        # is an outcome of its own (issue 21 item 3).
+        assert res.edge in base.part.stable_edges or (
+            res.kind == 'lost' and 'outside the domain of f' in res.lost_reason), res
     assert hops > 5
 
 

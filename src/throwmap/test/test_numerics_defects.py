@@ -31,6 +31,7 @@ import math
 import numpy as np
 import pytest
 from throwmap import Scene
+from throwmap.status import LOST, OK
 from throwmap_testing import SCENES
 import yaml
 
@@ -260,9 +261,12 @@ def test_liftoff_equals_the_consistent_model_state_by_state():
     radii = np.array([lift.r_min(e) * 1.001 for e in edges]) + rng.uniform(0, 0.25, n)
     a = lift.f_batch(edges, radii)
     b = cons.f_batch(edges, radii)
-    assert (a['status'] == 0).all() and (b['status'] == 0).all()
+    # Both lose the same states: those that slip to rest below R_min (issue 21 item 3).
+    assert (a['status'] == b['status']).all() and set(a['status'].tolist()) <= {OK, LOST}
+    ok = a['status'] == OK
+    assert ok.sum() >= 0.9 * n
     assert (a['edge'] == b['edge']).all()
-    assert np.abs(a['R'] - b['R']).max() < 1e-9
+    assert np.abs(a['R'][ok] - b['R'][ok]).max() < 1e-9
 
 
 def test_liftoff_with_a_force_uses_its_mu_at_impacts_too():

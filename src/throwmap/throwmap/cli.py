@@ -31,7 +31,7 @@ from . import search as design_search
 from .analysis import analyse
 from .basins import basin, default_grid
 from .errors import ThrowmapError
-from .orbits import limit_set, orbit, pull_share
+from .orbits import limit_set, loss_reason, orbit, pull_share
 from .robustness import S_MAX
 from .scene import load_scene
 from .status import LOST, OK
@@ -401,8 +401,9 @@ def cmd_orbit(scene, args, out):
              'kind': r['kind'] or 'start'} for r in orb.rows()],
            ['throw', 'edge', 'R (cm)', 'kind'], out)
     if orb.kinds[-1] == 'lost':
-        out.write(f'the part was lost (it left the arm) at throw {len(orb.edges) - 1}; the '
-                  'orbit ends there\n')
+        why = loss_reason(scene.model, orb.edges[-2], orb.radii[-2]) or 'a noisy throw'
+        out.write(f'the part was lost at throw {len(orb.edges) - 1} ({why}); the orbit ends '
+                  'there\n')
     return 0
 
 

@@ -41,7 +41,7 @@ from .model import (batch_buffers, batch_result, impacts_from_records, orbit_buf
                     ThrowModel, ThrowResult)
 from .pipeline import Context
 from .sensor import read_sensor
-from .status import LOST, OK, REC_COLS
+from .status import LOST, OFF_DOMAIN, OK, REC_COLS
 
 REC_ROWS = 2048
 
@@ -196,11 +196,16 @@ class EffectModel(ThrowModel):
         return self._one(edge, R, float(z[0]), float(z[1]), self.ctx, self.prm, rec)
 
     def f(self, edge, R):
-        """(edge', R', kind); kind 'lost' (edge -1, R nan) when the part leaves the arm."""
+        """
+        (edge', R', kind); kind 'lost' (edge -1, R nan) when the part leaves the arm.
+
+        Also 'lost' when the part comes to rest outside the domain of f (below R_min), where no
+        later throw is defined: :meth:`throw` says where it rests and why.
+        """
         edge, R = self._state(edge, R)
         out = self._throw(edge, R, self._normals((1,))[0], self._rec)
         st = out[0]
-        if st == LOST:
+        if st == LOST or st == OFF_DOMAIN:
             return -1, math.nan, 'lost'
         if st != OK:
             self._raise(st, edge, R)
@@ -217,14 +222,18 @@ class EffectModel(ThrowModel):
         z = self._normals((1,))[0]
         rec = self._rec
         st, j, r1, t, rot, _, k0, nrec, w, h, e0 = self._throw(edge, R, z, rec)
-        if st not in (OK, LOST):
+        if st not in (OK, LOST, OFF_DOMAIN):
             self._raise(st, edge, R)
         if nrec > rec.shape[0]:     # a long catch: again, with room for every event
             rec = np.empty((nrec, REC_COLS))
             self._throw(edge, R, z, rec)
         rows = rec[:nrec]
         reason = ''
-        if st == LOST:
+        if st == OFF_DOMAIN:
+            kind = 'lost'
+            reason = self._off_domain_reason(int(j), float(r1))
+            j, r1 = -1, math.nan
+        elif st == LOST:
             kind = 'lost'
             for _, module, params in self.effects.modules():
                 if hasattr(module, 'lost_reason'):
@@ -239,6 +248,12 @@ class EffectModel(ThrowModel):
                                  float(rot), int(k0), impacts_from_records(rows), float(e0),
                                  traj, min_normal_force=low, release_speed=float(w),
                                  offset=float(h), lost_reason=reason)
+
+    def _off_domain_reason(self, edge, R):
+        err = self.domain_error(edge, R)
+        why = str(err) if err is not None else 'the nominal release does not grasp it there'
+        return (f'the part came to rest on edge {edge} at R = {R:.6g} m, outside the domain of '
+                f'f ({why}); no later throw is defined')
 
     def f_batch(self, edges, radii):
         edges, radii, out = batch_buffers(edges, radii)

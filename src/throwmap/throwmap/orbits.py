@@ -15,9 +15,10 @@
 """
 Orbits of the throw map and their forward limit sets (paper section IV).
 
-An orbit iterates f from a start; with effect finite_arm it may end early with a 'lost' state
-(-1, nan). Its limit set is read off its tail: the edges visited by flips, the R band on each
-edge, the jog counts, the cycle lengths and the transient.
+An orbit iterates f from a start; with effects it may end early with a 'lost' state (-1, nan):
+the part left a finite arm, or came to rest outside the domain of f (:func:`loss_reason`).
+Its limit set is read off its tail: the edges visited by flips, the R band on each edge, the
+jog counts, the cycle lengths and the transient.
 """
 
 from dataclasses import dataclass
@@ -52,6 +53,16 @@ def orbit(model, edge, R, throws):
     kinds = [None] + [('lost' if edges[k] < 0 else throw_kind(edges[k - 1], edges[k], rots[k]))
                       for k in range(1, len(edges))]
     return Orbit(edges, radii, tuple(kinds), rots)
+
+
+def loss_reason(model, edge, R):
+    """
+    Say why the throw from (edge, R) lost the part, as the noise-free model throws it.
+
+    '' where that throw does not lose it (a noisy throw did).
+    """
+    res = model.nominal().throw(int(edge), float(R))
+    return getattr(res, 'lost_reason', '') if res.kind == 'lost' else ''
 
 
 def flip_pattern(edges, rotations):
@@ -174,9 +185,11 @@ def limit_set(model, edge, R, throws=2000, tail_fraction=0.5):
     """Return the LimitSet of the orbit from (edge, R); PartLost if the part is lost on the way."""
     orb = orbit(model, edge, R, throws)
     if orb.edges[-1] < 0:
-        raise PartLost(f'from ({edge}, {R:.6g} m) the part was lost (fell off the arm) at throw '
-                       f'{len(orb.edges) - 1}: there is no limit set; start elsewhere or '
-                       'lengthen arm.length', after=len(orb.edges) - 2)
+        why = loss_reason(model, orb.edges[-2], orb.radii[-2]) or 'a noisy throw lost it'
+        raise PartLost(f'from ({edge}, {R:.6g} m) the part was lost at throw '
+                       f'{len(orb.edges) - 1} ({why}): there is no limit set; start elsewhere '
+                       'or change the design (arm.length, release speed, offset)',
+                       after=len(orb.edges) - 2)
     return limit_set_from_orbit(orb.edges, orb.radii, orb.rotations, tail_fraction)
 
 

@@ -16,8 +16,10 @@
 A part on the arm of a scene, throw by throw (the object the sim, the emulator, the monitor use).
 
 :class:`PartOnArm` holds (edge, R) and advances it with the scene's throw map. With effect
-``finite_arm`` a throw may lose the part off the arm's end: f returns ``(-1, nan, 'lost')``;
-the part is then gone (edge -1) and every later throw is an empty one, of kind ``lost`` too
+``finite_arm`` a throw may lose the part off the arm's end, and under ``liftoff`` a roll may
+slip the part inwards to rest below R_min, where no later throw is defined: f returns
+``(-1, nan, 'lost')`` and the throw says why (``Throw.lost_reason``); the part is then gone
+(edge -1) and every later throw is an empty one, of kind ``lost`` too
 (``lost_at`` names the throw that lost it), until :meth:`PartOnArm.place` puts a part back. The
 sensor's reading goes through the scene's sensor model (``sensor_noise``: seeded false positives
 and negatives) unless the object is told to read the geometric bit. :meth:`PartOnArm.orbit` and
@@ -46,6 +48,7 @@ class Throw:
     R: float
     kind: str               # 'jog', 'flip' or 'lost' (no part on the arm after it)
     detected: bool
+    lost_reason: str = ''   # why this throw lost the part ('' if it did not, or had none)
 
     @property
     def on_arm(self):
@@ -141,15 +144,19 @@ class PartOnArm:
     def throw(self):
         """Advance one throw; raises throwmap.DomainError / NumericalError (state unchanged)."""
         edge0, r0 = self.edge, self.R
+        reason = ''
         if self.lost:
             edge, R, kind = -1, math.nan, LOST
         else:
-            edge, R, kind = self.model.f(edge0, r0)
+            # The full result, not f: the same throw (and random draws), with the reason of a loss.
+            res = self.model.throw(edge0, r0)
+            edge, R, kind = res.edge, res.R, res.kind
+            reason = getattr(res, 'lost_reason', '')
         self.edge, self.R = int(edge), float(R)
         self.count += 1
         if kind == LOST and self.lost_at is None:
             self.lost_at = self.count
-        return Throw(self.count, edge0, r0, self.edge, self.R, kind, self.read())
+        return Throw(self.count, edge0, r0, self.edge, self.R, kind, self.read(), reason)
 
     def pose(self):
         """(x, y, yaw) of the resting part's CM in frame feeder_base; None without a part."""

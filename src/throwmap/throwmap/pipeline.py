@@ -30,6 +30,12 @@ the module that calls it; docs/effects.md has the interface):
    throw after the fact (finite_carry's returning arm, finite_arm's losses). Checks run in the
    registry's order; the first one that changes the status decides.
 
+Last, a throw that ends at rest outside the domain of f (below R_min: under ``liftoff`` a roll
+can slip inwards) has the outcome OFF_DOMAIN with its rest state; a batch or an orbit reports
+it as LOST (edge -1): no later throw is defined. The domain is the nominal release's: the part
+must rest on a stable edge, right of the pivot, where the ``release`` hook grasps it at the
+scene's own w and h.
+
 The pipeline names no effect; with all defaults it is the base model (base_map) bit for bit.
 """
 
@@ -41,7 +47,7 @@ from .catch import catch_at_contact
 from .grasp import impulse_grasp_radius
 from .jit import njit
 from .status import (ERR_EDGE_INDEX, ERR_GRASP, ERR_RELEASE, ERR_TOE_STUB, ERR_UNSTABLE_EDGE,
-                     LOST, OK)
+                     LOST, OFF_DOMAIN, OK)
 
 # Everything a throw needs besides its state: nominal release speed w, arm offset h, gravity g,
 # the arm's friction mu (inf: none given), the part and knobs bundles, the event simulator's
@@ -103,8 +109,17 @@ def build(perturb=no_perturbation, release=impulsive_release, motion=closed_moti
     throw_one(edge, R, z0, z1, ctx, prm, rec) -> (status, edge, R, first contact time, net
     rotation, impacts, first contact vertex, records written, w used, h used, energy per unit
     mass at release over the arm surface). ``prm`` is the effect set's parameter bundle,
-    passed to every hook.
+    passed to every hook. Status OFF_DOMAIN comes with the rest state; throw_many and orbit_many
+    report it as LOST.
     """
+
+    @njit(cache=False)
+    def rests_in_domain(edge, R, ctx, prm):
+        # The nominal throw from (edge, R) would pass the domain checks of throw_one.
+        part = ctx.part
+        if not (0 <= edge < part.n and part.stable[edge] and R + part.u_l[edge] > 0.0):
+            return False
+        return release(edge, R, ctx.w, ctx.h, ctx, prm)[0] == OK
 
     @njit(cache=False)
     def throw_one(edge, R, z0, z1, ctx, prm, rec):
@@ -128,6 +143,8 @@ def build(perturb=no_perturbation, release=impulsive_release, motion=closed_moti
         out = Outcome(st, j, r1, t, rot, imp, k, nrec, x_lo, x_hi)
         status = check(out, Release(x0, y0, phi0, vx, vy, om, w, h), edge, ctx, prm)
         if status == st:
+            if st == OK and not rests_in_domain(j, r1, ctx, prm):
+                return OFF_DOMAIN, j, r1, t, rot, imp, k, nrec, w, h, e0
             return st, j, r1, t, rot, imp, k, nrec, w, h, e0
         # A check failed or lost the throw. A lost part keeps the rotation of its throw.
         if not (status == LOST and st == OK):
@@ -140,6 +157,8 @@ def build(perturb=no_perturbation, release=impulsive_release, motion=closed_moti
         for i in range(edges.shape[0]):
             st, j, r1, t, rot, _, k, nrec, _, _, _ = throw_one(edges[i], radii[i], z[i, 0],
                                                                z[i, 1], ctx, prm, rec)
+            if st == OFF_DOMAIN:
+                st, j, r1 = LOST, -1, math.nan
             out_edge[i] = j
             out_r[i] = r1
             out_status[i] = st
@@ -168,6 +187,8 @@ def build(perturb=no_perturbation, release=impulsive_release, motion=closed_moti
                 st, j, r1, _, rot, _, _, _, _, _, _ = throw_one(edge, R, z[s, k, 0],
                                                                 z[s, k, 1], ctx, prm, rec)
                 if st != OK:
+                    if st == OFF_DOMAIN:
+                        st = LOST
                     out_status[s] = st
                     out_done[s] = k
                     if st == LOST:

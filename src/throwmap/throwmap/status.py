@@ -43,12 +43,16 @@ LOST = 20                   # finite_arm: the part left the arm (an outcome, not
 ERR_CARRY_GRASP = 21        # finite_carry: no dynamic grasp somewhere along the carry
 ERR_ARM_STRIKE = 22         # finite_carry: the returning arm meets the part
 ERR_RELEASE = 24            # a perturbed release speed <= 0
+# A throw whose part came to rest outside the domain of f (below R_min: a slip under liftoff's
+# finite friction): one throw's outcome only (pipeline.throw_one, with the rest state); batches
+# and orbits report it as LOST, since no later throw is defined (issue 21 item 3).
+OFF_DOMAIN = 25
 
 CODES = {OK: 'ok', ERR_EDGE_INDEX: 'edge_index', ERR_UNSTABLE_EDGE: 'stable_edge',
          ERR_GRASP: 'grasp', ERR_TOE_STUB: 'toe_stub', ERR_FLIGHT_CAP: 'flight_cap',
          ERR_SETTLE_CAP: 'settle_cap', ERR_NONFINITE: 'nonfinite', ERR_PAINLEVE: 'painleve',
          ERR_SIM_CAP: 'sim_cap', LOST: 'lost', ERR_CARRY_GRASP: 'carry_grasp',
-         ERR_ARM_STRIKE: 'arm_strike', ERR_RELEASE: 'release_speed'}
+         ERR_ARM_STRIKE: 'arm_strike', ERR_RELEASE: 'release_speed', OFF_DOMAIN: 'off_domain'}
 
 # ------------------------------------------------------------------------------ events
 EV_FLIGHT_IMPACT = 0      # a vertex hits the arm at the end of flight
@@ -126,8 +130,8 @@ TEMPLATES = {
                   'accuracy.max_sim_steps = {model.knobs.max_sim_steps} integrator '
                   'steps; raise it, or integrator_step / roll_step'),
     LOST: (PartLost,
-           'lost: from ({edge}, {R:.6g} m) the part left the arm [0, '
-           '{model.arm_length:g} m]'),
+           'lost: from ({edge}, {R:.6g} m) the part left the arm [0, {model.arm_length:g} m] '
+           'or came to rest outside the domain of f'),
     ERR_RELEASE: (functools.partial(DomainError, 'release_speed'),
                   'from ({edge}, {R:.6g} m) the sampled release speed is '
                   '<= 0; noise.release_speed_sd is too large for the release speed'),
