@@ -221,11 +221,13 @@ class PartNode(FeederLifecycleNode):
         if throw.kind == LOST and throw.count == self._predictor.lost_at:
             self._lost_seq = seq
             self._lost_reason = throw.lost_reason or "the part left the arm's end"
+            arm = self._scene.arm_length
+            arm = (f'arm length {arm:g} m' if arm is not None and math.isfinite(arm)
+                   else 'arm taken as endless')
             self.get_logger().error(
                 f'part lost at cycle {seq} (thrown from edge {throw.edge0} at R '
-                f'{throw.R0:.4f} m; arm length {self._scene.arm_length:g} m): '
-                f'{self._lost_reason}; set start_edge / start_radius{self._place_hint()} when '
-                'a part is back on the arm')
+                f'{throw.R0:.4f} m; {arm}): {self._lost_reason}; set start_edge / '
+                f'start_radius{self._place_hint()} when a part is back on the arm')
 
     def _place_hint(self):
         """Return the other ways to put a part back, for the lost-part message ('' if none)."""
