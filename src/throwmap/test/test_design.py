@@ -261,6 +261,13 @@ def test_chosen_design_is_a_scene_every_command_loads(triangle, tmp_path):
     # The search is deterministic and the triangle's 5x5 grid has designs above the default
     # floor: a missing choice is a failure, not a reason to skip the round trip.
     assert result['chosen'] is not None, 'no design met the floor on the 5x5 grid'
+    # The triangle gives no arm length: the output says the arm was taken as endless, and how
+    # far out the chosen design puts the part and the sensor (issue 21 item 2, in part).
+    chosen = result['chosen']['figures']
+    endless = [n for n in result['notes'] if n.startswith('the arm is taken as endless')]
+    assert len(endless) == 1
+    assert f'up to R = {chosen["r_hi"] * 100:.1f} cm' in endless[0]
+    assert f'sensor at {chosen["sensor_radius"] * 100:.1f} cm' in endless[0]
     path = tmp_path / 'triangle_design.yaml'
     scene = load_scene(str(path))
     chosen = result['chosen']

@@ -263,6 +263,8 @@ def search(scene, h_range, w_range, n_h=40, n_w=40, goals=None, fractions=(0.25,
     if chosen is None:
         notes.append(f'no design meets the robustness floor {floor}: lower --robust, or widen '
                      'the ranges')
+    if scene.arm_length is None:
+        notes.append(endless_arm_note(chosen))
     outside = res.design[:, D.D_STATUS] == D.ST_ARRIVAL_OUTSIDE
     if outside.any():
         notes.append(f'{int(outside.sum())} of {outside.size} designs not eligible: '
@@ -418,6 +420,23 @@ def catalogue_task(path, h_range, w_range, n_h, n_w, fractions=(0.25,), floor=0.
                  refine=refine, options=D.eval_options(scene, throws=throws), workers=1,
                  objective=objective)
     return summary(scene, res, path)
+
+
+def endless_arm_note(chosen):
+    """
+    Say that the search took the arm as endless, and how far out the chosen design reaches.
+
+    The search runs the base model, whose arm has no end; a scene that gives arm.length needs
+    effect finite_arm, which the search does not evaluate yet (issue 21 item 2).
+    """
+    text = ('the arm is taken as endless: the scene gives no arm.length, and the search '
+            'evaluates the base model only (finite_arm not yet)')
+    if chosen is None:
+        return text
+    f = chosen.figures
+    return (f'{text}; the chosen design rests the part up to R = {f["r_hi"] * 100:.1f} cm out '
+            f'(R_max of Z) and puts the sensor at {f["sensor_radius"] * 100:.1f} cm: check it '
+            'on your arm with `throwmap design` and effects: [finite_arm], arm.length_cm')
 
 
 def summary(scene, res, path=None):
