@@ -89,7 +89,8 @@ def test_audit_finds_the_misses_of_a_cut_map_sample_by_sample(setting):
         u_r, u_w, u_h = rng.random(), rng.uniform(-1, 1), rng.uniform(-1, 1)
         RB.audit_cells(h, w, dh, dw, g, math.inf, part.arrays, knobs, np.empty((0, REC_COLS)),
                        lo, hi, succ_lo, succ_hi, escape, progress, np.array([e]), np.array([c]),
-                       np.array([u_r]), np.array([u_w]), np.array([u_h]), np.empty(part.n), out)
+                       np.array([u_r]), np.array([u_w]), np.array([u_h]), np.empty(part.n),
+                       math.inf, out)
         model = ThrowModel(part, h + dh * u_h, w + dw * u_w, g)
         R = lo[e] + (c + u_r) * (hi[e] - lo[e]) / m
         if R < model.r_min(e):

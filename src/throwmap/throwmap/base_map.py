@@ -17,7 +17,10 @@ The paper's throw map f(i, R) compiled: one throw, a batch of throws, orbits.
 
 Impulsive release (eqs 5-6), ballistic flight to the first contact (throwmap.ballistic), the
 closed-form catch (throwmap.catch). This is what a scene without effects runs; the entry points
-here are called from Python (throwmap.model.ThrowModel) and cached on disk by numba.
+here are called from Python (throwmap.model.ThrowModel, arm = inf) and cached on disk by numba.
+The design kernel (throwmap.design) calls them with the arm's length of a scene whose only
+effect is ``finite_arm``: a throw that touches the arm line off [0, arm] or rests off it is
+LOST, by :func:`off_arm`, the rule that effect's check applies.
 """
 
 import math
@@ -25,16 +28,30 @@ import math
 from .ballistic import first_contact, impulsive_release, state_at
 from .catch import catch_at_contact
 from .jit import njit
-from .status import ERR_EDGE_INDEX, ERR_GRASP, ERR_TOE_STUB, ERR_UNSTABLE_EDGE, OK
+from .status import ERR_EDGE_INDEX, ERR_GRASP, ERR_TOE_STUB, ERR_UNSTABLE_EDGE, LOST, OK
 
 
 @njit
-def throw_one(edge, R, w, g, h, r_grasp, part, knobs, rec):
+def off_arm(status, vertex, x_lo, x_hi, R, length):
+    """
+    Tell whether a throw left an arm occupying [0, length] (effect finite_arm's rule).
+
+    x_lo, x_hi: the lowest and highest arm coordinate a vertex touched; R: the rest position
+    of an OK throw. A throw that failed after a contact off the arm is lost all the same.
+    """
+    off = x_lo < 0.0 or x_hi > length
+    if status == OK:
+        return off or R < 0.0 or R > length
+    return vertex >= 0 and off
+
+
+@njit
+def throw_one(edge, R, w, g, h, r_grasp, part, knobs, rec, arm=math.inf):
     """
     One evaluation of f(edge, R); ``rec`` receives the catch's events (may have no rows).
 
     Returns (status, new edge, new R, flight time, net rotation, impacts, first contact vertex,
-    records written).
+    records written). ``arm``: the arm's length (inf: no end); a throw off it is LOST.
     """
     nan = math.nan
     if edge < 0 or edge >= part.n:
@@ -51,8 +68,11 @@ def throw_one(edge, R, w, g, h, r_grasp, part, knobs, rec):
         return status, -1, nan, nan, nan, 0, -1, 0
     rx, ry, x_cm, xdot, ydot, phi, energy = state_at(T, edge, k, x0, y0, phi0, vx, vy, om, g,
                                                      part)
-    status, j, r1, rot, imp, nrec, _, _ = catch_at_contact(k, phi, rx, ry, x_cm, xdot, ydot, om,
-                                                           energy, -g, part, knobs, rec)
+    status, j, r1, rot, imp, nrec, x_lo, x_hi = catch_at_contact(k, phi, rx, ry, x_cm, xdot,
+                                                                 ydot, om, energy, -g, part,
+                                                                 knobs, rec)
+    if arm < math.inf and off_arm(status, k, x_lo, x_hi, r1, arm):
+        return LOST, -1, nan, T, rot, imp, k, nrec
     return status, j, r1, T, rot, imp, k, nrec
 
 

@@ -27,8 +27,10 @@ arrival (``eval_options(arrival=...)``: one edge, R uniform in a range). The ker
 the GIL, so :func:`evaluate_grid` runs chunks of designs on threads, one per core.
 docs/design.md has the method and the measured figures.
 
-The base model only: a scene with effects has a throw map that is not this kernel's
-(:func:`check_scene` says so).
+The base model, on the scene's arm: with effect ``finite_arm`` the kernel throws with the arm's
+length (base_map.off_arm, that effect's rule), so a design that puts the part past the arm's end
+from Z, a start or its limit set is ST_OFF_ARM (not eligible). Any other effect has a throw map
+that is not this kernel's (:func:`check_scene` says so).
 """
 
 from collections import namedtuple
@@ -46,7 +48,7 @@ from .catch import is_jog
 from .errors import InputError
 from .grasp import impulse_grasp_radius
 from .jit import njit
-from .status import OK, REC_COLS
+from .status import LOST, OK, REC_COLS
 
 _is_jog = njit(is_jog)      # the one jog/flip rule (throwmap.catch), compiled here as well
 
@@ -83,12 +85,14 @@ S_COLS = ('goal_in', 'feasible', 'guarantee_radius', 'reach_radius', 'sensor_rad
           'first_ready_max', 'never_ready', 'sensor_fits', 'readies_per_second',
           'part_seconds_mean', 'part_seconds_p95', 'parts_per_minute')
 # Design status codes.
-ST_OK, ST_NO_GRASP, ST_THROW_ERROR, ST_NO_Z, ST_ARRIVAL_OUTSIDE = 0, 1, 2, 3, 4
+ST_OK, ST_NO_GRASP, ST_THROW_ERROR, ST_NO_Z, ST_ARRIVAL_OUTSIDE, ST_OFF_ARM = 0, 1, 2, 3, 4, 5
 STATUS_TEXT = {ST_OK: 'ok', ST_NO_GRASP: 'no start in the domain of f',
                ST_THROW_ERROR: 'a throw left the domain of f (below R_grasp or a toe stub)',
                ST_NO_Z: 'R_max does not converge (Z of Prop. IV.4 is not bounded)',
                ST_ARRIVAL_OUTSIDE: 'the arrival range starts below R_min of its edge at this '
-                                   'h (outside the domain of f)'}
+                                   'h (outside the domain of f)',
+               ST_OFF_ARM: 'a throw from Z, from a start or in the limit set puts the part past '
+                           "the arm's end (arm.length, effect finite_arm)"}
 
 
 @dataclass(frozen=True)
@@ -120,7 +124,7 @@ def _r_min(edge, h, mu, part):
 
 
 @njit
-def _z_top(w, g, h, r_grasp, lo, r_max, part, knobs, rec, samples):
+def _z_top(w, g, h, arm, r_grasp, lo, r_max, part, knobs, rec, samples):
     """
     R_max over all stable edges: the top of Z (basins.design_radii's growth, compiled).
 
@@ -140,9 +144,9 @@ def _z_top(w, g, h, r_grasp, lo, r_max, part, knobs, rec, samples):
             for s in range(samples):
                 R = lo[i] + (hi - lo[i]) * s / (samples - 1)
                 st, j, r1, _, rot, _, _, _ = throw_one(i, R, w, g, h, r_grasp, part, knobs,
-                                                       rec)
+                                                       rec, arm)
                 if st != OK:
-                    return ST_THROW_ERROR, math.nan
+                    return ST_OFF_ARM if st == LOST else ST_THROW_ERROR, math.nan
                 if not _is_jog(i, j, rot):
                     r_max[i] = R
                     found = True
@@ -157,9 +161,10 @@ def _z_top(w, g, h, r_grasp, lo, r_max, part, knobs, rec, samples):
                 continue
             for s in range(samples):
                 R = lo[i] + (r_max[i] - lo[i]) * s / (samples - 1)
-                st, j, r1, _, _, _, _, _ = throw_one(i, R, w, g, h, r_grasp, part, knobs, rec)
+                st, j, r1, _, _, _, _, _ = throw_one(i, R, w, g, h, r_grasp, part, knobs, rec,
+                                                     arm)
                 if st != OK:
-                    return ST_THROW_ERROR, math.nan
+                    return ST_OFF_ARM if st == LOST else ST_THROW_ERROR, math.nan
                 if r1 > r_max[j] * (1.0 + 1e-12):
                     r_max[j] = r1
                     grew = True
@@ -173,23 +178,28 @@ def _z_top(w, g, h, r_grasp, lo, r_max, part, knobs, rec, samples):
 
 
 @njit
-def _orbit(edge, R, steps, w, g, h, r_grasp, part, knobs, rec, oe, orr, orot, ot):
-    """Iterate f recording edge, R, net rotation and flight time; returns throws done."""
+def _orbit(edge, R, steps, w, g, h, arm, r_grasp, part, knobs, rec, oe, orr, orot, ot):
+    """
+    Iterate f recording edge, R, net rotation and flight time.
+
+    Returns (throws done, whether the throw after them lost the part off the arm).
+    """
     oe[0] = edge
     orr[0] = R
     orot[0] = 0.0
     ot[0] = 0.0
     for k in range(steps):
-        st, j, r1, t, rot, _, _, _ = throw_one(edge, R, w, g, h, r_grasp, part, knobs, rec)
+        st, j, r1, t, rot, _, _, _ = throw_one(edge, R, w, g, h, r_grasp, part, knobs, rec,
+                                               arm)
         if st != OK:
-            return k
+            return k, st == LOST
         oe[k + 1] = j
         orr[k + 1] = r1
         orot[k + 1] = rot
         ot[k + 1] = t
         edge = j
         R = r1
-    return steps
+    return steps, False
 
 
 @njit
@@ -234,7 +244,8 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
         return
     for i in range(n):
         edge_buf[3, i] = lo[i]
-    st, r_hi = _z_top(w, g, h, r_grasp, edge_buf[3], edge_buf[2], part, knobs, rec,
+    arm = opt.arm_length
+    st, r_hi = _z_top(w, g, h, arm, r_grasp, edge_buf[3], edge_buf[2], part, knobs, rec,
                       opt.zmax_samples)
     if st != ST_OK:
         out_design[D_STATUS] = st
@@ -269,12 +280,12 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     # default start), the second half of a long orbit.
     e0 = goals[0]
     nref = opt.ref_throws
-    done = _orbit(e0, 1.5 * lo[e0], nref, w, g, h, r_grasp, part, knobs, rec, ref_e, ref_r,
-                  ref_rot, ref_t)
+    done, lost = _orbit(e0, 1.5 * lo[e0], nref, w, g, h, arm, r_grasp, part, knobs, rec, ref_e,
+                        ref_r, ref_rot, ref_t)
     out_design[D_REF_EDGE] = e0
     out_design[D_REF_R] = 1.5 * lo[e0]
     if done < nref:
-        out_design[D_STATUS] = ST_THROW_ERROR
+        out_design[D_STATUS] = ST_OFF_ARM if lost else ST_THROW_ERROR
         return
     tail0 = nref // 2
     rmin_all = math.inf
@@ -308,13 +319,15 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     T = opt.throws
     in_ref = 0
     errors = 0
+    losses = 0
     transient_max = 0
     for s in range(starts):
-        done = _orbit(int(out_starts[s, 0]), out_starts[s, 1], T, w, g, h, r_grasp, part, knobs,
-                      rec, work_e[s], work_r[s], work_rot[s], work_t[s])
+        done, lost = _orbit(int(out_starts[s, 0]), out_starts[s, 1], T, w, g, h, arm, r_grasp,
+                            part, knobs, rec, work_e[s], work_r[s], work_rot[s], work_t[s])
         if done < T:
             labels[s] = -1
             errors += 1
+            losses += lost
             for k in range(done + 1, T + 1):
                 work_e[s, k] = -1
             continue
@@ -339,8 +352,8 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     # Arrival starts: only their first readies (and the warm-up) use them; an orbit that
     # leaves the domain of f gets no ready (never_ready), as a failing grid start would.
     for s in range(starts, rows):
-        done = _orbit(int(out_starts[s, 0]), out_starts[s, 1], T, w, g, h, r_grasp, part, knobs,
-                      rec, work_e[s], work_r[s], work_rot[s], work_t[s])
+        done, _ = _orbit(int(out_starts[s, 0]), out_starts[s, 1], T, w, g, h, arm, r_grasp,
+                         part, knobs, rec, work_e[s], work_r[s], work_rot[s], work_t[s])
         for k in range(done + 1, T + 1):
             work_e[s, k] = -1
     first_row = starts if rows > starts else 0
@@ -359,7 +372,8 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     out_design[D_ATTRACTORS] = others + (1 if in_ref > 0 else 0)
     out_design[D_TRANSIENT] = transient_max
     out_design[D_ERRORS] = errors
-    out_design[D_STATUS] = ST_OK if errors == 0 else ST_THROW_ERROR
+    out_design[D_STATUS] = ST_OK if errors == 0 else (ST_OFF_ARM if losses else
+                                                      ST_THROW_ERROR)
     if outside:
         out_design[D_STATUS] = ST_ARRIVAL_OUTSIDE
     cycle = flight + opt.settle_time + opt.reset_time
@@ -495,13 +509,19 @@ class GridResult:
         return sel[..., S_COLS.index(name)]
 
 
+# Effects the kernel evaluates itself: finite_arm (its rule, base_map.off_arm, with the length).
+KERNEL_EFFECTS = ('finite_arm',)
+
+
 def check_scene(scene):
-    """Raise InputError unless the scene runs the base model (the kernel's throw map)."""
-    if scene.effects:
-        names = ', '.join(scene.effects.names) if hasattr(scene.effects, 'names') else 'effects'
-        raise InputError('effects', f'design search evaluates the base model only; this scene '
-                         f'names effects ({names})', 'remove the effects section for the '
-                         'search, then check the chosen design with the effects by `throwmap '
+    """Raise InputError unless the kernel's throw map is the scene's (base model + finite_arm)."""
+    names = tuple(getattr(scene.effects, 'names', ())) if scene.effects else ()
+    other = [n for n in names if n not in KERNEL_EFFECTS]
+    if other:
+        raise InputError('effects', f'design search evaluates the base model only, with '
+                         f'finite_arm; this scene names effects ({", ".join(other)})',
+                         'remove those effects for the search (keep finite_arm and '
+                         'arm.length), then check the chosen design with them by `throwmap '
                          'design`')
 
 

@@ -308,8 +308,8 @@ class ThrowModel:
     def _throw_one(self, edge, R, rec):
         # The compiled throw, called directly (its argument types never change; jit.entry_point).
         if self._f is None:
-            self._f = entry_point(base_map.throw_one, edge, R, *self._base_args(), rec)
-        return self._f(edge, R, *self._base_args(), rec)
+            self._f = entry_point(base_map.throw_one, edge, R, *self._base_args(), rec, math.inf)
+        return self._f(edge, R, *self._base_args(), rec, math.inf)      # the base model: no end
 
     def f(self, edge, R):
         """(edge', R', kind) of one throw; raises DomainError outside the domain."""

@@ -45,7 +45,7 @@ from .status import OK, REC_COLS
 
 @njit
 def build_cells(h, w, dh, dw, g, mu, part, knobs, rec, r_top, m, k_r, lo, hi, succ_lo,
-                succ_hi, escape, progress, r_grasp):
+                succ_hi, escape, progress, r_grasp, arm):
     """
     Fill the cell map: succ_lo/hi[e, c, j] = range of cells on edge j (-1: none), escape[e, c].
 
@@ -93,7 +93,7 @@ def build_cells(h, w, dh, dw, g, mu, part, knobs, rec, r_top, m, k_r, lo, hi, su
                     for kr in range(k_r):
                         R = r0 + width * kr / (k_r - 1)
                         st, j, r1, _, rot, _, _, _ = throw_one(e, R, ww, g, hh, r_grasp[:n],
-                                                               part, knobs, rec)
+                                                               part, knobs, rec, arm)
                         if st != OK or not (lo[j] <= r1 <= hi[j]):
                             escape[e, c] = True
                             prev_j = -1
@@ -124,7 +124,7 @@ def build_cells(h, w, dh, dw, g, mu, part, knobs, rec, r_top, m, k_r, lo, hi, su
 
 @njit
 def audit_cells(h, w, dh, dw, g, mu, part, knobs, rec, lo, hi, succ_lo, succ_hi, escape,
-                progress, edges, cells, u_r, u_w, u_h, r_grasp, out):
+                progress, edges, cells, u_r, u_w, u_h, r_grasp, arm, out):
     """
     Throw random interior samples of cell x box and count where the cell map is wrong.
 
@@ -152,7 +152,8 @@ def audit_cells(h, w, dh, dw, g, mu, part, knobs, rec, lo, hi, succ_lo, succ_hi,
             out[2] += 1
             continue
         out[0] += 1
-        st, j, r1, _, rot, _, _, _ = throw_one(e, R, ww, g, hh, r_grasp, part, knobs, rec)
+        st, j, r1, _, rot, _, _, _ = throw_one(e, R, ww, g, hh, r_grasp, part, knobs, rec,
+                                               arm)
         if st != OK or not (lo[j] <= r1 <= hi[j]) or succ_lo[e, c, j] < 0:
             out[1] += 1
             continue
@@ -178,7 +179,7 @@ class Audit:
                 'audit_miss_bound_95': self.miss_bound_95}
 
 
-def audit(part, g, mu, knobs, h, w, dh, dw, cmap, samples=2000, seed=0):
+def audit(part, g, mu, knobs, h, w, dh, dw, cmap, samples=2000, seed=0, arm=math.inf):
     """
     Check the cell map on random samples of cell x box.
 
@@ -197,7 +198,7 @@ def audit(part, g, mu, knobs, h, w, dh, dw, cmap, samples=2000, seed=0):
                 knobs, np.empty((0, REC_COLS)), lo, hi, succ_lo, succ_hi, escape, progress,
                 pick[:, 0].astype(np.int64), pick[:, 1].astype(np.int64),
                 rng.random(samples), rng.uniform(-1.0, 1.0, samples),
-                rng.uniform(-1.0, 1.0, samples), np.empty(part.n), out)
+                rng.uniform(-1.0, 1.0, samples), np.empty(part.n), float(arm), out)
     thrown, misses = int(out[0]), int(out[1])
     bound = 1.0 - 0.05 ** (1.0 / thrown) if thrown and not misses else math.nan
     return Audit(thrown, misses, int(out[2]), bound)
@@ -215,8 +216,12 @@ class GraphVerdict:
     closure: frozenset = frozenset()    # A*: its (edge, cell) nodes
 
 
-def cell_map(part, g, mu, knobs, h, w, dh, dw, r_top, cells=120, samples=5):
-    """Return (lo, hi, succ_lo, succ_hi, escape, progress) of the cell map (build_cells)."""
+def cell_map(part, g, mu, knobs, h, w, dh, dw, r_top, cells=120, samples=5, arm=math.inf):
+    """
+    Return (lo, hi, succ_lo, succ_hi, escape, progress) of the cell map (build_cells).
+
+    ``arm``: the arm's length; a throw off it escapes, as one that fails.
+    """
     n = part.n
     lo = np.empty(n)
     hi = np.empty(n)
@@ -226,7 +231,7 @@ def cell_map(part, g, mu, knobs, h, w, dh, dw, r_top, cells=120, samples=5):
     progress = np.zeros((n, cells))
     build_cells(float(h), float(w), float(dh), float(dw), float(g), float(mu), part.arrays,
                 knobs, np.empty((0, REC_COLS)), float(r_top), int(cells), int(samples), lo, hi,
-                succ_lo, succ_hi, escape, progress, np.empty(3 * n))
+                succ_lo, succ_hi, escape, progress, np.empty(3 * n), float(arm))
     return lo, hi, succ_lo, succ_hi, escape, progress
 
 
@@ -374,7 +379,7 @@ class Robustness:
 def robust_check(part, g, mu, knobs, h, w, dh, dw, limit, cells=120, samples=5,
                  with_map=False):
     """check_graph for the box (dh, dw) around the design; ``limit``: a LimitSpec."""
-    cmap = cell_map(part, g, mu, knobs, h, w, dh, dw, limit.r_top, cells, samples)
+    cmap = cell_map(part, g, mu, knobs, h, w, dh, dw, limit.r_top, cells, samples, limit.arm)
     verdict = check_graph(part, cmap, limit.bands, limit.flips, limit.goal, limit.x,
                           limit.footprint, limit.r_start_top)
     return (verdict, cmap) if with_map else verdict
@@ -391,6 +396,7 @@ class LimitSpec:
     footprint: float
     r_start_top: float      # starts: every cell up to the basin grid's top
     r_top: float            # covered range: up to this (above the grid, room to move)
+    arm: float = math.inf   # the arm's length (effect finite_arm): a throw off it escapes
 
 
 # The largest error searched for, as a fraction (of w and of d_min): beyond 20 % a feeder is
@@ -432,5 +438,6 @@ def robustness(part, g, mu, knobs, h, w, limit, cells=120, samples=5, s_max=S_MA
     s_h = largest_error(lambda s: at(s * d, 0.0), s_max, steps)
     s_j = largest_error(lambda s: at(s * d, s * w), min(s_w, s_h), steps)
     joint, cmap = at(s_j * d, s_j * w, with_map=True)
-    checked = audit(part, g, mu, knobs, h, w, s_j * d, s_j * w, cmap, audit_samples)
+    checked = audit(part, g, mu, knobs, h, w, s_j * d, s_j * w, cmap, audit_samples,
+                    arm=limit.arm)
     return Robustness(s_w * w, s_h * d, s_j, joint, nominal, cells, samples, checked)

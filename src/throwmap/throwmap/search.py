@@ -151,7 +151,7 @@ def limit_spec(scene, cand, opt):
     flips = frozenset((int(e[k - 1]), int(e[k])) for k in range(half + 1, len(e))
                       if not is_jog(e[k - 1], e[k], rot[k]))
     return LimitSpec(res.bands[0], flips, cand.goal, f['sensor_radius'], opt.footprint,
-                     f['r_hi'], 1.1 * f['r_hi'])
+                     f['r_hi'], 1.1 * f['r_hi'], opt.arm_length)
 
 
 def assess(scene, cand, opt, cells=120):
@@ -426,17 +426,16 @@ def endless_arm_note(chosen):
     """
     Say that the search took the arm as endless, and how far out the chosen design reaches.
 
-    The search runs the base model, whose arm has no end; a scene that gives arm.length needs
-    effect finite_arm, which the search does not evaluate yet (issue 21 item 2).
+    A scene without arm.length (and effect finite_arm) has an arm without an end; the search
+    then cannot refuse designs that put the part or the sensor past the real arm's end.
     """
-    text = ('the arm is taken as endless: the scene gives no arm.length, and the search '
-            'evaluates the base model only (finite_arm not yet)')
+    text = ('the arm is taken as endless: the scene gives no arm.length (give arm.length_cm and '
+            'effects: [finite_arm] to search for your arm)')
     if chosen is None:
         return text
     f = chosen.figures
     return (f'{text}; the chosen design rests the part up to R = {f["r_hi"] * 100:.1f} cm out '
-            f'(R_max of Z) and puts the sensor at {f["sensor_radius"] * 100:.1f} cm: check it '
-            'on your arm with `throwmap design` and effects: [finite_arm], arm.length_cm')
+            f'(R_max of Z) and puts the sensor at {f["sensor_radius"] * 100:.1f} cm')
 
 
 def summary(scene, res, path=None):

@@ -35,9 +35,10 @@ Scene: arm: {offset_cm: -0.5, length_cm: 40}; effects: [finite_arm].
 from collections import namedtuple
 from dataclasses import dataclass
 
+from ..base_map import off_arm
 from ..errors import InputError
 from ..jit import njit
-from ..status import LOST, OK, REC_X
+from ..status import LOST, REC_X
 
 NAME = 'finite_arm'
 SCHEMA = {'arm': ('length', 'length_cm')}
@@ -77,12 +78,8 @@ def bundle(params, part, knobs):
 @njit
 def check(outcome, release, edge, ctx, prm):
     """Return LOST if a vertex touched the arm line off [0, L] or the part rests off it (hook)."""
-    L = prm.length
-    off = outcome.x_lo < 0.0 or outcome.x_hi > L
-    if outcome.status == OK:
-        if off or outcome.R < 0.0 or outcome.R > L:
-            return LOST
-    elif outcome.vertex >= 0 and off:
+    if off_arm(outcome.status, outcome.vertex, outcome.x_lo, outcome.x_hi, outcome.R,
+               prm.length):
         return LOST
     return outcome.status
 
