@@ -36,7 +36,9 @@ it as LOST (edge -1): no later throw is defined. The domain is the nominal relea
 must rest on a stable edge, right of the pivot, where the ``release`` hook grasps it at the
 scene's own w and h.
 
-The pipeline names no effect; with all defaults it is the base model (base_map) bit for bit.
+The pipeline names no effect; with all defaults it is the base model (base_map) bit for bit,
+but for that last check: base_map still returns a landing outside the domain and refuses the
+next throw (scenes/hard/fast_spin.yaml), until one kernel serves both (issue 21 item 1).
 """
 
 from collections import namedtuple
