@@ -124,6 +124,12 @@ def _r_min(edge, h, mu, part):
 
 
 @njit
+def _failure(throw_status):
+    """Return the design status of a design one of whose throws failed with ``throw_status``."""
+    return ST_OFF_ARM if throw_status == LOST else ST_THROW_ERROR
+
+
+@njit
 def _z_top(w, g, h, arm, r_grasp, lo, r_max, part, knobs, rec, samples):
     """
     R_max over all stable edges: the top of Z (basins.design_radii's growth, compiled).
@@ -146,7 +152,7 @@ def _z_top(w, g, h, arm, r_grasp, lo, r_max, part, knobs, rec, samples):
                 st, j, r1, _, rot, _, _, _ = throw_one(i, R, w, g, h, r_grasp, part, knobs,
                                                        rec, arm)
                 if st != OK:
-                    return ST_OFF_ARM if st == LOST else ST_THROW_ERROR, math.nan
+                    return _failure(st), math.nan
                 if not _is_jog(i, j, rot):
                     r_max[i] = R
                     found = True
@@ -164,7 +170,7 @@ def _z_top(w, g, h, arm, r_grasp, lo, r_max, part, knobs, rec, samples):
                 st, j, r1, _, _, _, _, _ = throw_one(i, R, w, g, h, r_grasp, part, knobs, rec,
                                                      arm)
                 if st != OK:
-                    return ST_OFF_ARM if st == LOST else ST_THROW_ERROR, math.nan
+                    return _failure(st), math.nan
                 if r1 > r_max[j] * (1.0 + 1e-12):
                     r_max[j] = r1
                     grew = True
@@ -182,7 +188,7 @@ def _orbit(edge, R, steps, w, g, h, arm, r_grasp, part, knobs, rec, oe, orr, oro
     """
     Iterate f recording edge, R, net rotation and flight time.
 
-    Returns (throws done, whether the throw after them lost the part off the arm).
+    Returns (throws done, the status of the throw after them: OK when all were done).
     """
     oe[0] = edge
     orr[0] = R
@@ -192,14 +198,14 @@ def _orbit(edge, R, steps, w, g, h, arm, r_grasp, part, knobs, rec, oe, orr, oro
         st, j, r1, t, rot, _, _, _ = throw_one(edge, R, w, g, h, r_grasp, part, knobs, rec,
                                                arm)
         if st != OK:
-            return k, st == LOST
+            return k, st
         oe[k + 1] = j
         orr[k + 1] = r1
         orot[k + 1] = rot
         ot[k + 1] = t
         edge = j
         R = r1
-    return steps, False
+    return steps, OK
 
 
 @njit
@@ -280,12 +286,12 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     # default start), the second half of a long orbit.
     e0 = goals[0]
     nref = opt.ref_throws
-    done, lost = _orbit(e0, 1.5 * lo[e0], nref, w, g, h, arm, r_grasp, part, knobs, rec, ref_e,
-                        ref_r, ref_rot, ref_t)
+    done, st = _orbit(e0, 1.5 * lo[e0], nref, w, g, h, arm, r_grasp, part, knobs, rec, ref_e,
+                      ref_r, ref_rot, ref_t)
     out_design[D_REF_EDGE] = e0
     out_design[D_REF_R] = 1.5 * lo[e0]
     if done < nref:
-        out_design[D_STATUS] = ST_OFF_ARM if lost else ST_THROW_ERROR
+        out_design[D_STATUS] = _failure(st)
         return
     tail0 = nref // 2
     rmin_all = math.inf
@@ -322,12 +328,12 @@ def evaluate_design(h, w, g, part, knobs, opt, goals, fractions, rec, edge_buf, 
     losses = 0
     transient_max = 0
     for s in range(starts):
-        done, lost = _orbit(int(out_starts[s, 0]), out_starts[s, 1], T, w, g, h, arm, r_grasp,
-                            part, knobs, rec, work_e[s], work_r[s], work_rot[s], work_t[s])
+        done, st = _orbit(int(out_starts[s, 0]), out_starts[s, 1], T, w, g, h, arm, r_grasp,
+                          part, knobs, rec, work_e[s], work_r[s], work_rot[s], work_t[s])
         if done < T:
             labels[s] = -1
             errors += 1
-            losses += lost
+            losses += st == LOST
             for k in range(done + 1, T + 1):
                 work_e[s, k] = -1
             continue
