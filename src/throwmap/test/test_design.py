@@ -33,7 +33,6 @@ from throwmap import basin, default_grid, design_radii, limit_set, load_scene, s
 from throwmap import design as D
 from throwmap import robustness as RB
 from throwmap import search as S
-from throwmap.accuracy import compiled_knobs
 from throwmap.analysis import scene_analysis
 from throwmap.catch import is_jog
 from throwmap.cli import main
@@ -132,8 +131,9 @@ def test_threads_give_the_serial_results_and_bad_input_is_refused(triangle):
         D.evaluate_grid(triangle, hs, ws, goals=[7], options=opt)
     with pytest.raises(InputError, match='throws'):
         D.eval_options(triangle, throws=0)
-    with pytest.raises(InputError, match='effects'):
-        D.check_scene(load_scene(str(SCENES / 'experiment.yaml')))
+    D.check_scene(load_scene(str(SCENES / 'experiment.yaml')))     # the scene's own physics
+    with pytest.raises(InputError, match='finite_carry moves the domain'):
+        D.check_scene(load_scene(str(SCENES / 'house.yaml')))
 
 
 def test_cycle_time_model_is_a_scene_section_with_checked_values(tmp_path):
@@ -171,12 +171,10 @@ def test_robustness_graph_holds_on_exhaustive_worst_case_sequences(triangle):
     """Every sequence of corner throws (4^7 per start) stays inside what the graph proves."""
     opt = D.eval_options(triangle, **SMALL)
     spec = _limit(triangle, opt)
-    knobs = compiled_knobs(triangle.model.accuracy)
     part, g = triangle.part, triangle.model.g
     h, w = PAPER
     dw, dh = 0.005 * w, 0.005 * part.d_min     # s = 0.005: inside what the graph proves
-    verdict, cmap = RB.robust_check(part, g, math.inf, knobs, h, w, dh, dw, spec,
-                                    with_map=True)
+    verdict, cmap = RB.robust_check(triangle.model, h, w, dh, dw, spec, with_map=True)
     assert verdict.ok, verdict.reason
     corners = [ThrowModel(part, h + sh * dh, w + sw * dw, g)
                for sh, sw in itertools.product((-1, 1), (-1, 1))]
@@ -229,10 +227,9 @@ def test_robustness_fails_where_brute_force_finds_a_false_detection(triangle):
     """At +-0.3 rad/s a sequence puts another edge under the sensor: the graph must say so."""
     opt = D.eval_options(triangle, **SMALL)
     spec = _limit(triangle, opt)
-    knobs = compiled_knobs(triangle.model.accuracy)
     part, g = triangle.part, triangle.model.g
     h, w = PAPER
-    verdict = RB.robust_check(part, g, math.inf, knobs, h, w, 0.0, 0.3, spec)
+    verdict = RB.robust_check(triangle.model, h, w, 0.0, 0.3, spec)
     assert not verdict.ok
     # Brute force: every sequence of 5 throws at w - dw, w, w + dw from 200 limit-set states.
     nominal = ThrowModel(part, h, w, g)
@@ -286,7 +283,7 @@ def test_a_scene_design_without_a_limit_set_is_not_robust_and_no_error():
                           opt, 1)
     cand = S.Candidate(scene.h, scene.release_speed, scene.goal_edge, 0.25,
                        S._figures(own, 0, 0, 0), stage='scene')
-    with pytest.raises(ThrowmapError, match='left the domain'):
+    with pytest.raises(ThrowmapError, match='no limit set: a throw .* outside the domain of f'):
         S.limit_spec(scene, cand, opt)
     S.assess(scene, cand, opt)
     assert cand.robust() == 0.0 and not cand.robustness['nominal_ok']
@@ -298,8 +295,8 @@ def test_cli_refuses_bad_ranges_and_effect_scenes(capsys):
     assert '--grid' in capsys.readouterr().err
     assert main(['design-search', str(SCENES / 'triangle.yaml'), '--speed', '3:1']) == 2
     assert 'A < B' in capsys.readouterr().err
-    assert main(['design-search', str(SCENES / 'experiment.yaml')]) == 2
-    assert 'base model only' in capsys.readouterr().err
+    assert main(['design-search', str(SCENES / 'house.yaml')]) == 2
+    assert 'finite_carry moves the domain' in capsys.readouterr().err
 
 
 def test_dask_catalogue_on_two_local_workers_equals_the_serial_path(tmp_path):

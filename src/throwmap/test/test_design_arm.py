@@ -16,11 +16,11 @@
 Design search on the arm the feeder has (issue 21 item 2, the arm's length).
 
 The paper's feeder has "a 40 cm long horizontal arm". A scene says so with ``arm.length_cm``
-and effect ``finite_arm``; the design kernel then throws with that length (base_map.off_arm,
-the effect's own rule) and a design whose Z, grid starts or limit set put the part past the
-arm's end is not eligible, and its sensor must fit on the arm. Checked against the effect
-itself: the kernel's throws equal EffectModel's with finite_arm state by state, and the chosen
-design keeps every grid start on the arm for 10,000 throws.
+and effect ``finite_arm``; the design kernel throws through the scene's own throw kernel (the
+model's, with that effect's check), so a design whose Z, grid starts or limit set put the part
+past the arm's end is not eligible, and its sensor must fit on the arm. Checked: the design
+kernel's limit set is the model's orbit bit for bit, and the chosen design keeps every grid
+start on the arm for 10,000 throws.
 """
 
 import io
@@ -31,10 +31,9 @@ import numpy as np
 import pytest
 from throwmap import design as D
 from throwmap import Scene
-from throwmap.base_map import throw_one
 from throwmap.basins import default_grid
 from throwmap.cli import main
-from throwmap.status import LOST, OK, REC_COLS
+from throwmap.status import LOST, OK
 from throwmap_testing import PAPER_W, TRIANGLE_VERTICES
 
 ARM = 0.40
@@ -57,25 +56,27 @@ def on_arm():
     return triangle()
 
 
-def test_the_kernel_loses_a_part_exactly_where_effect_finite_arm_does(on_arm):
-    model = on_arm.model                      # EffectModel: the pipeline with finite_arm
-    rng = np.random.default_rng(11)
-    edges = rng.choice(model.part.stable_edges, 600)
-    radii = np.array([model.r_min(e) for e in edges]) * 1.01 + rng.uniform(0.0, 0.45, 600)
-    ref = model.f_batch(edges, radii)
-    rec = np.empty((0, REC_COLS))
-    got = [throw_one(int(e), float(r), model.w, model.g, model.h, model.r_grasp,
-                     model.part.arrays, model._knobs, rec, ARM)[:3] for e, r in zip(edges, radii)]
-    status = np.array([g[0] for g in got])
-    np.testing.assert_array_equal(status, ref['status'])
-    assert 50 < int(np.sum(status == LOST)) < 550 and set(status.tolist()) <= {OK, LOST}
-    ok = status == OK
-    np.testing.assert_array_equal(np.array([g[1] for g in got])[ok], ref['edge'][ok])
-    np.testing.assert_array_equal(np.array([g[2] for g in got])[ok], ref['R'][ok])
-    # Without the arm argument (inf) the kernel is the base model: nothing is lost.
-    assert all(throw_one(int(e), float(r), model.w, model.g, model.h, model.r_grasp,
-                         model.part.arrays, model._knobs, rec)[0] == OK
-               for e, r in zip(edges[:100], radii[:100]))
+def test_the_design_kernel_throws_the_scenes_own_map(on_arm):
+    # One throw kernel: the design kernel's reference orbit (from the goal edge at 1.5 R_min,
+    # its second half the limit set) is the model's orbit, bit for bit, with finite_arm.
+    model = on_arm.model
+    opt = D.eval_options(on_arm, ref_throws=400)
+    res = D.evaluate_grid(on_arm, [model.h], [model.w], options=opt)
+    e0 = int(res.design[0, D.D_REF_EDGE])
+    r0 = float(res.design[0, D.D_REF_R])
+    assert e0 == 1 and r0 == 1.5 * model.r_min(1)
+    e, r, _ = model.orbit_arrays(e0, r0, 400)
+    for edge in model.part.stable_edges:
+        tail = r[200:][e[200:] == edge]
+        band = res.bands[0, edge]
+        if tail.size:
+            assert (band[0], band[1]) == (tail.min(), tail.max())
+        else:
+            assert np.all(np.isnan(band))
+    # A design far out on the arm loses the part in the kernel as in the model.
+    far = triangle(h=ENDLESS_CHOICE[0], w=ENDLESS_CHOICE[1])
+    lost = far.model.orbits([1], [0.30], 200)[3]
+    assert lost[0] == LOST
 
 
 def test_a_design_that_throws_the_part_off_the_arm_is_not_eligible():

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 import pytest
-from throwmap import (EffectModel, InputError, limit_set, load_scene, orbit, PartLost, Scene, sees,
+from throwmap import (InputError, limit_set, load_scene, orbit, PartLost, Scene, sees,
                       sensor_probability, ThrowModel)
 from throwmap.internal import (carry_margin, carry_release_state, plate_drag,
                                routh_stronge_impact, sticking_impact)
@@ -54,11 +54,14 @@ def base():
     return scene().model
 
 
-def test_scene_without_effects_is_the_base_model_itself():
-    assert type(scene().model) is ThrowModel
-    assert type(scene(effects=[]).model) is ThrowModel
-    assert type(load_scene(str(SCENES / 'triangle.yaml')).model) is ThrowModel
-    assert isinstance(load_scene(str(SCENES / 'experiment.yaml')).model, EffectModel)
+def test_one_model_class_a_scene_without_effects_is_the_empty_set():
+    for model in (scene().model, scene(effects=[]).model,
+                  load_scene(str(SCENES / 'triangle.yaml')).model):
+        assert type(model) is ThrowModel and model.slots == {} and not model.prm
+        assert model.composed.__name__.startswith('throwmap_composed_none_')
+    experiment = load_scene(str(SCENES / 'experiment.yaml')).model
+    assert type(experiment) is ThrowModel
+    assert list(experiment.slots) == ['backplate_friction', 'finite_arm']
 
 
 def test_plate_gives_in_plane_gravity_and_normal_pressure():

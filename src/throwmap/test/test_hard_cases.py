@@ -27,6 +27,7 @@ import numpy as np
 import pytest
 from throwmap import Accuracy, DomainError, load_scene, NumericalError, Part, ThrowModel
 from throwmap.cli import main
+from throwmap.status import LOST
 from throwmap_testing import PAPER_W, SCENES, TRIANGLE_VERTICES
 
 HARD_SCENES = sorted((SCENES / 'hard').glob('*.yaml'))
@@ -820,7 +821,7 @@ def test_hard_scene_loads_throws_and_orbits(path, capsys):
     Load a hard scene with `throwmap grasp`, throw from its start, run a 50-throw orbit.
 
     The throw must satisfy the generic invariants and the scene's own property; the orbit must
-    give finite states until it ends or leaves the domain (a DomainError, documented).
+    give finite states until it ends or leaves the domain (lost to the map, documented).
     """
     assert main(['grasp', str(path)], out=io.StringIO()) == 0
     assert 'warning' not in capsys.readouterr().err
@@ -832,8 +833,12 @@ def test_hard_scene_loads_throws_and_orbits(path, capsys):
     edges, radii, _, status, done = scene.model.orbits([edge], [R], 50)
     assert np.all(np.isfinite(radii[0, :done[0] + 1]))
     if status[0] != 0:
-        assert scene.model.domain_error(int(edges[0, done[0]]),
-                                        float(radii[0, done[0]])) is not None
+        # The orbit ends at the throw that leaves the part outside the domain of f (lost to
+        # the map: edge -1); that throw's full result says where the part rests, and why.
+        assert status[0] == LOST and edges[0, done[0] + 1] == -1
+        last = scene.model.throw(int(edges[0, done[0]]), float(radii[0, done[0]]))
+        assert not last.in_domain and 'outside the domain of f' in last.lost_reason
+        assert scene.model.domain_error(last.edge, last.R) is not None
 
 
 # ------------------------------------------------------------------------------ regressions
@@ -924,8 +929,8 @@ def test_regression_a_1024_gon_settles_within_the_default_impact_cap():
     model = ThrowModel(part, -0.5 * part.d_min, PAPER_W, G)
     assert model.accuracy.max_impacts == 1_000_000
     for factor in (1.0, 1.5, 2.0):
-        edge, R, kind = model.f(0, model.r_grasp[0] * factor)
-        assert part.stable[edge] and math.isfinite(R) and kind == 'flip'
+        res = model.throw(0, model.r_grasp[0] * factor)
+        assert part.stable[res.edge] and math.isfinite(res.R) and res.kind == 'flip'
     capped = ThrowModel(part, -0.5 * part.d_min, PAPER_W, G,
                         accuracy=Accuracy(max_impacts=100_000))
     with pytest.raises(NumericalError) as err:

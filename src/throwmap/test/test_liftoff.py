@@ -138,7 +138,7 @@ def test_throw_result_carries_the_smallest_normal_force():
     for edge, R in zip(e[:-1], r[:-1]):
         res = model.throw(int(edge), float(R))
         rec = np.empty((256, REC_COLS))
-        nrec = model._throw_one(int(edge), float(R), rec)[-1]
+        nrec = model._throw(int(edge), float(R), (0.0, 0.0), rec).records
         part = model.part.arrays
         assert res.min_normal_force == records_min_normal(rec, nrec, part.vrad, part.rho2, G)
         assert res.needs_pull == (res.min_normal_force < 0.0)

@@ -62,8 +62,8 @@ def test_a_slip_below_r_min_is_a_lost_throw_with_where_and_why(slipping):
     # f and throw: a defined outcome, not a 'jog' to a state f cannot throw from.
     assert model.f(1, R)[0] == -1 and math.isnan(model.f(1, R)[1])
     assert model.f(1, R)[2] == 'lost'
-    res = model.throw(1, R)
-    assert (res.kind, res.edge) == ('lost', -1) and math.isnan(res.R)
+    res = model.throw(1, R)      # lost to the map; the full result says where the part rests
+    assert (res.kind, res.edge, res.R, res.in_domain) == ('jog', 1, r1, False)
     assert f'on edge 1 at R = {r1:.6g} m' in res.lost_reason
     assert 'outside the domain of f' in res.lost_reason
     assert 'stub its toe' in res.lost_reason

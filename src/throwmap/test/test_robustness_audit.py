@@ -29,7 +29,6 @@ from throwmap import design as D
 from throwmap import load_scene
 from throwmap import robustness as RB
 from throwmap import search as S
-from throwmap.accuracy import compiled_knobs
 from throwmap.model import ThrowModel
 from throwmap.status import REC_COLS
 from throwmap_testing import SCENES
@@ -49,11 +48,9 @@ def setting():
     part = tri.part
     h, w = PAPER
     dh, dw = S_ROBUST * part.d_min, S_ROBUST * w
-    knobs = compiled_knobs(tri.model.accuracy)
-    verdict, cmap = RB.robust_check(part, tri.model.g, math.inf, knobs, h, w, dh, dw, spec,
-                                    with_map=True)
+    verdict, cmap = RB.robust_check(tri.model, h, w, dh, dw, spec, with_map=True)
     assert verdict.ok, verdict.reason
-    return tri, knobs, (h, w, dh, dw), cmap
+    return tri, (h, w, dh, dw), cmap
 
 
 def _cut(cmap):
@@ -62,8 +59,8 @@ def _cut(cmap):
 
 
 def test_audit_finds_no_miss_where_the_graph_proves_robustness(setting):
-    tri, knobs, (h, w, dh, dw), cmap = setting
-    a = RB.audit(tri.part, tri.model.g, math.inf, knobs, h, w, dh, dw, cmap, 20000, seed=3)
+    tri, (h, w, dh, dw), cmap = setting
+    a = RB.audit(tri.model, h, w, dh, dw, cmap, 20000, seed=3)
     assert a.samples + a.skipped == 20000 and a.samples > 19000
     assert a.misses == 0
     # Rule of three: no miss in N samples bounds the missed fraction by about 3 / N.
@@ -72,10 +69,10 @@ def test_audit_finds_no_miss_where_the_graph_proves_robustness(setting):
 
 
 def test_audit_finds_the_misses_of_a_cut_map_sample_by_sample(setting):
-    tri, knobs, (h, w, dh, dw), cmap = setting
+    tri, (h, w, dh, dw), cmap = setting
     part, g = tri.part, tri.model.g
     cut = _cut(cmap)
-    assert RB.audit(part, g, math.inf, knobs, h, w, dh, dw, cut, 5000).misses > 100
+    assert RB.audit(tri.model, h, w, dh, dw, cut, 5000).misses > 100
     lo, hi, succ_lo, succ_hi, escape, progress = cut
     m = escape.shape[1]
     rng = np.random.default_rng(5)
@@ -87,10 +84,11 @@ def test_audit_finds_the_misses_of_a_cut_map_sample_by_sample(setting):
         if escape[e, c]:
             continue
         u_r, u_w, u_h = rng.random(), rng.uniform(-1, 1), rng.uniform(-1, 1)
-        RB.audit_cells(h, w, dh, dw, g, math.inf, part.arrays, knobs, np.empty((0, REC_COLS)),
-                       lo, hi, succ_lo, succ_hi, escape, progress, np.array([e]), np.array([c]),
-                       np.array([u_r]), np.array([u_w]), np.array([u_h]), np.empty(part.n),
-                       math.inf, out)
+        tri.model.composed.audit_cells(h, w, dh, dw, tri.model.ctx, tri.model.prm,
+                                       np.empty((0, REC_COLS)), lo, hi, succ_lo, succ_hi,
+                                       escape, progress, np.array([e]), np.array([c]),
+                                       np.array([u_r]), np.array([u_w]), np.array([u_h]),
+                                       np.empty(part.n), out)
         model = ThrowModel(part, h + dh * u_h, w + dw * u_w, g)
         R = lo[e] + (c + u_r) * (hi[e] - lo[e]) / m
         if R < model.r_min(e):

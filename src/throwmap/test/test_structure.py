@@ -38,13 +38,11 @@ LAYERS = [
     ('grasp', 'trajectory'),
     ('ballistic',),
     ('catch',),
-    ('base_map',),
     ('event_sim',),
     ('pipeline',),
     ('effects',),
     ('compose',),
     ('model',),
-    ('effect_model',),
     ('orbits',),
     ('basins',),
     ('stochastic',),
@@ -63,9 +61,8 @@ LAYER = {name: k for k, names in enumerate(LAYERS) for name in names}
 LAZY_OK = {'throwmap.plots', 'matplotlib', 'matplotlib.pyplot',   # heavy, optional
            'distributed'}
 # The simulator core and the models: they run effects through hooks, never by name.
-CORE = ('ballistic', 'catch', 'base_map', 'event_sim', 'pipeline', 'compose', 'model',
-        'effect_model', 'scene', 'orbits', 'basins', 'sensor', 'analysis_cache', 'analysis',
-        'part_on_arm')
+CORE = ('ballistic', 'catch', 'event_sim', 'pipeline', 'compose', 'model', 'scene', 'orbits',
+        'basins', 'sensor', 'analysis_cache', 'analysis', 'part_on_arm', 'design', 'robustness')
 
 
 def modules():
@@ -152,10 +149,10 @@ def test_imports_go_down_the_layers_and_none_hides_in_a_function():
 def test_the_check_sees_an_upward_import_and_a_hidden_one(tmp_path):
     path = tmp_path / 'ballistic.py'
     path.write_text('from .status import OK\n\n\ndef f():\n    from .scene import Scene\n'
-                    '    return Scene\n\n\nfrom .effect_model import EffectModel\n')
+                    '    return Scene\n\n\nfrom .model import ThrowModel\n')
     bad = violations('throwmap.ballistic', path)
     assert len(bad) == 3 and 'inside a function' in bad[0] and 'throwmap.scene' in bad[1]
-    assert 'throwmap.effect_model' in bad[2]
+    assert 'throwmap.model' in bad[2]
 
 
 def registry_names():

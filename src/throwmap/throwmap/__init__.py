@@ -23,15 +23,15 @@ Quick use::
 
 The public API is what this module exports; throwmap.internal lists the compiled pieces the
 tests exercise directly. docs/physics.md, docs/effects.md and docs/numerics.md describe the
-modules (layers, from the bottom: errors, status, part, grasp, ballistic, catch, base_map,
-event_sim, pipeline, effects, compose, model, effect_model, orbits, basins, sensor,
-stochastic, scene, part_on_arm, analysis, cli).
+modules (layers, from the bottom: errors, status, part, grasp, ballistic, catch, event_sim,
+pipeline, effects, compose, model, orbits, basins, sensor, stochastic, scene, part_on_arm,
+analysis, design, robustness, search, cli). One model class, ThrowModel, serves every scene:
+its effects (none: the paper's base model) are composed into the one compiled throw kernel.
 """
 
 from .accuracy import Accuracy, SimulatorAccuracy
 from .analysis import analyse, Analysis, scene_analysis, SensorDesignError
 from .basins import Basin, basin, default_grid, design_radii
-from .effect_model import EffectModel, EffectThrowResult
 from .errors import DomainError, InputError, NumericalError, PartLost, ThrowmapError
 from .grasp import edge_grasp, grasp_table, in_dynamic_grasp, wrench_cone_margins
 from .model import Impact, ThrowModel, ThrowResult
@@ -45,7 +45,7 @@ from .stochastic import (basin_distribution, sensor_probability, SensorProbabili
 
 __all__ = ['Accuracy', 'analyse', 'Analysis', 'basin', 'Basin',
            'basin_distribution', 'default_grid', 'design_radii', 'DomainError', 'edge_grasp',
-           'EffectModel', 'EffectThrowResult', 'grasp_table', 'Impact', 'in_dynamic_grasp',
+           'grasp_table', 'Impact', 'in_dynamic_grasp',
            'InputError', 'limit_set', 'limit_set_from_orbit',
            'LimitSet', 'load_scene', 'NumericalError', 'orbit', 'Orbit',
            'Part', 'PartLost', 'PartOnArm', 'read_sensor', 'resting_pose', 'Scene',

@@ -344,12 +344,14 @@ def cmd_throw(scene, args, out):
             _dump(res.as_dict(), out)
         elif res.kind == 'lost':
             out.write(f'({res.edge0}, {res.R0 * 100:.4f} cm) -> lost: '
-                      f'{getattr(res, "lost_reason", "")}\n')
+                      f'{res.lost_reason}\n')
         else:
             out.write(f'({res.edge0}, {res.R0 * 100:.4f} cm) -> ({res.edge}, '
                       f'{res.R * 100:.4f} cm): {res.kind}, flight {res.flight_time * 1000:.2f} '
                       f'ms, net rotation {math.degrees(res.net_rotation):.2f} deg\n')
             out.write(f'  {_normal_note(res.min_normal_force)}\n')
+            if not res.in_domain:
+                out.write(f'  no next throw: {res.lost_reason}\n')
         if not args.json:
             _table([{'impact': k, 'kind': i.kind, 'vertex': i.vertex,
                      'edge landed': i.edge if i.edge >= 0 else '-',

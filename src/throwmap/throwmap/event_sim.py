@@ -68,7 +68,7 @@ from .jit import njit
 from .rk8 import make_step
 from .status import (ERR_NONFINITE, ERR_PAINLEVE, ERR_SETTLE_CAP, ERR_SIM_CAP, EV_BOUNCE,
                      EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_HELD, EV_LANDING, EV_LIFTOFF,
-                     EV_SETTLE_SNAP, EV_TIP_FROM_REST, OK)
+                     EV_SETTLE_SNAP, EV_TIP_FROM_REST, OK, Outcome)
 
 # mu: Coulomb friction of the arm (inf: a vertex never slips); unilateral: a pivot may slide and
 # lift off (False: it is pinned, the paper's rolling); sticking: the impact law is eqs 7-9.
@@ -307,10 +307,10 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
     Return the simulator ``simulate`` compiled over these hooks.
 
     simulate(edge, x0, y0, phi0, vx0, vy0, om0, g, part, knobs, law, prm, rec) throws from the
-    release state (y0 over the arm, phi0 from the resting pose on ``edge``) and returns (status,
-    edge, R, first contact time, net rotation, impacts, first contact vertex, records written,
-    lowest and highest arm coordinate touched). ``prm`` is passed to every hook; ``law`` is a
-    :data:`ContactLaw`.
+    release state (y0 over the arm, phi0 from the resting pose on ``edge``) and returns its
+    :data:`throwmap.status.Outcome` (status, resting edge and R, first contact time and vertex,
+    net rotation, impacts, records written, the arm coordinates touched). ``prm`` is passed to
+    every hook; ``law`` is a :data:`ContactLaw`.
     """
 
     @njit(cache=False)
@@ -694,22 +694,25 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         while True:
             steps += 1
             if steps > max_steps:
-                return ERR_SIM_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
+                return Outcome(ERR_SIM_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
+                               x_hi)
             if impacts > max_imp:
-                return ERR_SETTLE_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
+                return Outcome(ERR_SETTLE_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
+                               x_hi)
             if mode == MODE_FLIGHT:
                 if knobs.flight_method == FLIGHT_RK8:
                     code, k, x, y, phi, vx, vy, om, t, steps = flight_to_contact(
                         x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge,
                         prm, knobs, steps)
                     if code != OK:
-                        return code, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo, x_hi
+                        return Outcome(code, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
+                                       x_hi)
                 else:
                     x1, y1, p1, vx1, vy1, om1 = flight_step(x, y, phi, vx, vy, om, dt, g, rho2,
                                                             edge, prm)
                     if not (math.isfinite(y1) and math.isfinite(om1)):
-                        return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec,
-                                x_lo, x_hi)
+                        return Outcome(ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first,
+                                       nrec, x_lo, x_hi)
                     if sep >= 0:
                         h1, un1 = vertex_normal(y1, p1, vy1, om1, bu[sep], bv[sep])
                         if h1 > 0.0 or (sep_rising and un1 < 0.0):
@@ -848,8 +851,8 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
                         xp1, p1, v1, o1 = contact_step(xp, phi, vxp, om, rdt, sliding, sigma,
                                                        bu[p], bv[p], g, rho2, mu, edge, prm)
                         if not (math.isfinite(p1) and math.isfinite(o1)):
-                            return (ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first, nrec,
-                                    x_lo, x_hi)
+                            return Outcome(ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first,
+                                           nrec, x_lo, x_hi)
                         code, kk = contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, g,
                                                    rho2, law, edge, prm)
                         if code == NO_EVENT:
@@ -896,8 +899,8 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
                             code = code2
                             kk = kk2
                 if code == PAINLEVE:
-                    return (ERR_PAINLEVE, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
-                            x_hi)
+                    return Outcome(ERR_PAINLEVE, -1, nan, t_first, nan, impacts, k_first, nrec,
+                                   x_lo, x_hi)
                 if code == SLIP_REVERSAL:
                     vxp = 0.0
                     sliding, sigma = contact_mode(0.0, xp, phi, om, p, bu, bv, g, rho2, law,
@@ -1063,6 +1066,6 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
             # MODE_DONE: snap the net rotation to the resting pose on out_edge.
             target = part.rest_angle[out_edge] - part.rest_angle[edge]
             rot = target + 2.0 * math.pi * round((phi - target) / (2.0 * math.pi))
-            return OK, out_edge, out_r, t_first, rot, impacts, k_first, nrec, x_lo, x_hi
+            return Outcome(OK, out_edge, out_r, t_first, rot, impacts, k_first, nrec, x_lo, x_hi)
 
     return simulate

@@ -24,12 +24,14 @@ loaded as if nothing had happened. At import, :func:`guard` compares a fingerpri
 throwmap source that holds compiled code with the one stored beside the cache and drops all of
 throwmap's cache files (and the composed modules, throwmap.compose) when it differs.
 
-Which functions are cached. Entry points called from Python (base_map's, a composed module's)
-and helpers whose argument types are all defined in throwmap's own modules. A function that
-takes a composed module's own types (its EffectParams) or numba dispatchers must not be: its
-cache index would name a module that another process may not have imported, and loading that
-index fails there. The cores built from hooks (event_sim.build, pipeline.build) are closures,
-compiled into the cached entry points of the composed module that calls them.
+Which functions are cached. Entry points called from Python (a composed module's) and helpers
+whose argument types are all defined in throwmap's own modules. A function that takes a
+composed module's own types (its EffectParams) or numba dispatchers must not be: its cache
+index would name a module that another process may not have imported, and loading that index
+fails there (and a dispatcher passed as an argument is a pointer numba cannot cache at all).
+The cores built from hooks and from the throw (event_sim.build, pipeline.build,
+design.build_kernel, robustness.build_kernel) are closures, compiled into the cached entry
+points of the composed module that calls them.
 """
 
 import glob
@@ -50,7 +52,7 @@ except ImportError:  # pragma: no cover
     HAVE_NUMBA = False
 
 
-def njit(fn=None, *, cache=True, nrt=False):
+def njit(fn=None, *, cache=True, nrt=False, inline=False):
     """
     Compile ``fn`` with numba (nogil, cached on disk if ``cache``); without numba return it.
 
@@ -59,10 +61,16 @@ def njit(fn=None, *, cache=True, nrt=False):
     a bundle (a named tuple) costs no atomic reference-count update, which otherwise made a
     throw a third slower than with 26 separate arguments (docs/numerics.md). A function that
     allocates fails to compile without it, so nothing can go wrong silently.
+
+    ``inline``: inline the function into its callers at numba's level. A call passes every
+    field of every bundle (the part's arrays, the knobs) as a separate argument, so a small
+    hook called once per throw (a release, a check) costs more in the call than in its body.
     """
     def wrap(f):
         if _numba is None:
             return f
+        if inline:
+            return _numba.njit(cache=cache, nogil=True, _nrt=nrt, inline='always')(f)
         return _numba.njit(cache=cache, nogil=True, _nrt=nrt)(f)
     return wrap if fn is None else wrap(fn)
 

@@ -62,7 +62,7 @@ def loss_reason(model, edge, R):
     '' where that throw does not lose it (a noisy throw did).
     """
     res = model.nominal().throw(int(edge), float(R))
-    return getattr(res, 'lost_reason', '') if res.kind == 'lost' else ''
+    return res.lost_reason
 
 
 def flip_pattern(edges, rotations):

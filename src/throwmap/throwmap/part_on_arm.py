@@ -151,7 +151,9 @@ class PartOnArm:
             # The full result, not f: the same throw (and random draws), with the reason of a loss.
             res = self.model.throw(edge0, r0)
             edge, R, kind = res.edge, res.R, res.kind
-            reason = getattr(res, 'lost_reason', '')
+            reason = res.lost_reason
+            if not res.in_domain:   # off the arm, or at rest outside f's domain: no next throw
+                edge, R, kind = -1, math.nan, LOST
         self.edge, self.R = int(edge), float(R)
         self.count += 1
         if kind == LOST and self.lost_at is None:

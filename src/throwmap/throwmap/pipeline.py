@@ -13,17 +13,18 @@
 # limitations under the License.
 
 """
-One throw of a scene with effects, as a pipeline of hooks: perturb, release, motion, check.
+The one throw kernel: perturb, release, motion, check, composed over a scene's effects.
 
-:func:`build` compiles the pipeline over the hooks of one effect set (throwmap.compose writes
-the module that calls it; docs/effects.md has the interface):
+Every scene throws through it: :func:`build` compiles the pipeline over the hooks of one effect
+set (throwmap.compose writes the module that calls it; docs/effects.md has the interface), and
+the base model is the empty set, whose hooks are the defaults below (the paper's map).
 
 1. ``perturb(w, h, z0, z1, prm) -> (w, h)``: this throw's release speed and arm offset from two
    standard normal draws (release_noise). Default: the nominal ones.
 2. ``release(edge, R, w, h, ctx, prm) -> (status, x0, y0, phi0, vx, vy, om)``: the grasp check
    and the state in which the part leaves the arm (finite_carry). Default
    :func:`impulsive_release`: the impulse-cone R_grasp at this throw's offset, then eqs 5-6.
-3. ``motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec)``: flight and catch.
+3. ``motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec) -> Outcome``: flight and catch.
    :func:`closed_motion` (ballistic flight, the closed-form catch) unless an effect adds a body
    force or an impact law; then the event simulator built over those (throwmap.event_sim).
 4. ``check(outcome, release, edge, ctx, prm) -> status``: checks that can fail or lose the
@@ -31,36 +32,50 @@ the module that calls it; docs/effects.md has the interface):
    registry's order; the first one that changes the status decides.
 
 Last, a throw that ends at rest outside the domain of f (below R_min: under ``liftoff`` a roll
-can slip inwards) has the outcome OFF_DOMAIN with its rest state; a batch or an orbit reports
-it as LOST (edge -1): no later throw is defined. The domain is the nominal release's: the part
-must rest on a stable edge, right of the pivot, where the ``release`` hook grasps it at the
-scene's own w and h.
+can slip inwards; a spin fast enough to carry the part behind the pivot) has the outcome
+OFF_DOMAIN with its rest state; a batch or an orbit reports it as LOST (edge -1): no later
+throw is defined. The domain is the nominal release's: the part must rest on a stable edge,
+right of the pivot, where the ``release`` hook grasps it at the context's w and h.
 
-The pipeline names no effect; with all defaults it is the base model (base_map) bit for bit,
-but for that last check: base_map still returns a landing outside the domain and refuses the
-next throw (scenes/hard/fast_spin.yaml), until one kernel serves both (issue 21 item 1).
+Every throw answers with one named record, :data:`throwmap.status.ThrowRecord`. Callers that
+vary the design (throwmap.design, throwmap.robustness) pass a Context of their own w and h.
 """
 
 from collections import namedtuple
 import math
+
+import numpy as np
 
 from .ballistic import first_contact, impulsive_release as release_state, state_at
 from .catch import catch_at_contact
 from .grasp import impulse_grasp_radius
 from .jit import njit
 from .status import (ERR_EDGE_INDEX, ERR_GRASP, ERR_RELEASE, ERR_TOE_STUB, ERR_UNSTABLE_EDGE,
-                     LOST, OFF_DOMAIN, OK)
+                     LOST, OFF_DOMAIN, OK, Outcome, ThrowRecord)
 
 # Everything a throw needs besides its state: nominal release speed w, arm offset h, gravity g,
 # the arm's friction mu (inf: none given), the part and knobs bundles, the event simulator's
-# contact law (throwmap.event_sim.ContactLaw).
-Context = namedtuple('Context', ['w', 'h', 'g', 'mu', 'part', 'knobs', 'law'])
+# contact law (throwmap.event_sim.ContactLaw), and r_grasp: the impulse-cone R_grasp of every
+# edge at h (inf on unstable edges), which the default release reads instead of computing it
+# again at every throw of the nominal offset.
+Context = namedtuple('Context', ['w', 'h', 'g', 'mu', 'part', 'knobs', 'law', 'r_grasp'])
 # The state in which the part left the arm, and this throw's w and h.
 Release = namedtuple('Release', ['x0', 'y0', 'phi0', 'vx', 'vy', 'om', 'w', 'h'])
-# What flight and catch gave: status, new edge and R, first contact time and vertex, net
-# rotation, impacts, records written, lowest and highest arm coordinate a vertex touched.
-Outcome = namedtuple('Outcome', ['status', 'edge', 'R', 't', 'rot', 'impacts', 'vertex',
-                                 'records', 'x_lo', 'x_hi'])
+
+
+def grasp_radii(part, h, mu):
+    """Return the Context's r_grasp: the impulse-cone R_grasp of each edge at h (inf: unstable)."""
+    out = np.full(part.n, math.inf)
+    for i in range(part.n):
+        if part.stable[i]:
+            out[i] = impulse_grasp_radius(i, h, mu, part.rho2, part.d, part.u_l, part.u_r)
+    return out
+
+
+@njit
+def with_design(ctx, w, h, r_grasp):
+    """Return ``ctx`` with another nominal w, h and its grasp radii (a design's own Context)."""
+    return Context(w, h, ctx.g, ctx.mu, ctx.part, ctx.knobs, ctx.law, r_grasp)
 
 
 # ------------------------------------------------------------------------------- defaults
@@ -74,7 +89,11 @@ def no_perturbation(w, h, z0, z1, prm):
 def impulsive_release(edge, R, w, h, ctx, prm):
     """Check the impulse-cone grasp at this throw's h, then release as in eqs 5-6."""
     part = ctx.part
-    if not R >= impulse_grasp_radius(edge, h, ctx.mu, part.rho2, part.d, part.u_l, part.u_r):
+    if h == ctx.h:
+        r_grasp = ctx.r_grasp[edge]
+    else:
+        r_grasp = impulse_grasp_radius(edge, h, ctx.mu, part.rho2, part.d, part.u_l, part.u_r)
+    if not R >= r_grasp:
         return ERR_GRASP, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     x0, y0, phi0, vx, vy, om = release_state(edge, R, w, h, part.d)
     return OK, x0, y0, phi0, vx, vy, om
@@ -86,19 +105,20 @@ def no_check(outcome, release, edge, ctx, prm):
     return outcome.status
 
 
-@njit(cache=False)
+# Inlined into the pipeline: the same reason as throw_one's (:func:`build`).
+@njit(cache=False, inline=True)
 def closed_motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec):
     """Ballistic flight (throwmap.ballistic) and the closed-form catch (throwmap.catch)."""
     part = ctx.part
     g = ctx.g
     status, T, k = first_contact(edge, y0, phi0, vy, om, g, part, ctx.knobs)
     if status != OK:
-        return status, -1, math.nan, math.nan, math.nan, 0, -1, 0, math.inf, -math.inf
+        return Outcome(status, -1, math.nan, math.nan, math.nan, 0, -1, 0, math.inf, -math.inf)
     rx, ry, x_cm, xdot, ydot, phi, energy = state_at(T, edge, k, x0, y0, phi0, vx, vy, om, g,
                                                      part)
     status, j, r1, rot, imp, nrec, x_lo, x_hi = catch_at_contact(
         k, phi, rx, ry, x_cm, xdot, ydot, om, energy, -g, part, ctx.knobs, rec)
-    return status, j, r1, T, rot, imp, k, nrec, x_lo, x_hi
+    return Outcome(status, j, r1, T, rot, imp, k, nrec, x_lo, x_hi)
 
 
 # ------------------------------------------------------------------------------- the builder
@@ -108,11 +128,10 @@ def build(perturb=no_perturbation, release=impulsive_release, motion=closed_moti
     Return (throw_one, throw_many, orbit_many) compiled over these hooks.
 
     Every function takes its record buffer ``rec`` (usually with no rows for batches).
-    throw_one(edge, R, z0, z1, ctx, prm, rec) -> (status, edge, R, first contact time, net
-    rotation, impacts, first contact vertex, records written, w used, h used, energy per unit
-    mass at release over the arm surface). ``prm`` is the effect set's parameter bundle,
-    passed to every hook. Status OFF_DOMAIN comes with the rest state; throw_many and orbit_many
-    report it as LOST.
+    throw_one(edge, R, z0, z1, ctx, prm, rec) -> ThrowRecord (throwmap.status); the batches
+    take the draws z0, z1 of every throw in ``z`` (no rows: no perturbation, all zeros).
+    ``prm`` is the effect set's parameter bundle, passed to every hook. Status OFF_DOMAIN comes
+    with the rest state; throw_many and orbit_many report it as LOST.
     """
 
     @njit(cache=False)
@@ -123,60 +142,70 @@ def build(perturb=no_perturbation, release=impulsive_release, motion=closed_moti
             return False
         return release(edge, R, ctx.w, ctx.h, ctx, prm)[0] == OK
 
-    @njit(cache=False)
+    # Inlined into its callers: a call passes every field of the Context (the part's arrays,
+    # the knobs) as separate arguments, which cost a batch 20 % of its time (docs/numerics.md).
+    @njit(cache=False, inline=True)
     def throw_one(edge, R, z0, z1, ctx, prm, rec):
         nan = math.nan
         part = ctx.part
         if edge < 0 or edge >= part.n:
-            return ERR_EDGE_INDEX, -1, nan, nan, nan, 0, -1, 0, nan, nan, nan
+            return ThrowRecord(ERR_EDGE_INDEX, -1, nan, nan, nan, 0, -1, 0, nan, nan, nan)
         if not part.stable[edge]:
-            return ERR_UNSTABLE_EDGE, -1, nan, nan, nan, 0, -1, 0, nan, nan, nan
+            return ThrowRecord(ERR_UNSTABLE_EDGE, -1, nan, nan, nan, 0, -1, 0, nan, nan, nan)
+        if not abs(R) < math.inf:   # outside every grasp (model.domain_error says why)
+            return ThrowRecord(ERR_GRASP, -1, nan, nan, nan, 0, -1, 0, nan, nan, nan)
         w, h = perturb(ctx.w, ctx.h, z0, z1, prm)
         if not w > 0.0:
-            return ERR_RELEASE, -1, nan, nan, nan, 0, -1, 0, w, h, nan
+            return ThrowRecord(ERR_RELEASE, -1, nan, nan, nan, 0, -1, 0, w, h, nan)
         status, x0, y0, phi0, vx, vy, om = release(edge, R, w, h, ctx, prm)
         if status != OK:
-            return status, -1, nan, nan, nan, 0, -1, 0, w, h, nan
+            return ThrowRecord(status, -1, nan, nan, nan, 0, -1, 0, w, h, nan)
         if not (R + part.u_l[edge] > 0.0):
-            return ERR_TOE_STUB, -1, nan, nan, nan, 0, -1, 0, w, h, nan
+            return ThrowRecord(ERR_TOE_STUB, -1, nan, nan, nan, 0, -1, 0, w, h, nan)
         e0 = 0.5 * (vx * vx + vy * vy + part.rho2 * om * om) - ctx.g * y0
-        st, j, r1, t, rot, imp, k, nrec, x_lo, x_hi = motion(edge, x0, y0, phi0, vx, vy, om,
-                                                             ctx, prm, rec)
-        out = Outcome(st, j, r1, t, rot, imp, k, nrec, x_lo, x_hi)
+        out = motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec)
+        st = out.status
         status = check(out, Release(x0, y0, phi0, vx, vy, om, w, h), edge, ctx, prm)
         if status == st:
-            if st == OK and not rests_in_domain(j, r1, ctx, prm):
-                return OFF_DOMAIN, j, r1, t, rot, imp, k, nrec, w, h, e0
-            return st, j, r1, t, rot, imp, k, nrec, w, h, e0
+            if st == OK and not rests_in_domain(out.edge, out.R, ctx, prm):
+                status = OFF_DOMAIN
+            return ThrowRecord(status, out.edge, out.R, out.t, out.rot, out.impacts,
+                               out.vertex, out.records, w, h, e0)
         # A check failed or lost the throw. A lost part keeps the rotation of its throw.
-        if not (status == LOST and st == OK):
-            rot = nan
-        return status, -1, nan, t, rot, imp, k, nrec, w, h, e0
+        rot = out.rot if status == LOST and st == OK else nan
+        return ThrowRecord(status, -1, nan, out.t, rot, out.impacts, out.vertex, out.records,
+                           w, h, e0)
 
     @njit(cache=False)
     def throw_many(edges, radii, z, ctx, prm, rec, out_edge, out_r, out_status, out_t, out_rot,
                    out_events, out_vertex):
+        draws = z.shape[0] > 0
         for i in range(edges.shape[0]):
-            st, j, r1, t, rot, _, k, nrec, _, _, _ = throw_one(edges[i], radii[i], z[i, 0],
-                                                               z[i, 1], ctx, prm, rec)
-            if st == OFF_DOMAIN:
-                st, j, r1 = LOST, -1, math.nan
-            out_edge[i] = j
-            out_r[i] = r1
-            out_status[i] = st
-            out_t[i] = t
-            out_rot[i] = rot
-            out_events[i] = nrec
-            out_vertex[i] = k
+            z0 = z[i, 0] if draws else 0.0
+            z1 = z[i, 1] if draws else 0.0
+            t = throw_one(edges[i], radii[i], z0, z1, ctx, prm, rec)
+            if t.status == OFF_DOMAIN:
+                out_edge[i] = -1
+                out_r[i] = math.nan
+                out_status[i] = LOST
+            else:
+                out_edge[i] = t.edge
+                out_r[i] = t.R
+                out_status[i] = t.status
+            out_t[i] = t.t
+            out_rot[i] = t.rot
+            out_events[i] = t.records
+            out_vertex[i] = t.vertex
 
     @njit(cache=False)
     def orbit_many(edges, radii, steps, z, ctx, prm, rec, out_edge, out_r, out_rot, out_status,
                    out_done):
         """
-        Iterate f from many starts; z has shape (starts, steps, 2).
+        Iterate f from many starts; z has shape (starts, steps, 2), or no rows: no draws.
 
         A lost throw ends its orbit with edge -1 and status LOST.
         """
+        draws = z.shape[0] > 0
         for s in range(edges.shape[0]):
             edge = edges[s]
             R = radii[s]
@@ -186,21 +215,21 @@ def build(perturb=no_perturbation, release=impulsive_release, motion=closed_moti
             out_status[s] = OK
             out_done[s] = steps
             for k in range(steps):
-                st, j, r1, _, rot, _, _, _, _, _, _ = throw_one(edge, R, z[s, k, 0],
-                                                                z[s, k, 1], ctx, prm, rec)
-                if st != OK:
-                    if st == OFF_DOMAIN:
-                        st = LOST
+                z0 = z[s, k, 0] if draws else 0.0
+                z1 = z[s, k, 1] if draws else 0.0
+                t = throw_one(edge, R, z0, z1, ctx, prm, rec)
+                if t.status != OK:
+                    st = LOST if t.status == OFF_DOMAIN else t.status
                     out_status[s] = st
                     out_done[s] = k
                     if st == LOST:
                         out_edge[s, k + 1] = -1
                     break
-                out_edge[s, k + 1] = j
-                out_r[s, k + 1] = r1
-                out_rot[s, k + 1] = rot
-                edge = j
-                R = r1
+                out_edge[s, k + 1] = t.edge
+                out_r[s, k + 1] = t.R
+                out_rot[s, k + 1] = t.rot
+                edge = t.edge
+                R = t.R
 
     return throw_one, throw_many, orbit_many
 

@@ -30,6 +30,10 @@ the longest path's length, which bounds the transient).
 What this proves and what it samples (docs/design.md): the graph logic is exact for the cell
 map it is given; the cell map is sampled (K radii x 3 speeds x 3 offsets per cell, widened),
 not an interval enclosure of f. The tests check it against exhaustive perturbation sequences.
+
+The throws are the scene's own: the compiled cell map takes the scene's throw kernel
+(throwmap.pipeline) and is called through its composed module (``model.composed.build_cells``,
+``audit_cells``), each throw with a Context of its own speed and offset.
 """
 
 from dataclasses import dataclass
@@ -37,132 +41,147 @@ import math
 
 import numpy as np
 
-from .base_map import throw_one
 from .design import _r_min
 from .jit import njit
+from .pipeline import with_design
 from .status import OK, REC_COLS
 
 
-@njit
-def build_cells(h, w, dh, dw, g, mu, part, knobs, rec, r_top, m, k_r, lo, hi, succ_lo,
-                succ_hi, escape, progress, r_grasp, arm):
+def build_kernel(throw):
     """
-    Fill the cell map: succ_lo/hi[e, c, j] = range of cells on edge j (-1: none), escape[e, c].
+    Return (build_cells, audit_cells) compiled over ``throw``, the scene's throw kernel.
 
-    progress[e, c] > 0: every sample of the cell that stays on edge e jogs outwards by at least
-    this much, so the cell's self-loop is progress (left within width / progress throws), and
-    its image on e starts at the cell itself (a jog cannot go below its own R).
-
-    lo[e], hi[e]: the covered R range of edge e ([largest R_min over the offsets, r_top]).
+    As throwmap.design.build_kernel: closures over pipeline.build's throw_one, called through
+    the scene's composed module (``model.composed.build_cells``, ``audit_cells``).
     """
-    n = part.n
-    for e in range(n):
-        lo[e] = math.nan
-        hi[e] = math.nan
-        if part.stable[e]:
-            a, _ = _r_min(e, h - dh, mu, part)
-            b, _ = _r_min(e, h + dh, mu, part)
-            lo[e] = max(a, b)
-            hi[e] = max(r_top, lo[e] * 1.5)
-    succ_lo[:] = -1
-    succ_hi[:] = -1
-    escape[:] = False
-    nw = 3 if dw > 0.0 else 1
-    nh = 3 if dh > 0.0 else 1
-    for e in range(n):
-        if not part.stable[e]:
-            continue
-        width = (hi[e] - lo[e]) / m
-        for c in range(m):
-            r0 = lo[e] + c * width
-            tmp_lo = r_grasp[n:2 * n]
-            tmp_hi = r_grasp[2 * n:3 * n]
+
+    @njit(cache=False)
+    def build_cells(h, w, dh, dw, scene_ctx, prm, rec, r_top, m, k_r, lo, hi, succ_lo,
+                    succ_hi, escape, progress, r_grasp):
+        """
+        Fill the cell map: succ_lo/hi[e, c, j] = range of cells on edge j (-1: none), escape[e, c].
+
+        progress[e, c] > 0: every sample of the cell that stays on edge e jogs outwards by at least
+        this much, so the cell's self-loop is progress (left within width / progress throws), and
+        its image on e starts at the cell itself (a jog cannot go below its own R).
+
+        lo[e], hi[e]: the covered R range of edge e ([largest R_min over the offsets, r_top]).
+        scene_ctx, prm: the scene's Context and effect parameters.
+        """
+        part = scene_ctx.part
+        mu = scene_ctx.mu
+        n = part.n
+        for e in range(n):
+            lo[e] = math.nan
+            hi[e] = math.nan
+            if part.stable[e]:
+                a, _ = _r_min(e, h - dh, mu, part)
+                b, _ = _r_min(e, h + dh, mu, part)
+                lo[e] = max(a, b)
+                hi[e] = max(r_top, lo[e] * 1.5)
+        succ_lo[:] = -1
+        succ_hi[:] = -1
+        escape[:] = False
+        nw = 3 if dw > 0.0 else 1
+        nh = 3 if dh > 0.0 else 1
+        for e in range(n):
+            if not part.stable[e]:
+                continue
+            width = (hi[e] - lo[e]) / m
+            for c in range(m):
+                r0 = lo[e] + c * width
+                tmp_lo = r_grasp[n:2 * n]
+                tmp_hi = r_grasp[2 * n:3 * n]
+                for j in range(n):
+                    tmp_lo[j] = math.inf
+                    tmp_hi[j] = -math.inf
+                jump = 0.0
+                step = math.inf
+                for iw in range(nw):
+                    ww = w + dw * (iw - 1) if nw == 3 else w
+                    for ih in range(nh):
+                        hh = h + dh * (ih - 1) if nh == 3 else h
+                        for j in range(n):
+                            _, r_grasp[j] = _r_min(j, hh, mu, part)
+                        prev_j = -1
+                        prev_r = 0.0
+                        for kr in range(k_r):
+                            R = r0 + width * kr / (k_r - 1)
+                            t = throw(e, R, 0.0, 0.0, with_design(scene_ctx, ww, hh, r_grasp[:n]),
+                                      prm, rec)
+                            j, r1, rot = t.edge, t.R, t.rot
+                            if t.status != OK or not (lo[j] <= r1 <= hi[j]):
+                                escape[e, c] = True
+                                prev_j = -1
+                                continue
+                            if j == e:
+                                if abs(rot) < math.pi and r1 > R:
+                                    step = min(step, r1 - R)
+                                else:
+                                    step = 0.0
+                            tmp_lo[j] = min(tmp_lo[j], r1)
+                            tmp_hi[j] = max(tmp_hi[j], r1)
+                            if prev_j == j:
+                                jump = max(jump, abs(r1 - prev_r))
+                            prev_j = j
+                            prev_r = r1
+                for j in range(n):
+                    if tmp_lo[j] > tmp_hi[j]:
+                        continue
+                    wj = (hi[j] - lo[j]) / m
+                    a = int(math.floor((tmp_lo[j] - jump - lo[j]) / wj))
+                    b = int(math.floor((tmp_hi[j] + jump - lo[j]) / wj))
+                    succ_lo[e, c, j] = max(0, min(m - 1, a))
+                    succ_hi[e, c, j] = max(0, min(m - 1, b))
+                progress[e, c] = step if 0.0 < step < math.inf else 0.0
+                if progress[e, c] > 0.0:
+                    succ_lo[e, c, e] = max(succ_lo[e, c, e], c)
+
+    @njit(cache=False)
+    def audit_cells(h, w, dh, dw, scene_ctx, prm, rec, lo, hi, succ_lo, succ_hi, escape,
+                    progress, edges, cells, u_r, u_w, u_h, r_grasp, out):
+        """
+        Throw random interior samples of cell x box and count where the cell map is wrong.
+
+        Sample k: state (edges[k], R at fraction u_r[k] of cell cells[k]), speed w + dw u_w[k],
+        offset h + dh u_h[k] (u in [-1, 1]). A miss: the throw fails, lands outside the covered
+        range or on an edge the cell has no successor on, lands in a cell outside the cell's
+        successor range, or (a cell taken as jogging outwards) stays on its edge without moving
+        out. out[0] = samples thrown, out[1] = misses, out[2] = samples below R_min (skipped).
+        """
+        part = scene_ctx.part
+        mu = scene_ctx.mu
+        n = part.n
+        m = escape.shape[1]
+        out[0] = 0
+        out[1] = 0
+        out[2] = 0
+        for k in range(edges.size):
+            e = edges[k]
+            c = cells[k]
+            hh = h + dh * u_h[k]
+            ww = w + dw * u_w[k]
+            R = lo[e] + (c + u_r[k]) * (hi[e] - lo[e]) / m
             for j in range(n):
-                tmp_lo[j] = math.inf
-                tmp_hi[j] = -math.inf
-            jump = 0.0
-            step = math.inf
-            for iw in range(nw):
-                ww = w + dw * (iw - 1) if nw == 3 else w
-                for ih in range(nh):
-                    hh = h + dh * (ih - 1) if nh == 3 else h
-                    for j in range(n):
-                        _, r_grasp[j] = _r_min(j, hh, mu, part)
-                    prev_j = -1
-                    prev_r = 0.0
-                    for kr in range(k_r):
-                        R = r0 + width * kr / (k_r - 1)
-                        st, j, r1, _, rot, _, _, _ = throw_one(e, R, ww, g, hh, r_grasp[:n],
-                                                               part, knobs, rec, arm)
-                        if st != OK or not (lo[j] <= r1 <= hi[j]):
-                            escape[e, c] = True
-                            prev_j = -1
-                            continue
-                        if j == e:
-                            if abs(rot) < math.pi and r1 > R:
-                                step = min(step, r1 - R)
-                            else:
-                                step = 0.0
-                        tmp_lo[j] = min(tmp_lo[j], r1)
-                        tmp_hi[j] = max(tmp_hi[j], r1)
-                        if prev_j == j:
-                            jump = max(jump, abs(r1 - prev_r))
-                        prev_j = j
-                        prev_r = r1
-            for j in range(n):
-                if tmp_lo[j] > tmp_hi[j]:
-                    continue
-                wj = (hi[j] - lo[j]) / m
-                a = int(math.floor((tmp_lo[j] - jump - lo[j]) / wj))
-                b = int(math.floor((tmp_hi[j] + jump - lo[j]) / wj))
-                succ_lo[e, c, j] = max(0, min(m - 1, a))
-                succ_hi[e, c, j] = max(0, min(m - 1, b))
-            progress[e, c] = step if 0.0 < step < math.inf else 0.0
-            if progress[e, c] > 0.0:
-                succ_lo[e, c, e] = max(succ_lo[e, c, e], c)
+                _, r_grasp[j] = _r_min(j, hh, mu, part)
+            r_low, _ = _r_min(e, hh, mu, part)
+            if R < r_low:
+                out[2] += 1
+                continue
+            out[0] += 1
+            t = throw(e, R, 0.0, 0.0, with_design(scene_ctx, ww, hh, r_grasp), prm, rec)
+            j, r1, rot = t.edge, t.R, t.rot
+            if t.status != OK or not (lo[j] <= r1 <= hi[j]) or succ_lo[e, c, j] < 0:
+                out[1] += 1
+                continue
+            cc = int(math.floor((r1 - lo[j]) / ((hi[j] - lo[j]) / m)))
+            if not (succ_lo[e, c, j] <= cc <= succ_hi[e, c, j]):
+                out[1] += 1
+            elif (j == e and cc == c and progress[e, c] > 0.0
+                  and not (abs(rot) < math.pi and r1 > R)):
+                out[1] += 1
 
-
-@njit
-def audit_cells(h, w, dh, dw, g, mu, part, knobs, rec, lo, hi, succ_lo, succ_hi, escape,
-                progress, edges, cells, u_r, u_w, u_h, r_grasp, arm, out):
-    """
-    Throw random interior samples of cell x box and count where the cell map is wrong.
-
-    Sample k: state (edges[k], R at fraction u_r[k] of cell cells[k]), speed w + dw u_w[k],
-    offset h + dh u_h[k] (u in [-1, 1]). A miss: the throw fails, lands outside the covered
-    range or on an edge the cell has no successor on, lands in a cell outside the cell's
-    successor range, or (a cell taken as jogging outwards) stays on its edge without moving
-    out. out[0] = samples thrown, out[1] = misses, out[2] = samples below R_min (skipped).
-    """
-    n = part.n
-    m = escape.shape[1]
-    out[0] = 0
-    out[1] = 0
-    out[2] = 0
-    for k in range(edges.size):
-        e = edges[k]
-        c = cells[k]
-        hh = h + dh * u_h[k]
-        ww = w + dw * u_w[k]
-        R = lo[e] + (c + u_r[k]) * (hi[e] - lo[e]) / m
-        for j in range(n):
-            _, r_grasp[j] = _r_min(j, hh, mu, part)
-        r_low, _ = _r_min(e, hh, mu, part)
-        if R < r_low:
-            out[2] += 1
-            continue
-        out[0] += 1
-        st, j, r1, _, rot, _, _, _ = throw_one(e, R, ww, g, hh, r_grasp, part, knobs, rec,
-                                               arm)
-        if st != OK or not (lo[j] <= r1 <= hi[j]) or succ_lo[e, c, j] < 0:
-            out[1] += 1
-            continue
-        cc = int(math.floor((r1 - lo[j]) / ((hi[j] - lo[j]) / m)))
-        if not (succ_lo[e, c, j] <= cc <= succ_hi[e, c, j]):
-            out[1] += 1
-        elif (j == e and cc == c and progress[e, c] > 0.0
-              and not (abs(rot) < math.pi and r1 > R)):
-            out[1] += 1
+    return build_cells, audit_cells
 
 
 @dataclass(frozen=True)
@@ -179,9 +198,9 @@ class Audit:
                 'audit_miss_bound_95': self.miss_bound_95}
 
 
-def audit(part, g, mu, knobs, h, w, dh, dw, cmap, samples=2000, seed=0, arm=math.inf):
+def audit(model, h, w, dh, dw, cmap, samples=2000, seed=0):
     """
-    Check the cell map on random samples of cell x box.
+    Check the cell map on random samples of cell x box, with ``model``'s throws (a ThrowModel).
 
     The samples are uniform over its cells (every stable edge, every cell the map does not
     already mark as escaping) and over the error box. The cell map is sampled, not an
@@ -190,15 +209,17 @@ def audit(part, g, mu, knobs, h, w, dh, dw, cmap, samples=2000, seed=0, arm=math
     3 / N) with 95 % confidence. Deterministic for a seed.
     """
     lo, hi, succ_lo, succ_hi, escape, progress = cmap
+    part = model.part
     nodes = np.argwhere(~escape & np.asarray(part.stable)[:, None])
     rng = np.random.default_rng(seed)
     pick = nodes[rng.integers(0, len(nodes), samples)]
     out = np.zeros(3, dtype=np.int64)
-    audit_cells(float(h), float(w), float(dh), float(dw), float(g), float(mu), part.arrays,
-                knobs, np.empty((0, REC_COLS)), lo, hi, succ_lo, succ_hi, escape, progress,
-                pick[:, 0].astype(np.int64), pick[:, 1].astype(np.int64),
-                rng.random(samples), rng.uniform(-1.0, 1.0, samples),
-                rng.uniform(-1.0, 1.0, samples), np.empty(part.n), float(arm), out)
+    model.composed.audit_cells(float(h), float(w), float(dh), float(dw), model.ctx, model.prm,
+                               np.empty((0, REC_COLS)), lo, hi, succ_lo, succ_hi, escape,
+                               progress, pick[:, 0].astype(np.int64),
+                               pick[:, 1].astype(np.int64), rng.random(samples),
+                               rng.uniform(-1.0, 1.0, samples),
+                               rng.uniform(-1.0, 1.0, samples), np.empty(part.n), out)
     thrown, misses = int(out[0]), int(out[1])
     bound = 1.0 - 0.05 ** (1.0 / thrown) if thrown and not misses else math.nan
     return Audit(thrown, misses, int(out[2]), bound)
@@ -216,22 +237,23 @@ class GraphVerdict:
     closure: frozenset = frozenset()    # A*: its (edge, cell) nodes
 
 
-def cell_map(part, g, mu, knobs, h, w, dh, dw, r_top, cells=120, samples=5, arm=math.inf):
+def cell_map(model, h, w, dh, dw, r_top, cells=120, samples=5):
     """
     Return (lo, hi, succ_lo, succ_hi, escape, progress) of the cell map (build_cells).
 
-    ``arm``: the arm's length; a throw off it escapes, as one that fails.
+    The throws are ``model``'s (a ThrowModel: its effects; with finite_arm a throw off the arm
+    escapes, as one that fails).
     """
-    n = part.n
+    n = model.part.n
     lo = np.empty(n)
     hi = np.empty(n)
     succ_lo = np.empty((n, cells, n), dtype=np.int64)
     succ_hi = np.empty((n, cells, n), dtype=np.int64)
     escape = np.zeros((n, cells), dtype=np.bool_)
     progress = np.zeros((n, cells))
-    build_cells(float(h), float(w), float(dh), float(dw), float(g), float(mu), part.arrays,
-                knobs, np.empty((0, REC_COLS)), float(r_top), int(cells), int(samples), lo, hi,
-                succ_lo, succ_hi, escape, progress, np.empty(3 * n), float(arm))
+    model.composed.build_cells(float(h), float(w), float(dh), float(dw), model.ctx, model.prm,
+                               np.empty((0, REC_COLS)), float(r_top), int(cells), int(samples),
+                               lo, hi, succ_lo, succ_hi, escape, progress, np.empty(3 * n))
     return lo, hi, succ_lo, succ_hi, escape, progress
 
 
@@ -376,11 +398,10 @@ class Robustness:
         return d
 
 
-def robust_check(part, g, mu, knobs, h, w, dh, dw, limit, cells=120, samples=5,
-                 with_map=False):
+def robust_check(model, h, w, dh, dw, limit, cells=120, samples=5, with_map=False):
     """check_graph for the box (dh, dw) around the design; ``limit``: a LimitSpec."""
-    cmap = cell_map(part, g, mu, knobs, h, w, dh, dw, limit.r_top, cells, samples, limit.arm)
-    verdict = check_graph(part, cmap, limit.bands, limit.flips, limit.goal, limit.x,
+    cmap = cell_map(model, h, w, dh, dw, limit.r_top, cells, samples)
+    verdict = check_graph(model.part, cmap, limit.bands, limit.flips, limit.goal, limit.x,
                           limit.footprint, limit.r_start_top)
     return (verdict, cmap) if with_map else verdict
 
@@ -396,7 +417,6 @@ class LimitSpec:
     footprint: float
     r_start_top: float      # starts: every cell up to the basin grid's top
     r_top: float            # covered range: up to this (above the grid, room to move)
-    arm: float = math.inf   # the arm's length (effect finite_arm): a throw off it escapes
 
 
 # The largest error searched for, as a fraction (of w and of d_min): beyond 20 % a feeder is
@@ -418,7 +438,7 @@ def largest_error(check, s_max=S_MAX, steps=10):
     return a
 
 
-def robustness(part, g, mu, knobs, h, w, limit, cells=120, samples=5, s_max=S_MAX, steps=10,
+def robustness(model, h, w, limit, cells=120, samples=5, s_max=S_MAX, steps=10,
                audit_samples=20000):
     """
     Largest errors: speed alone (+-s w), offset alone (+-s d_min), both at once (s).
@@ -428,16 +448,15 @@ def robustness(part, g, mu, knobs, h, w, limit, cells=120, samples=5, s_max=S_MA
     joint box's cell map is then audited on ``audit_samples`` random samples (:func:`audit`).
     """
     def at(dh, dw, with_map=False):
-        return robust_check(part, g, mu, knobs, h, w, dh, dw, limit, cells, samples, with_map)
+        return robust_check(model, h, w, dh, dw, limit, cells, samples, with_map)
 
     nominal = at(0.0, 0.0)
     if not nominal.ok:
         return Robustness(0.0, 0.0, 0.0, nominal, nominal, cells, samples)
-    d = float(part.d_min)
+    d = float(model.part.d_min)
     s_w = largest_error(lambda s: at(0.0, s * w), s_max, steps)
     s_h = largest_error(lambda s: at(s * d, 0.0), s_max, steps)
     s_j = largest_error(lambda s: at(s * d, s * w), min(s_w, s_h), steps)
     joint, cmap = at(s_j * d, s_j * w, with_map=True)
-    checked = audit(part, g, mu, knobs, h, w, s_j * d, s_j * w, cmap, audit_samples,
-                    arm=limit.arm)
+    checked = audit(model, h, w, s_j * d, s_j * w, cmap, audit_samples)
     return Robustness(s_w * w, s_h * d, s_j, joint, nominal, cells, samples, checked)

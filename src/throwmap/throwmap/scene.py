@@ -33,7 +33,6 @@ import yaml
 from . import effects as fx
 from .accuracy import (Accuracy, BASE_KEYS, check_knob, SETTLE_RULES, SIMULATOR_KEYS,
                        SimulatorAccuracy)
-from .effect_model import EffectModel
 from .errors import InputError
 from .model import ThrowModel
 from .part import MAX_VERTICES, Part
@@ -353,9 +352,8 @@ class Scene:
     """
     A validated scene: the part, the throw-map model and the sensor/start settings.
 
-    ``seed`` overrides ``noise.seed`` (the CLI's --seed). ``model`` is the base ThrowModel when
-    the scene names no effects (and keeps the default contact method), else an EffectModel
-    with the same interface.
+    ``seed`` overrides ``noise.seed`` (the CLI's --seed). ``model`` is the scene's ThrowModel:
+    its effects composed into the one throw kernel (none: the paper's base model).
     """
 
     def __init__(self, data, source='<scene>', seed=None):
@@ -413,14 +411,10 @@ class Scene:
         self.cycle = _cycle(data)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter('always')
-            if not self.effects and simulator.contact_method == 'advancement':
-                self.model = ThrowModel(self.part, h, w, g, mu=mu, settle_rule=rule,
-                                        accuracy=accuracy)
-            else:
-                self.model = EffectModel(self.part, h, w, g, mu=mu, settle_rule=rule,
-                                         accuracy=accuracy, effects=self.effects,
-                                         simulator=simulator, knobs=knobs, seed=self.seed,
-                                         arm_length=self.arm_length)
+            self.model = ThrowModel(self.part, h, w, g, mu=mu, settle_rule=rule,
+                                    accuracy=accuracy, effects=self.effects,
+                                    simulator=simulator, knobs=knobs, seed=self.seed,
+                                    arm_length=self.arm_length)
         self.warnings = [str(c.message) for c in caught]
         for msg in self.warnings:
             warnings.warn(f'{source}: {msg}', stacklevel=2)

@@ -36,10 +36,8 @@ import numpy as np
 import yaml
 
 from . import design as D
-from .accuracy import compiled_knobs
 from .catch import is_jog
 from .errors import InputError, ThrowmapError
-from .model import ThrowModel
 from .orbits import limit_set
 from .robustness import LimitSpec, robustness
 from .scene import load_scene, Scene
@@ -145,18 +143,21 @@ def limit_spec(scene, cand, opt):
                           fractions=[cand.fraction], options=opt._replace(arrival_edge=-1),
                           workers=1)
     f = cand.figures
-    model = ThrowModel(scene.part, cand.h, cand.w, scene.model.g, mu=scene.model.mu)
+    if f['status'] not in (D.ST_OK, D.ST_ARRIVAL_OUTSIDE):
+        raise ThrowmapError(f'the design has no limit set: {D.STATUS_TEXT[int(f["status"])]}')
+    model = scene.model.at(cand.h, cand.w)
     e, _, rot = model.orbit_arrays(int(f['ref_edge']), f['ref_R'], opt.ref_throws)
+    if e[-1] < 0:
+        raise ThrowmapError(f'the part was lost at throw {len(e) - 1} of the reference orbit')
     half = opt.ref_throws // 2
     flips = frozenset((int(e[k - 1]), int(e[k])) for k in range(half + 1, len(e))
                       if not is_jog(e[k - 1], e[k], rot[k]))
     return LimitSpec(res.bands[0], flips, cand.goal, f['sensor_radius'], opt.footprint,
-                     f['r_hi'], 1.1 * f['r_hi'], opt.arm_length)
+                     f['r_hi'], 1.1 * f['r_hi'])
 
 
 def assess(scene, cand, opt, cells=120):
     """Fill ``cand.robustness`` (throwmap.robustness) and return the candidate."""
-    knobs = compiled_knobs(scene.model.accuracy, None, scene.model.settle_rule)
     try:
         spec = limit_spec(scene, cand, opt)
     except ThrowmapError as exc:
@@ -167,7 +168,7 @@ def assess(scene, cand, opt, cells=120):
                            'nominal_reason': f'no limit set: {exc}', 'cells': cells,
                            'samples': 0}
         return cand
-    rb = robustness(scene.part, scene.model.g, opt.mu, knobs, cand.h, cand.w, spec, cells=cells)
+    rb = robustness(scene.model, cand.h, cand.w, spec, cells=cells)
     cand.robustness = rb.as_dict()
     return cand
 
@@ -263,8 +264,8 @@ def search(scene, h_range, w_range, n_h=40, n_w=40, goals=None, fractions=(0.25,
     if chosen is None:
         notes.append(f'no design meets the robustness floor {floor}: lower --robust, or widen '
                      'the ranges')
-    if scene.arm_length is None:
-        notes.append(endless_arm_note(chosen))
+    if scene.arm_length is None or 'finite_arm' not in scene.effects:
+        notes.append(endless_arm_note(scene, chosen))
     outside = res.design[:, D.D_STATUS] == D.ST_ARRIVAL_OUTSIDE
     if outside.any():
         notes.append(f'{int(outside.sum())} of {outside.size} designs not eligible: '
@@ -276,7 +277,7 @@ def search(scene, h_range, w_range, n_h=40, n_w=40, goals=None, fractions=(0.25,
 
 def library_guarantee(scene, cand, throws=10_000):
     """Return the guarantee radius of the library's own (10,000-throw) limit set for cand."""
-    model = ThrowModel(scene.part, cand.h, cand.w, scene.model.g, mu=scene.model.mu)
+    model = scene.model.at(cand.h, cand.w)
     f = cand.figures
     ls = limit_set(model, int(f['ref_edge']), f['ref_R'], throws)
     return sensor_design(model, ls, cand.goal, scene.sensor_footprint,
@@ -422,14 +423,17 @@ def catalogue_task(path, h_range, w_range, n_h, n_w, fractions=(0.25,), floor=0.
     return summary(scene, res, path)
 
 
-def endless_arm_note(chosen):
+def endless_arm_note(scene, chosen):
     """
     Say that the search took the arm as endless, and how far out the chosen design reaches.
 
-    A scene without arm.length (and effect finite_arm) has an arm without an end; the search
-    then cannot refuse designs that put the part or the sensor past the real arm's end.
+    A scene without arm.length and effect finite_arm has an arm without an end (the search runs
+    the scene's own throws); it then cannot refuse designs that put the part or the sensor past
+    the real arm's end.
     """
-    text = ('the arm is taken as endless: the scene gives no arm.length (give arm.length_cm and '
+    missing = ('no arm.length' if scene.arm_length is None else
+               f'arm.length {scene.arm_length * 100:g} cm but not effect finite_arm')
+    text = (f'the arm is taken as endless: the scene gives {missing} (give arm.length_cm and '
             'effects: [finite_arm] to search for your arm)')
     if chosen is None:
         return text

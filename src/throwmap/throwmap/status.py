@@ -13,20 +13,21 @@
 # limitations under the License.
 
 """
-The compiled code's vocabulary: status codes with their messages, event codes, record columns.
+The compiled code's vocabulary: status codes with their messages, records, event codes.
 
-Every compiled path (base_map, the composed pipeline, event_sim, the effects' hooks) returns one
-of these status codes and writes events in the record layout below; :func:`error_for` turns a
-status into the exception the Python API raises, with a message that names the problem and the
-fix. A new status is one line in CODES and one in TEMPLATES or, if its message needs more
-than a template, one builder.
+Every compiled path (the composed pipeline, event_sim, the effects' hooks) answers with a named
+record (Outcome, ThrowRecord) holding one of these status codes, and writes events in the
+record layout below; :func:`error_for` turns a status into the exception the Python API
+raises, with a message that names the problem and the fix. A new status is one line in CODES
+and one in TEMPLATES or, if its message needs more than a template, one builder.
 """
 
+from collections import namedtuple
 import functools
 import math
 import numbers
 
-from .errors import DomainError, NumericalError, PartLost
+from .errors import DomainError, NumericalError, PartLost, ThrowmapError
 
 # ------------------------------------------------------------------------------ status codes
 OK = 0
@@ -53,6 +54,19 @@ CODES = {OK: 'ok', ERR_EDGE_INDEX: 'edge_index', ERR_UNSTABLE_EDGE: 'stable_edge
          ERR_SETTLE_CAP: 'settle_cap', ERR_NONFINITE: 'nonfinite', ERR_PAINLEVE: 'painleve',
          ERR_SIM_CAP: 'sim_cap', LOST: 'lost', ERR_CARRY_GRASP: 'carry_grasp',
          ERR_ARM_STRIKE: 'arm_strike', ERR_RELEASE: 'release_speed', OFF_DOMAIN: 'off_domain'}
+
+# ------------------------------------------------------------------------------ records
+# What a throw's flight and catch gave (a motion hook's answer, throwmap.pipeline): status,
+# resting edge and R, first contact time and vertex, net rotation, impacts, catch records
+# written, lowest and highest arm coordinate a vertex touched.
+Outcome = namedtuple('Outcome', ['status', 'edge', 'R', 't', 'rot', 'impacts', 'vertex',
+                                 'records', 'x_lo', 'x_hi'])
+# One throw: the compiled kernel's answer (throwmap.pipeline.build), the one record every
+# caller reads by name. status, edge, R, t (release to first contact), rot, impacts, vertex
+# and records as in Outcome; w and h the throw's own release speed and arm offset; energy per
+# unit mass at release over the arm surface (J/kg). A failed throw has edge -1 and R nan.
+ThrowRecord = namedtuple('ThrowRecord', ['status', 'edge', 'R', 't', 'rot', 'impacts',
+                                         'vertex', 'records', 'w', 'h', 'energy'])
 
 # ------------------------------------------------------------------------------ events
 EV_FLIGHT_IMPACT = 0      # a vertex hits the arm at the end of flight
@@ -110,6 +124,17 @@ def _arm_strike(model, status, edge, R):
                        'arm faster (smaller return_time) or throw higher')
 
 
+def _lost(model, status, edge, R):
+    # Where and why, as the noise-free throw from (edge, R) loses the part; a noisy throw
+    # that the nominal one does not lose gets the general sentence.
+    try:
+        reason = model.nominal().throw(edge, R).lost_reason
+    except ThrowmapError:
+        reason = ''
+    return PartLost(f'lost: from ({edge}, {R:.6g} m) '
+                    + (reason or 'the part left the arm or came to rest outside the domain of f'))
+
+
 # Messages that are templates: status -> (exception of a message, template). A template
 # quotes the throw's ``edge`` and ``R`` and what ``model`` knows (str.format fields).
 TEMPLATES = {
@@ -129,9 +154,6 @@ TEMPLATES = {
                   'throw from ({edge}, {R:.6g} m) did not settle within '
                   'accuracy.max_sim_steps = {model.knobs.max_sim_steps} integrator '
                   'steps; raise it, or integrator_step / roll_step'),
-    LOST: (PartLost,
-           'lost: from ({edge}, {R:.6g} m) the part left the arm [0, {model.arm_length:g} m] '
-           'or came to rest outside the domain of f'),
     ERR_RELEASE: (functools.partial(DomainError, 'release_speed'),
                   'from ({edge}, {R:.6g} m) the sampled release speed is '
                   '<= 0; noise.release_speed_sd is too large for the release speed'),
@@ -139,7 +161,8 @@ TEMPLATES = {
 
 # Messages that need more than a template: status -> builder(model, status, edge, R).
 BUILDERS = {ERR_EDGE_INDEX: _domain, ERR_UNSTABLE_EDGE: _domain, ERR_GRASP: _domain,
-            ERR_TOE_STUB: _domain, ERR_CARRY_GRASP: _domain, ERR_ARM_STRIKE: _arm_strike}
+            ERR_TOE_STUB: _domain, ERR_CARRY_GRASP: _domain, ERR_ARM_STRIKE: _arm_strike,
+            LOST: _lost}
 
 
 def error_for(model, status, edge, R, after=None):

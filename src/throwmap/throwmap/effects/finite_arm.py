@@ -35,10 +35,9 @@ Scene: arm: {offset_cm: -0.5, length_cm: 40}; effects: [finite_arm].
 from collections import namedtuple
 from dataclasses import dataclass
 
-from ..base_map import off_arm
 from ..errors import InputError
 from ..jit import njit
-from ..status import LOST, REC_X
+from ..status import LOST, OK, REC_X
 
 NAME = 'finite_arm'
 SCHEMA = {'arm': ('length', 'length_cm')}
@@ -77,11 +76,18 @@ def bundle(params, part, knobs):
 
 @njit
 def check(outcome, release, edge, ctx, prm):
-    """Return LOST if a vertex touched the arm line off [0, L] or the part rests off it (hook)."""
-    if off_arm(outcome.status, outcome.vertex, outcome.x_lo, outcome.x_hi, outcome.R,
-               prm.length):
-        return LOST
-    return outcome.status
+    """
+    Return LOST if a vertex touched the arm line off [0, L] or the part rests off it (hook).
+
+    outcome.x_lo, x_hi: the lowest and highest arm coordinate a vertex touched. A throw that
+    failed after a contact off the arm is lost all the same.
+    """
+    off = outcome.x_lo < 0.0 or outcome.x_hi > prm.length
+    if outcome.status == OK:
+        off = off or outcome.R < 0.0 or outcome.R > prm.length
+    else:
+        off = off and outcome.vertex >= 0
+    return LOST if off else outcome.status
 
 
 def lost_reason(rows, R, params):

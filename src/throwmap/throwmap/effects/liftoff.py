@@ -58,7 +58,7 @@ from ..catch import (catch_at_contact, flat_landing_edge, pivot_normal, record, 
                      sticking_impact)
 from ..jit import njit
 from ..status import (ERR_SETTLE_CAP, EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_LANDING, EV_LIFTOFF,
-                      OK, REC_COLS)
+                      OK, Outcome, REC_COLS)
 
 NAME = 'liftoff'
 SCHEMA = {'liftoff': ('mu',)}
@@ -262,7 +262,7 @@ def closed_motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec):
 
     From there the event simulator slips, lifts off, flies, lands (sticking) and settles.
 
-    Returns the pipeline's motion tuple (throwmap.pipeline.closed_motion).
+    Returns the motion's Outcome (throwmap.status), as throwmap.pipeline.closed_motion.
     """
     part = ctx.part
     knobs = ctx.knobs
@@ -272,7 +272,7 @@ def closed_motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec):
     nan = math.nan
     status, t, k = first_contact(edge, y0, phi0, vy, om, g, part, knobs)
     if status != OK:
-        return status, -1, nan, nan, nan, 0, -1, 0, math.inf, -math.inf
+        return Outcome(status, -1, nan, nan, nan, 0, -1, 0, math.inf, -math.inf)
     rx, ry, x_cm, xdot, ydot, phi, energy = state_at(t, edge, k, x0, y0, phi0, vx, vy, om, g,
                                                      part)
     # The closed-form catch's impacts stick; where the e = 0 impact with friction mu does not
@@ -311,7 +311,7 @@ def closed_motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec):
         for i in range(min(ns, scratch.shape[0])):
             if i < rec.shape[0]:
                 _copy_row(rec, i, scratch, i)
-        return st, j, r1, t, rot, imp, k, ns, lo, hi
+        return Outcome(st, j, r1, t, rot, imp, k, ns, lo, hi)
     # Keep the events before the roll that leaves the cone; it ends there.
     nrec = 0
     impacts = 0
@@ -357,5 +357,5 @@ def closed_motion(edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec):
     if impacts > knobs.max_impacts and st == OK:
         st = ERR_SETTLE_CAP
     if st != OK:
-        return st, -1, nan, t, nan, impacts, k, nrec, x_lo, x_hi
-    return OK, j, r1, t, rot, impacts, k, nrec, min(x_lo, lo), max(x_hi, hi)
+        return Outcome(st, -1, nan, t, nan, impacts, k, nrec, x_lo, x_hi)
+    return Outcome(OK, j, r1, t, rot, impacts, k, nrec, min(x_lo, lo), max(x_hi, hi))
