@@ -49,7 +49,7 @@ from feeder_common import auth, paths
 # name: (default, description)
 COMMON_ARGUMENTS = {
     'scene': ('triangle', 'an installed scene (share/feeder_bringup/scenes/<name>.yaml: '
-              'triangle, bracket, experiment, house, rectangle, hard/<name>) or a path'),
+              'triangle, bracket, experiment, house, rectangle, liftoff, hard/<name>) or a path'),
     'namespace': ('feeder', 'namespace of the feeder (every topic, service and node in it)'),
     'cycle_period': ('1.0', 's between cycles while enabled'),
     'realtime_priority': ('0', "SCHED_FIFO priority (1-99) of the feeder's nodes (needs an "

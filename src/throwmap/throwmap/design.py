@@ -49,7 +49,7 @@ from .errors import InputError
 from .grasp import impulse_grasp_radius
 from .jit import njit
 from .pipeline import with_design
-from .status import LOST, OK, REC_COLS
+from .status import LOST, OFF_DOMAIN, OK, REC_COLS
 
 _is_jog = njit(is_jog)      # the one jog/flip rule (throwmap.catch), compiled here as well
 
@@ -158,7 +158,11 @@ def build_kernel(throw):
         R_max over all stable edges: the top of Z (basins.design_radii's growth, compiled).
 
         Returns (status, R_max_all). R_flip^i is found on a grid (no bisection): it only seeds
-        the growth, which then samples each [R_min^i, R_max^i] until f maps it into Z.
+        the growth, which then samples each [R_min^i, R_max^i] until f maps it into Z. Z only
+        bounds the grid of starts: a sample that loses the part (past the arm's end, or past
+        the pivot after a slip under liftoff) has no landing to grow Z by, and one that comes
+        to rest below R_min still bounds it by where it rests; whether the design keeps the
+        part is the orbits' question (the grid's starts and the reference).
         """
         part = ctx.part
         n = part.n
@@ -174,7 +178,9 @@ def build_kernel(throw):
                 for s in range(samples):
                     R = lo[i] + (hi - lo[i]) * s / (samples - 1)
                     t = throw(i, R, 0.0, 0.0, ctx, prm, rec)
-                    if t.status != OK:
+                    if t.status == LOST:
+                        continue
+                    if t.status != OK and t.status != OFF_DOMAIN:
                         return _failure(t.status), math.nan
                     if not _is_jog(i, t.edge, t.rot):
                         r_max[i] = R
@@ -191,7 +197,9 @@ def build_kernel(throw):
                 for s in range(samples):
                     R = lo[i] + (r_max[i] - lo[i]) * s / (samples - 1)
                     t = throw(i, R, 0.0, 0.0, ctx, prm, rec)
-                    if t.status != OK:
+                    if t.status == LOST:
+                        continue
+                    if t.status != OK and t.status != OFF_DOMAIN:
                         return _failure(t.status), math.nan
                     if t.R > r_max[t.edge] * (1.0 + 1e-12):
                         r_max[t.edge] = t.R
