@@ -167,7 +167,7 @@ def test_scenes_the_nodes_cannot_run_stop_them_with_the_reason(graph, tmp_path):
                                                    'start: {edge: 1, R: 0.32}'))
     cases = {   # scene: what the message says
         str(lost): 'the part was lost at throw 1 (first contact at x',
-        str(REPO / 'scenes' / 'hard' / 'fast_spin.yaml'): 'the orbit left the domain of f',
+        str(REPO / 'scenes' / 'hard' / 'fast_spin.yaml'): 'outside the domain of f',
     }
     procs = []
     for scene, text in cases.items():

@@ -158,7 +158,7 @@ def test_a_scene_the_monitor_cannot_run_fails_its_configure(graph, ros, tmp_path
                         scene=str(REPO / 'scenes' / 'hard' / 'fast_spin.yaml'))
     for proc, node, text in ((mon, MONITOR, 'the part was lost at throw 1 (first contact at x'),
                              (fast_spin, '/other/feeder_monitor',
-                              'the orbit left the domain of f')):
+                              'outside the domain of f')):
         assert state(ros, node) == 'unconfigured'
         assert not change(ros, Transition.TRANSITION_CONFIGURE, node)
         assert state(ros, node) == 'unconfigured'

@@ -492,7 +492,7 @@ def test_a_scene_whose_analysis_fails_is_refused(tmp_path):
     res = _run_cli('--scene', str(REPO / 'scenes' / 'hard' / 'fast_spin.yaml'), '--link',
                    str(tmp_path / 'l'))
     assert res.returncode == 2
-    assert 'analysis failed' in res.stderr and 'left the domain of f' in res.stderr
+    assert 'analysis failed' in res.stderr and 'outside the domain of f' in res.stderr
 
 
 def test_memory_stays_flat_over_many_cycles(emu_factory, link_path):
