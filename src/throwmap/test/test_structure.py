@@ -23,10 +23,12 @@ can hide in one.
 """
 
 import ast
+import inspect
 import pathlib
 import re
 
-from throwmap import load_scene
+from throwmap import event_sim, load_scene, pipeline
+from throwmap.effects import EVENT_SLOTS, MODULES, SLOT_TABLE, SLOTS
 from throwmap.internal import composed_source
 from throwmap_testing import SCENES
 
@@ -197,3 +199,23 @@ def test_a_scene_compiles_only_the_effects_it_names():
     model = load_scene(str(SCENES / 'experiment.yaml')).model
     loaded = sorted(k for k in vars(model.composed) if k.startswith('fx_'))
     assert loaded == ['fx_backplate_friction', 'fx_finite_arm']
+
+
+def _parameters(fn):
+    return ', '.join(inspect.signature(getattr(fn, 'py_func', fn)).parameters)
+
+
+def test_the_slot_table_is_the_one_place_a_hook_is_declared():
+    # Every hook an effect fills, and every default, takes the arguments its slot declares;
+    # the event slots are event_sim.build's parameters, in order.
+    assert SLOTS == tuple(SLOT_TABLE)
+    assert tuple(inspect.signature(event_sim.build).parameters) == EVENT_SLOTS
+    homes = {'pipeline': pipeline, 'event_sim': event_sim}
+    for name, slot in SLOT_TABLE.items():
+        home, attr = slot.default.split('.')
+        assert _parameters(getattr(homes[home], attr)) == slot.signature, name
+        for module in MODULES.values():
+            if hasattr(module, name):
+                assert _parameters(getattr(module, name)) == slot.signature, (module, name)
+    # A hook with another signature is seen.
+    assert _parameters(lambda w, h, z0, prm: None) != SLOT_TABLE['perturb'].signature

@@ -41,7 +41,7 @@ import os
 import sys
 import tempfile
 
-from .effects import event_simulated, EVENT_SLOTS
+from .effects import event_simulated, EVENT_SLOTS, SLOT_TABLE
 from .errors import ThrowmapError
 from .jit import COMPOSED_DIR_NAME, HERE, SOURCE_FINGERPRINT
 
@@ -124,19 +124,6 @@ def audit_cells(h, w, dh, dw, ctx, prm, rec, lo, hi, succ_lo, succ_hi, escape, p
                  edges, cells, u_r, u_w, u_h, r_grasp, out)
 """
 
-# slot -> (signature, how several effects' hooks combine, the default when none fills it)
-SLOT_CODE = {
-    'perturb': ('w, h, z0, z1, prm', 'chain_wh', 'pipeline.no_perturbation'),
-    'release': ('edge, R, w, h, ctx, prm', 'one', 'pipeline.impulsive_release'),
-    'check': ('outcome, release, edge, ctx, prm', 'first_change', 'pipeline.no_check'),
-    'body_force': ('vx, vy, om, phi, edge, prm', 'sum', 'event_sim.no_force'),
-    'static_hold': ('phi, om, turned, size, pu, pv, g, edge, prm', 'first_held',
-                    'event_sim.no_hold'),
-    'impact': ('rx, ry, vx, vy, om, rho2, prm', 'one', 'event_sim.sticking_law'),
-    'closed_motion': ('edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec', 'one',
-                      'pipeline.closed_motion'),
-}
-
 
 def _call(name, slot, signature):
     args = signature.replace(', prm', f', prm.{name}')
@@ -144,7 +131,7 @@ def _call(name, slot, signature):
 
 
 def _slot(slot, fillers):
-    signature, rule, default = SLOT_CODE[slot]
+    signature, rule, default, _ = SLOT_TABLE[slot]
     if not fillers:
         return f'{slot} = {default}\n'
     if rule == 'one' and len(fillers) > 1:
@@ -184,7 +171,7 @@ def source(slots):
     The module's EffectParams has one field per effect in ``slots``.
     """
     names = list(slots)
-    fillers = {s: [n for n in names if s in slots[n]] for s in SLOT_CODE}
+    fillers = {s: [n for n in names if s in slots[n]] for s in SLOT_TABLE}
     title = ', '.join(names) if names else 'none (the base model)'
     text = HEADER.format(title=title, fields=names,
                          imports='\n'.join(f'from throwmap.effects import {n} as fx_{n}'
@@ -192,10 +179,10 @@ def source(slots):
     text += '\n'
     for slot in ('perturb', 'release', 'check'):
         text += _slot(slot, fillers[slot])
-    if event_simulated(s for s in SLOT_CODE if fillers[s]):
+    if event_simulated(s for s in SLOT_TABLE if fillers[s]):
         for slot in EVENT_SLOTS:
             text += _slot(slot, fillers[slot])
-        text += ('simulate = event_sim.build(body_force, static_hold, impact)\n'
+        text += (f'simulate = event_sim.build({", ".join(EVENT_SLOTS)})\n'
                  'motion = pipeline.event_motion(simulate)\n')
     else:   # ballistic flight and the closed-form catch (or an effect's version of them)
         text += _slot('closed_motion', fillers['closed_motion'])

@@ -49,6 +49,7 @@ Registering an effect is one line in ``REGISTRY``. Its order is the order of the
 checks (the first check that changes a throw's status decides) and of summed forces.
 """
 
+from collections import namedtuple
 from dataclasses import dataclass, field
 import importlib
 
@@ -67,8 +68,26 @@ REGISTRY = (
 )
 MODULES = {name: importlib.import_module(f'{__name__}.{name}') for name in REGISTRY}
 NAMES = tuple(MODULES)
-SLOTS = ('perturb', 'release', 'body_force', 'static_hold', 'impact', 'check', 'closed_motion')
-EVENT_SLOTS = ('body_force', 'static_hold', 'impact')     # these need the event simulator
+# The one table of hooks: slot -> how its compiled function is called (its arguments), how the
+# hooks of several effects combine, the default when no effect fills it (a compiled function of
+# throwmap.pipeline or throwmap.event_sim), and whether it needs the event simulator (its
+# event slots are event_sim.build's parameters, in this order). throwmap.compose writes the
+# generated module from it; test_structure.py checks every effect's hooks against it.
+Slot = namedtuple('Slot', ['signature', 'combine', 'default', 'event'])
+SLOT_TABLE = {
+    'perturb': Slot('w, h, z0, z1, prm', 'chain_wh', 'pipeline.no_perturbation', False),
+    'release': Slot('edge, R, w, h, ctx, prm', 'one', 'pipeline.impulsive_release', False),
+    'body_force': Slot('vx, vy, om, phi, edge, prm', 'sum', 'event_sim.no_force', True),
+    'static_hold': Slot('phi, om, turned, size, pu, pv, g, edge, prm', 'first_held',
+                        'event_sim.no_hold', True),
+    'impact': Slot('rx, ry, vx, vy, om, rho2, prm', 'one', 'event_sim.sticking_law', True),
+    'check': Slot('outcome, release, edge, ctx, prm', 'first_change', 'pipeline.no_check',
+                  False),
+    'closed_motion': Slot('edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec', 'one',
+                          'pipeline.closed_motion', False),
+}
+SLOTS = tuple(SLOT_TABLE)
+EVENT_SLOTS = tuple(name for name, slot in SLOT_TABLE.items() if slot.event)
 
 
 def event_simulated(filled):
@@ -189,4 +208,4 @@ def compose(names, scene):
 
 
 __all__ = ['compose', 'EffectSet', 'event_simulated', 'EVENT_SLOTS', 'knob_defaults', 'MODULES',
-           'NAMES', 'owned_keys', 'parse_names', 'REGISTRY', 'SceneValues', 'SLOTS']
+           'NAMES', 'owned_keys', 'parse_names', 'REGISTRY', 'SceneValues', 'SLOT_TABLE', 'SLOTS']
