@@ -46,7 +46,7 @@ PLATE = {'inclination_deg': 80, 'g0': 9.81, 'mu': 0.1}
 AIR = {'density': 1.2, 'drag_coefficient': 1.2, 'frontal_area_cm2': 4.0, 'mass_g': 20.0}
 REFERENCE = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'contact_root_tol': 1e-13,
              'roll_method': 'rk4', 'flight_method': 'rk4'}
-PICARD = {'flight_method': 'picard', 'flight_step': 0.08, 'flight_tol': 1e-7}
+PICARD = {'flight_method': 'picard', 'flight_step': 0.08, 'flight_tol': 1e-6}
 SETS = {
     'plate': {'plate': PLATE, 'effects': ['backplate_friction']},
     'air': {'gravity': -9.66, 'air': AIR, 'effects': ['air_drag']},
