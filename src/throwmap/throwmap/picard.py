@@ -33,8 +33,8 @@ Converged, a piece is Gauss collocation, of order 2 NODES at its end and NODES +
 (positions). The quadrature needs a smooth force: the plate's drag has a kink where the
 instantaneous centre of the velocity field crosses the outline (docs/effects.md), so a piece
 ends where the centre crosses an edge: looked for at KINK_SAMPLES points of the predicted
-motion (unless the centre stays clear of the part: :func:`centre_far`), located by regula
-falsi, and located again on the first sweep's motion. A piece is at most ``flight_step``
+motion (there interpolated linearly), then located by regula falsi on the first sweep's
+motion. A piece is at most ``flight_step``
 long. The error that remains is measured against the rk4 reference (docs/accuracy.md): where
 the centre passes close to the outline without crossing it the force is smooth but varies
 fast, which long pieces resolve less well.
@@ -61,7 +61,7 @@ KINK_MARGIN = 0.1   # a crossing of an edge's line this far (times the edge) pas
 MAX_SWEEPS = 12     # sweeps before a piece is quartered
 KINK_SKIP = 1e-3    # a kink this close (times the piece) after a piece's start is not split at
 KINK_REACH = 0.25   # how far about the predicted kink the first sweep's motion is searched
-KINK_TOL = 1e-9     # s, how exactly a kink is located (a piece's end off it by dt costs ~dt^3)
+KINK_TOL = 1e-8     # s, how exactly a kink is located (a piece's end off it by dt costs ~dt^3)
 EPS = 2.220446049250313e-16
 
 
@@ -212,40 +212,13 @@ def side_root(cx, cy, cp, h, bu, bv, k, a, b, fa, fb, tol):
 
 
 @njit
-def centre_far(cx, cy, cp, h, size):
-    """
-    Tell whether the instantaneous centre stays clear of the part over a piece.
-
-    The centre is |v| / |om| from the CM and the part within ``size`` of it: clear where that
-    distance, less size, stays above twice its largest change between KINK_SAMPLES points.
-    No trigonometry: this is the cheap test before :func:`first_kink`.
-    """
-    low = math.inf
-    jump = 0.0
-    prev = 0.0
-    for i in range(KINK_SAMPLES + 1):
-        s = i / KINK_SAMPLES
-        _, dx = poly_at(cx, s)
-        _, dy = poly_at(cy, s)
-        _, dp = poly_at(cp, s)
-        if dp == 0.0:
-            return False
-        d = math.sqrt(dx * dx + dy * dy) / abs(dp) - size
-        low = min(low, d)
-        if i > 0:
-            jump = max(jump, abs(d - prev))
-        prev = d
-    return low > 2.0 * jump
-
-
-@njit
-def first_kink(cx, cy, cp, h, bu, bv, t_min, tol):
+def first_kink(cx, cy, cp, h, bu, bv, t_min, tol, exact=True):
     """
     Return (time, edge) of the centre's first crossing of an edge in (t_min, h), else (h, -1).
 
     Sampled at KINK_SAMPLES points; a sign change of an edge's side counts where the crossing
-    (interpolated linearly between the samples, then located to ``tol`` by regula falsi) lies
-    on the edge, within KINK_MARGIN of its length.
+    (interpolated linearly between the samples, then, if ``exact``, located to ``tol`` by
+    regula falsi) lies on the edge, within KINK_MARGIN of its length.
     """
     n = bu.shape[0]
     _, _, pa, ua, va, oa = dense_state(cx, cy, cp, 0.0, h)
@@ -266,11 +239,14 @@ def first_kink(cx, cy, cp, h, bu, bv, t_min, tol):
             along = ((1.0 - w) * la + w * lb) / ((1.0 - w) * oa + w * ob)
             if not (-0.5 <= along <= 1.5):
                 continue        # clearly off the edge: the force is smooth there
-            b = side_root(cx, cy, cp, h, bu, bv, k, lo, hi, sa, sb, tol)
-            _, _, p, u, v, o = dense_state(cx, cy, cp, b / h, h)
-            bx, by = body_velocity(u, v, p)
-            _, along = centre_edge(bx, by, o, bu, bv, k)
-            along /= o if o != 0.0 else 1.0
+            if exact:
+                b = side_root(cx, cy, cp, h, bu, bv, k, lo, hi, sa, sb, tol)
+                _, _, p, u, v, o = dense_state(cx, cy, cp, b / h, h)
+                bx, by = body_velocity(u, v, p)
+                _, along = centre_edge(bx, by, o, bu, bv, k)
+                along /= o if o != 0.0 else 1.0
+            else:
+                b = lo + w * (hi - lo)
             if b > t_min and -KINK_MARGIN <= along <= 1.0 + KINK_MARGIN and b < best:
                 best = b
                 best_k = k
@@ -406,8 +382,7 @@ def make_flight(rhs, lowest_approaching, vertex_normal, n=NODES):
         cx = dense(x, vx, h, ax)
         cy = dense(y, vy, h, ay)
         cp = dense(phi, om, h, ao)
-        if not centre_far(cx, cy, cp, h, size):
-            h, kink = first_kink(cx, cy, cp, h, bu, bv, t_min, kink_tol)
+        h, kink = first_kink(cx, cy, cp, h, bu, bv, t_min, kink_tol, False)
         evals = 0
         prev = math.inf
         rem = math.inf
@@ -436,6 +411,13 @@ def make_flight(rhs, lowest_approaching, vertex_normal, n=NODES):
                 fa, _ = centre_side_at(ex_x, ex_y, ex_p, a, h_ext, bu, bv, kink)
                 fb, _ = centre_side_at(ex_x, ex_y, ex_p, h_ext, h_ext, bu, bv, kink)
                 hk = side_root(ex_x, ex_y, ex_p, h_ext, bu, bv, kink, a, h_ext, fa, fb, kink_tol)
+                if hk >= 0.0:
+                    _, _, p, u, v, o = dense_state(ex_x, ex_y, ex_p, hk / h_ext, h_ext)
+                    bx, by = body_velocity(u, v, p)
+                    _, along = centre_edge(bx, by, o, bu, bv, kink)
+                    along /= o if o != 0.0 else 1.0
+                    if not -KINK_MARGIN <= along <= 1.0 + KINK_MARGIN:
+                        hk = -1.0
                 if hk < 0.0:
                     hk, kink = first_kink(ex_x, ex_y, ex_p, h_ext, bu, bv, t_min, kink_tol)
                 if abs(hk - h) > kink_tol:
