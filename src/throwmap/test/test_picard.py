@@ -16,7 +16,7 @@
 flight_method 'picard' (issue 24): flight as a series about the ballistic flight.
 
 * Its collocation tables integrate polynomial accelerations exactly, and its flight under a
-  smooth force meets an independent scipy integration (DOP853, rtol 1e-12) at the first
+  smooth force meets an independent scipy integration (DOP853, rtol 1e-13) at the first
   contact, with the series' remainder reported below flight_tol.
 * Its kink finder finds where the instantaneous centre crosses an edge, against fine sampling.
 * Throw by throw against the event simulator's rk4 reference (steps 5e-5 s, roots 1e-13 s) on
@@ -135,7 +135,7 @@ def knobs_bundle(step, tol):
 @pytest.mark.parametrize('step', [0.02, 0.08])
 def test_flight_meets_an_independent_integration_at_the_first_contact(step):
     """
-    A smooth force: the contact time and state match scipy's DOP853 with a contact event.
+    A smooth force: the contact time and state match scipy's DOP853 (rtol 1e-13) at its event.
 
     The triangle thrown up from 5 cm over the arm, spinning; the remainder reported is below
     flight_tol and positive (the force is not zero).
@@ -160,12 +160,15 @@ def test_flight_meets_an_independent_integration_at_the_first_contact(step):
         ev.terminal = True
         ev.direction = -1
         return ev
-    sol = solve_ivp(rhs, (0.0, 2.0), list(x0), method='DOP853', rtol=1e-12, atol=1e-14,
+    sol = solve_ivp(rhs, (0.0, 2.0), list(x0), method='DOP853', rtol=1e-13, atol=1e-15,
                     events=[height(k) for k in range(3)])
     hit = [k for k in range(3) if sol.t_events[k].size]
     assert hit == [vertex]
+    # inside a piece the motion is the interpolant's: positions of order NODES + 2 in the
+    # piece, velocities of order NODES + 1
     assert t == pytest.approx(sol.t_events[vertex][0], abs=1e-11)
-    assert np.abs(np.array(state) - sol.y_events[vertex][0]).max() < 1e-10
+    err = np.abs(np.array(state) - sol.y_events[vertex][0])
+    assert err[:3].max() < 1e-11 and err[3:].max() < 1e-9, err
     assert evals < 20 * NODES * (1 + t / step)
 
 
@@ -233,7 +236,7 @@ def test_picard_flight_finds_the_same_first_contacts():
     for i, rr in zip(e, r):
         a, b = model.throw(int(i), float(rr)), ref.throw(int(i), float(rr))
         assert a.first_contact_vertex == b.first_contact_vertex
-        assert a.flight_time == pytest.approx(b.flight_time, abs=5e-9)
+        assert a.flight_time == pytest.approx(b.flight_time, abs=2e-8)
 
 
 def test_picard_flight_without_plate_drag_is_the_base_model():

@@ -55,7 +55,7 @@ import numpy as np
 from .jit import njit
 from .status import ERR_NONFINITE, ERR_SIM_CAP, OK
 
-NODES = 6           # Gauss-Legendre nodes per piece (collocation order 12 at a piece's end)
+NODES = 5           # Gauss-Legendre nodes per piece (collocation order 10 at a piece's end)
 KINK_SAMPLES = 8    # points per piece at which the centre's crossing of an edge is looked for
 KINK_MARGIN = 0.1   # a crossing of an edge's line this far (times the edge) past its ends counts
 MAX_SWEEPS = 12     # sweeps before a piece is quartered
