@@ -441,6 +441,8 @@ def plate_comparison(quick, before):
                            env=env, check=True)
             rows += json.loads((old / 'rows.json').read_text())
     rows += plate_rows(PLATE_CONFIGS, data, orbit_throws, band_throws, 'this branch')
+    base_us = timed_best(tri.model, data['triangle_edges'], data['triangle_radii'])[1]
+    print(f'\nbase model (triangle, the same states): {base_us:.2f} us per throw')
     for name in PLATE_SCENES:
         print(f'\n### backplate_friction ({name} scene, {n_states} states): before ({before}) '
               'and after, against the reference (rk4 steps 5e-5 s, roots 1e-13 s); time: '
