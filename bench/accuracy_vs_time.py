@@ -27,6 +27,11 @@ state at several time steps; its reference is the base model (pymunk has no plat
 
 Prints markdown tables and writes a Pareto plot (time per throw vs error). Asserts nothing.
 Usage: python bench/accuracy_vs_time.py [--quick] [--out docs/accuracy_pareto.png]
+       python bench/accuracy_vs_time.py --plate [--before REV] [--quick]
+--plate measures only backplate_friction's configurations (the experiment scene and the
+triangle with the plate), each time the best of 3 runs; --before REV measures the same with
+the code of git revision REV (git archive, in a child process) in the same run, on the same
+states against the same reference.
 """
 
 import argparse
@@ -35,6 +40,7 @@ import math
 import os
 import pathlib
 import platform
+import sys
 import time
 
 import numpy as np
@@ -46,13 +52,31 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 WRONG_EDGE_MM = 10.0      # a throw that ends on the wrong edge counts as a 10 mm error
 # Issue 24's methods: the order-8 flight with error control (and the default closed-form roll).
 RK8_FLIGHT = {'flight_method': 'rk8', 'flight_step': 0.1, 'flight_tol': 1e-9}
+# The series about the ballistic flight (flight_method picard; issue 24, the plate).
+PICARD_FLIGHT = {'flight_method': 'picard', 'flight_step': 0.08, 'flight_tol': 1e-6}
 FAST_CONFIGS = [
     {'integrator_step': 5e-3},
     {'integrator_step': 2e-3},
     dict(RK8_FLIGHT, flight_tol=1e-6),
     RK8_FLIGHT,
     dict(RK8_FLIGHT, flight_tol=1e-11),
+    PICARD_FLIGHT,
+    dict(PICARD_FLIGHT, flight_step=0.04, flight_tol=1e-7),
+    dict(PICARD_FLIGHT, flight_step=0.02, flight_tol=1e-9),
 ]
+# --plate: the plate's configurations, each measured with this code and (--before REV) with
+# the code of git revision REV in a child process, on the same states against one reference.
+PLATE_REF_KNOBS = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'plate_quadrature': 0,
+                   'contact_root_tol': 1e-13, 'roll_method': 'rk4', 'flight_method': 'rk4'}
+PLATE_CONFIGS = [{}, {'integrator_step': 5e-3}, dict(RK8_FLIGHT, flight_tol=1e-6)] + [
+    c for c in FAST_CONFIGS if c.get('flight_method') == 'picard']
+PLATE_SCENES = {  # scene name, changes, (seed, largest R) of the random states: the
+    # experiment's as in its table below, the triangle with the plate as in the effects table
+    'experiment': ('experiment', {}, (1, 0.28)),
+    'triangle': ('triangle', {'effects': ['backplate_friction'], 'gravity': None,
+                              'plate': {'inclination_deg': 80, 'g0': 9.81, 'mu': 0.1}},
+                 (0, 0.3)),
+}
 
 
 def knob_text(v):
@@ -129,6 +153,14 @@ def evaluate(label, group, model, ref, states, start, orbit_throws, band_throws)
     long = orbit_of(model, start, band_throws)
     row['band'] = band_error(long, ref['ls'])
     return row
+
+
+def timed_best(model, edges, radii, repeats=3):
+    """timed_batch's result and its shortest time of ``repeats`` runs (a shared machine)."""
+    res, us = timed_batch(model, edges, radii)
+    for _ in range(repeats - 1):
+        us = min(us, timed_batch(model, edges, radii)[1])
+    return res, us
 
 
 def reference(model, states, start, orbit_throws, band_throws):
@@ -351,6 +383,93 @@ def orbit_pull_count(throws=400):
               f'contact in {int(np.sum(hop > thr))} throws ({both} of them need a pull)')
 
 
+# ----------------------------------------------------------------------------------- plate
+def plate_rows(configs, data, orbit_throws, band_throws, label):
+    """Rows of the plate's configurations on both scenes, against the references in ``data``."""
+    rows = []
+    for name, (scene_name, changes, _) in PLATE_SCENES.items():
+        states = (data[f'{name}_edges'], data[f'{name}_radii'])
+        start = (1, 0.12)
+        ref = {'throws': {k: data[f'{name}_ref_{k}'] for k in ('edge', 'R', 'status')},
+               'orbit': tuple(data[f'{name}_orbit_{i}'] for i in range(3)),
+               'ls': limit_set_from_orbit(*(data[f'{name}_long_{i}'] for i in range(3)))}
+        for knobs in configs:
+            model = load(scene_name, accuracy=knobs, **copy.deepcopy(changes)).model
+            res, us = timed_best(model, *states)
+            row = {'scene': name, 'config': ', '.join(
+                f'{k}={knob_text(v)}' for k, v in knobs.items()) or 'defaults',
+                'code': label, 'us': us}
+            row.update(compare(res, ref['throws']))
+            row['orbit'] = orbit_agreement(orbit_of(model, start, orbit_throws), ref['orbit'])
+            row['band'] = band_error(orbit_of(model, start, band_throws), ref['ls'])
+            rows.append(row)
+    return rows
+
+
+def plate_comparison(quick, before):
+    """The plate (experiment and triangle): this code's configurations, and REV's (--before)."""
+    import json
+    import subprocess
+    import tempfile
+    n_states = 100 if quick else 250
+    orbit_throws = 100 if quick else 300
+    band_throws = 200 if quick else 1000
+    tri = load('triangle')
+    data = {}
+    for name, (scene_name, changes, (seed, r_hi)) in PLATE_SCENES.items():
+        edges, radii = random_states(tri.model, n_states, seed=seed, r_hi=r_hi)
+        ref_model = load(scene_name, accuracy=PLATE_REF_KNOBS, **copy.deepcopy(changes)).model
+        ref = ref_model.f_batch(edges, radii)
+        data[f'{name}_edges'], data[f'{name}_radii'] = edges, radii
+        for k in ('edge', 'R', 'status'):
+            data[f'{name}_ref_{k}'] = np.asarray(ref[k])
+        for tag, throws in (('orbit', orbit_throws), ('long', 2 * band_throws)):
+            for i, a in enumerate(orbit_of(ref_model, (1, 0.12), throws)):
+                data[f'{name}_{tag}_{i}'] = a
+    rows = []
+    if before:
+        with tempfile.TemporaryDirectory() as tmp:
+            old = pathlib.Path(tmp)
+            subprocess.run(f'git -C {ROOT} archive {before} src/throwmap | tar -x -C {old}',
+                           shell=True, check=True)
+            np.savez(old / 'data.npz', **data)
+            old_configs = [c for c in PLATE_CONFIGS if c.get('flight_method') != 'picard']
+            (old / 'configs.json').write_text(json.dumps(old_configs))
+            env = dict(os.environ, PYTHONPATH=str(old / 'src' / 'throwmap'))
+            subprocess.run([sys.executable, __file__, '--plate-child', str(old),
+                            '--before', before] + (['--quick'] if quick else []),
+                           env=env, check=True)
+            rows += json.loads((old / 'rows.json').read_text())
+    rows += plate_rows(PLATE_CONFIGS, data, orbit_throws, band_throws, 'this branch')
+    base_us = timed_best(tri.model, data['triangle_edges'], data['triangle_radii'])[1]
+    print(f'\nbase model (triangle, the same states): {base_us:.2f} us per throw')
+    for name in PLATE_SCENES:
+        print(f'\n### backplate_friction ({name} scene, {n_states} states): before ({before}) '
+              'and after, against the reference (rk4 steps 5e-5 s, roots 1e-13 s); time: '
+              'best of 3 runs\n')
+        print('| code | config | time/throw (us) | edge differs | median abs dR (m) '
+              '| max abs dR (m) | orbit agrees (throws) | band error (mm) |')
+        print('|---|---|---:|---:|---:|---:|---:|---:|')
+        for r in (r for r in rows if r['scene'] == name):
+            print(f"| {r['code']} | {r['config']} | {r['us']:.1f} "
+                  f"| {r['edge_diff'] * 100:.1f} % | {fmt(r['dR_med'] * 1e-3, '.2e')} "
+                  f"| {fmt(r['dR_max'] * 1e-3, '.2e')} | {r['orbit']} | {fmt(r['band'], '.2e')} |")
+
+
+def plate_child(folder, quick, before):
+    """Run the plate's configurations with the code in PYTHONPATH (a revision's)."""
+    import json
+    import throwmap
+    folder = pathlib.Path(folder)
+    assert str(folder) in throwmap.__file__, throwmap.__file__
+    data = dict(np.load(folder / 'data.npz'))
+    configs = json.loads((folder / 'configs.json').read_text())
+    rows = plate_rows(configs, data, 100 if quick else 300, 200 if quick else 1000, before)
+    for r in rows:
+        r['orbit'] = int(r['orbit'])
+    (folder / 'rows.json').write_text(json.dumps(rows))
+
+
 # ----------------------------------------------------------------------------------- main
 def fmt(v, spec):
     if isinstance(v, str):
@@ -415,7 +534,18 @@ def main():
                         help='only the lift-off comparison against pymunk at dt 1e-5 s')
     parser.add_argument('--mu', type=float, nargs='+', default=[1e6, 1.0],
                         help='arm friction coefficients of the lift-off comparison')
+    parser.add_argument('--plate', action='store_true',
+                        help="only the plate's configurations on the experiment and the triangle")
+    parser.add_argument('--before', metavar='REV',
+                        help='with --plate: also measure the code of git revision REV')
+    parser.add_argument('--plate-child', metavar='FOLDER', help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.plate_child:
+        plate_child(args.plate_child, args.quick, args.before)
+        return
+    if args.plate:
+        plate_comparison(args.quick, args.before)
+        return
     if args.liftoff:
         for mu in args.mu:
             liftoff_comparison(20 if args.quick else 100, mu)
@@ -495,6 +625,9 @@ def main():
         ('backplate_friction, flight rk8 (flight_tol 1e-9)',
          {'effects': ['backplate_friction'], 'gravity': None, 'plate': dict(plate, mu=0.1),
           'accuracy': RK8_FLIGHT}),
+        ('backplate_friction, flight picard (flight_step 0.08, flight_tol 1e-6)',
+         {'effects': ['backplate_friction'], 'gravity': None, 'plate': dict(plate, mu=0.1),
+          'accuracy': PICARD_FLIGHT}),
         ('backplate_friction at 0 (mu_p 0)', {'effects': ['backplate_friction'],
                                               'gravity': None, 'plate': dict(plate, mu=0.0)}),
         ('air_drag', {'effects': ['air_drag'], 'air': air}),

@@ -36,7 +36,7 @@ PKG = pathlib.Path(__file__).resolve().parents[1] / 'throwmap'
 LAYERS = [
     ('errors', 'jit'),
     ('status',),
-    ('part', 'accuracy', 'sensor', 'rk8'),
+    ('part', 'accuracy', 'sensor', 'rk8', 'picard'),
     ('grasp', 'trajectory'),
     ('ballistic',),
     ('catch',),

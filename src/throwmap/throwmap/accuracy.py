@@ -31,9 +31,10 @@ SETTLE_RULES = ('full', 'first_stable')
 CONTACT_METHODS = ('advancement', 'scan')
 METHOD_ADVANCEMENT = 0
 METHOD_SCAN = 1
-FLIGHT_METHODS = ('rk4', 'rk8')
+FLIGHT_METHODS = ('rk4', 'rk8', 'picard')
 FLIGHT_RK4 = 0
 FLIGHT_RK8 = 1
+FLIGHT_PICARD = 2
 ROLL_METHODS = ('rk4', 'energy')
 ROLL_RK4 = 0
 ROLL_ENERGY = 1
@@ -126,10 +127,15 @@ class SimulatorAccuracy:
         or 'rk8' (fixed steps of flight_step with the order-8 Dormand-Prince tableau, contacts
         looked for on the step's quintic Hermite interpolant no farther apart than
         integrator_step, or farther where a speed bound proves no vertex can reach the arm,
-        and the contact state integrated exactly from the step's start).
-    flight_step : s, the largest step of flight_method 'rk8'.
+        and the contact state integrated exactly from the step's start), or 'picard' (the
+        series about the ballistic flight: pieces of at most flight_step, ended where the
+        plate drag has a kink, each solved by Picard sweeps at Gauss-Legendre nodes until a
+        sweep moves its end by less than flight_tol; throwmap.picard).
+    flight_step : s, the largest step of flight_method 'rk8', the largest piece of 'picard'.
     flight_tol : the error allowed per step of flight_method 'rk8' (DOP853's estimate, in m,
-        rad, m/s and rad/s alike); steps shrink and grow to meet it.
+        rad, m/s and rad/s alike); steps shrink and grow to meet it. For 'picard': the last
+        sweep's increment at a piece's end (m; velocities times the piece, rad times the
+        part's size), the series' remainder.
     roll_method : how the event simulator rolls about a pinned pivot (a hinge: not
         ``unilateral``): 'energy' (default: closed form, the work-energy equation in the roll
         angle, exact when the body force's torque about the pivot is -sign(omega) (a0 +

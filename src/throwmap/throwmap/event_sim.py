@@ -41,7 +41,8 @@ Phases (per unit mass, frame F, heights over the arm surface):
   accelerations at both ends) at points no farther apart than ``integrator_step`` (farther
   where a bound on the vertices' downward speed proves the arm out of reach), bisected there,
   and the state at the crossing is integrated from the step's start in one order-8 sub-step
-  (:func:`build`'s ``flight_to_contact``).
+  (:func:`build`'s ``flight_to_contact``). With ``flight_method`` 'picard' the flight is the
+  series about the ballistic flight of throwmap.picard (pieces split at the drag's kinks).
 * IMPACT at one vertex: the impact hook. A vertex that stays on the arm has its normal velocity
   removed (a further normal impulse, which only dissipates); a pinned pivot (not
   ``unilateral``) is then caught by a sticking impulse. A pinned pivot also holds a vertex that
@@ -62,9 +63,10 @@ Phases (per unit mass, frame F, heights over the arm surface):
 from collections import namedtuple
 import math
 
-from .accuracy import FLIGHT_RK8, ROLL_ENERGY
+from .accuracy import FLIGHT_PICARD, FLIGHT_RK8, ROLL_ENERGY
 from .catch import flat_landing_edge, record, stays_on_edge, sticking_impact, tip_pivot
 from .jit import njit
+from .picard import make_flight
 from .rk8 import make_step
 from .status import (ERR_NONFINITE, ERR_PAINLEVE, ERR_SETTLE_CAP, ERR_SIM_CAP, EV_BOUNCE,
                      EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_HELD, EV_LANDING, EV_LIFTOFF,
@@ -339,6 +341,7 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         return x_new, y_new, p_new, vx_new, vy_new, om_new
 
     rk8_step = make_step(flight_rhs)
+    picard_flight = make_flight(flight_rhs, lowest_approaching, vertex_normal)
 
     @njit(cache=False)
     def flight_to_contact(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size,
@@ -702,6 +705,13 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
             if mode == MODE_FLIGHT:
                 if knobs.flight_method == FLIGHT_RK8:
                     code, k, x, y, phi, vx, vy, om, t, steps = flight_to_contact(
+                        x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge,
+                        prm, knobs, steps)
+                    if code != OK:
+                        return Outcome(code, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
+                                       x_hi)
+                elif knobs.flight_method == FLIGHT_PICARD:
+                    code, k, x, y, phi, vx, vy, om, t, steps, _, _ = picard_flight(
                         x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge,
                         prm, knobs, steps)
                     if code != OK:

@@ -75,6 +75,7 @@ PlateParams = namedtuple('PlateParams', ['coef', 'vreg', 'QU', 'QV', 'QW', 'exac
 # against the high-precision reference (test_effect_physics: plate_drag_mp, 40 digits).
 SERIES_EPS = 0.2
 SERIES_ORDER = 18
+SERIES_TAIL = (SERIES_ORDER + 1) * math.log(SERIES_EPS)    # ln of the tail's size at SERIES_EPS
 
 
 @dataclass(frozen=True)
@@ -197,16 +198,16 @@ def plate_drag(vx, vy, om, phi, qu, qv, qw, coef, vreg):
 
 
 @njit
-def _log_sec_tan(r, t, p):
+def _sec_plus_tan(r, t, p):
     """
-    Return ln(sec + tan) at a point of an edge's line, without cancellation.
+    Return sec + tan at a point of an edge's line, without cancellation.
 
     r: the point's distance, t: its signed position along the line from the foot, p: the
-    line's distance (sec = r / p, tan = t / p).
+    line's distance (sec = r / p, tan = t / p; for t < 0, (r + t) / p = p / (r - t)).
     """
     if t >= 0.0:
-        return math.log((r + t) / p)
-    return math.log(p / (r - t))
+        return (r + t) / p
+    return p / (r - t)
 
 
 @njit
@@ -225,35 +226,49 @@ def polar_moments(p0x, p0y, xs, ys):
     gy = 0.0
     m3 = 0.0
     m = xs.shape[0]
+    bx = xs[0] - p0x
+    by = ys[0] - p0y
+    rb = math.sqrt(bx * bx + by * by)
     for k in range(m):
-        ax = xs[k] - p0x
-        ay = ys[k] - p0y
+        # the edge from a (vertex k) to b (vertex k + 1); distances carried from one to the next
+        ax = bx
+        ay = by
+        ra = rb
         bx = xs[(k + 1) % m] - p0x
         by = ys[(k + 1) % m] - p0y
+        rb = math.sqrt(bx * bx + by * by)
         cross = ax * by - ay * bx
-        length = math.hypot(bx - ax, by - ay)
-        if length == 0.0 or abs(cross) <= 1e-13 * (ax * ax + ay * ay + bx * bx + by * by):
+        length = math.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
+        if length == 0.0 or abs(cross) <= 1e-13 * (ra * ra + rb * rb):
             # p0 on the edge's line (a pivot's own edges): no area, and sec would overflow
             continue
         p = abs(cross) / length
-        ex = (bx - ax) / length
-        ey = (by - ay) / length
+        inv = 1.0 / length
+        ex = (bx - ax) * inv
+        ey = (by - ay) * inv
         ta = ax * ex + ay * ey
         tb = bx * ex + by * ey
-        nx = (ax - ta * ex) / p         # unit normal from p0 to the line (the foot)
-        ny = (ay - ta * ey) / p
+        inv = 1.0 / p
+        nx = (ax - ta * ex) * inv       # unit normal from p0 to the line (the foot)
+        ny = (ay - ta * ey) * inv
         if ex * -ny + ey * nx < 0.0:    # angle t grows against e: positions count negatively
             ta = -ta
             tb = -tb
-        ra = math.hypot(ax, ay)
-        rb = math.hypot(bx, by)
-        s1 = _log_sec_tan(rb, tb, p) - _log_sec_tan(ra, ta, p)
+        # ln(sec + tan) at b minus at a, in one logarithm
+        s1 = math.log(_sec_plus_tan(rb, tb, p) / _sec_plus_tan(ra, ta, p))
         half_s0 = 0.5 * p * (rb - ra)    # p^2 / 2 (sec b - sec a)
         half_s1 = 0.5 * p * p * s1
         gx += -nx * half_s0 - ny * half_s1
         gy += -ny * half_s0 + nx * half_s1
         m3 += p * (tb * rb - ta * ra) / 6.0 + p * p * p / 6.0 * s1
     return gx, gy, m3
+
+
+# The binomial series' ratios: (1 + zeta)^(1/2) = sum A_k zeta^k with A_(k+1) = A_k RA[k],
+# (1 + conj(zeta))^(-1/2) = sum B_m conj(zeta)^m with B_(m+1) = B_m RB[m] (a table: a division
+# per term cost more than the rest of the series).
+SERIES_RA = np.array([(0.5 - k) / (k + 1.0) for k in range(64)])
+SERIES_RB = np.array([(-0.5 - m) / (m + 1.0) for m in range(64)])
 
 
 @njit
@@ -274,6 +289,13 @@ def plate_drag_series(bx, by, om, size, mom):
     c = complex(0.0, om * size) / complex(bx, by)
     cc = c.conjugate()
     order = mom.shape[0] - 1
+    # A slower spin needs fewer terms: the tail falls as eps^(order + 1), so the degree that
+    # keeps it below its size at (SERIES_EPS, SERIES_ORDER) is enough.
+    eps = abs(om) * size / speed
+    if 0.0 < eps < SERIES_EPS:
+        order = min(order, max(2, int(math.ceil(SERIES_TAIL / math.log(eps))) - 1))
+    elif eps == 0.0:
+        order = 0
     force = 0j
     torque = 0j
     a_k = 1.0
@@ -283,8 +305,8 @@ def plate_drag_series(bx, by, om, size, mom):
         for m in range(order + 1 - k):
             force += term * mom[k, m]
             torque += term * mom[k, m + 1]
-            term *= cc * ((-0.5 - m) / (m + 1.0))
-        a_k *= (0.5 - k) / (k + 1.0)
+            term *= cc * SERIES_RB[m]
+        a_k *= SERIES_RA[k]
         ck *= c
     force *= e_hat
     torque = size * (e_hat * torque).imag
@@ -312,15 +334,19 @@ def plate_drag_exact(vx, vy, om, phi, ou, ov, cu, cv, size, mom, coef, vreg):
     bx = c * vx + s * vy
     by = -s * vx + c * vy
     m = ou.shape[0]
-    vmax = 0.0
+    vmax2 = 0.0
     area2 = 0.0
     for k in range(m):
-        vmax = max(vmax, math.hypot(bx - om * ov[k], by + om * ou[k]))
+        wx = bx - om * ov[k]
+        wy = by + om * ou[k]
+        vmax2 = max(vmax2, wx * wx + wy * wy)
         kn = (k + 1) % m
         area2 += ou[k] * ov[kn] - ou[kn] * ov[k]
-    if vmax == 0.0:
+    if vmax2 == 0.0:
         return 0.0, 0.0, 0.0
-    scale = coef * min(1.0, vmax / vreg) if vreg > 0.0 else coef
+    scale = coef
+    if vmax2 < vreg * vreg:
+        scale = coef * math.sqrt(vmax2) / vreg
     speed = math.hypot(bx, by)
     if abs(om) * size < SERIES_EPS * speed:
         ux, uy, tu = plate_drag_series(bx, by, om, size, mom)

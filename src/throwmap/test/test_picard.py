@@ -1,0 +1,282 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+flight_method 'picard' (issue 24): flight as a series about the ballistic flight.
+
+* Its collocation tables integrate polynomial accelerations exactly, and its flight under a
+  smooth force meets an independent scipy integration (DOP853, rtol 1e-13) at the first
+  contact, with the series' remainder reported below flight_tol.
+* Its kink finder finds where the instantaneous centre crosses an edge, against fine sampling.
+* Throw by throw against the event simulator's rk4 reference (steps 5e-5 s, roots 1e-13 s) on
+  the plate, the air and both: within issue 24's bar (1e-6 m) at flight_step 0.08 s and
+  converging as the pieces shrink; the same first contacts; mu_p = 0 is the base model.
+* The plate drag's cheaper evaluation (the series' order follows eps) against the 40-digit
+  quadrature at random eps below the switch.
+
+Every comparison is a maximum over all states, not a median.
+"""
+
+import copy
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from throwmap import Scene, ThrowModel
+from throwmap.event_sim import lowest_approaching, vertex_normal
+from throwmap.jit import njit
+from throwmap.picard import centre_edge, first_kink, make_flight, NODES, poly_at, sweep_source
+from throwmap_testing import PAPER_W, TRIANGLE_VERTICES
+
+BASE = {'name': 't', 'part': {'vertices': TRIANGLE_VERTICES}, 'arm': {'offset': -0.005},
+        'throw': {'release_speed': PAPER_W}}
+PLATE = {'inclination_deg': 80, 'g0': 9.81, 'mu': 0.1}
+AIR = {'density': 1.2, 'drag_coefficient': 1.2, 'frontal_area_cm2': 4.0, 'mass_g': 20.0}
+REFERENCE = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'contact_root_tol': 1e-13,
+             'roll_method': 'rk4', 'flight_method': 'rk4'}
+PICARD = {'flight_method': 'picard', 'flight_step': 0.08, 'flight_tol': 1e-6}
+SETS = {
+    'plate': {'plate': PLATE, 'effects': ['backplate_friction']},
+    'air': {'gravity': -9.66, 'air': AIR, 'effects': ['air_drag']},
+    'plate and air': {'plate': PLATE, 'air': AIR, 'effects': ['backplate_friction', 'air_drag']},
+}
+
+
+def scene(effects, plate=None, **accuracy):
+    data = copy.deepcopy(BASE)
+    data.update(copy.deepcopy(SETS[effects]))
+    if plate is not None:
+        data['plate'] = plate
+    if accuracy:
+        data['accuracy'] = accuracy
+    return Scene(data)
+
+
+def states(model, count, seed):
+    rng = np.random.default_rng(seed)
+    edges = rng.choice(model.part.stable_edges, count)
+    lo = np.array([model.r_min(e) * 1.01 for e in edges])
+    return edges, lo + rng.uniform(0, 1, count) * (0.28 - lo)
+
+
+def worst(got, ref):
+    """Return (edges that differ, max abs dR over the rest) of two f_batch results."""
+    assert np.all(got['status'] == 0) and np.all(ref['status'] == 0)
+    same = got['edge'] == ref['edge']
+    return int(np.sum(~same)), float(np.max(np.abs(got['R'] - ref['R'])[same]))
+
+
+@pytest.fixture(scope='module', params=sorted(SETS))
+def case(request):
+    model = scene(request.param, **REFERENCE).model
+    e, r = states(model, 80, 7)
+    return request.param, (e, r), model.f_batch(e, r)
+
+
+def generated(n=NODES, rhs=None):
+    space = {'rhs': rhs}
+    exec(compile(sweep_source(n), '<test>', 'exec'), space)  # noqa: S102
+    return space
+
+
+# ------------------------------------------------------------------------ the collocation
+@pytest.mark.parametrize('n', [3, NODES, 8])
+def test_dense_motion_is_exact_for_polynomial_accelerations(n):
+    """Node accelerations of a polynomial of degree n - 1 give its exact double integral."""
+    dense = generated(n)['dense']
+    c, _ = np.polynomial.legendre.leggauss(n)
+    c = 0.5 * (c + 1.0)
+    rng = np.random.default_rng(n)
+    coef = rng.normal(size=n)                       # a(t) = sum coef[k] t^k
+    h, q0, v0 = 0.07, 0.3, -1.2
+    acc = tuple(float(np.polyval(coef[::-1], ci * h)) for ci in c)
+    poly = dense(q0, v0, h, acc)
+    for s in (0.0, 0.13, 0.5, 0.87, 1.0, 1.2):
+        t = s * h
+        exact = q0 + v0 * t + sum(coef[k] * t ** (k + 2) / ((k + 1) * (k + 2))
+                                  for k in range(n))
+        dexact = v0 + sum(coef[k] * t ** (k + 1) / (k + 1) for k in range(n))
+        q, dq = poly_at(poly, s)
+        assert q == pytest.approx(exact, abs=1e-14)
+        assert dq / h == pytest.approx(dexact, abs=1e-13)
+
+
+K_DRAG = 0.8
+G = -9.66
+
+
+@njit(cache=False)
+def smooth_rhs(vx, vy, om, phi, g, rho2, edge, prm):
+    """Return a smooth body force of the plate's size (a few % of g), depending on phi too."""
+    return (-0.02 * K_DRAG * vx * (1.0 + 0.3 * math.sin(phi)),
+            g - 0.02 * K_DRAG * vy * (1.0 + vy * vy),
+            -0.4 * K_DRAG * om * (1.0 + 0.2 * math.cos(phi)))
+
+
+def knobs_bundle(step, tol):
+    from throwmap.accuracy import compiled_knobs, SimulatorAccuracy
+    from throwmap.accuracy import Accuracy
+    return compiled_knobs(Accuracy(), SimulatorAccuracy(flight_method='picard', flight_step=step,
+                                                        flight_tol=tol))
+
+
+@pytest.mark.parametrize('step', [0.02, 0.08])
+def test_flight_meets_an_independent_integration_at_the_first_contact(step):
+    """
+    A smooth force: the contact time and state match scipy's DOP853 (rtol 1e-13) at its event.
+
+    The triangle thrown up from 5 cm over the arm, spinning; the remainder reported is below
+    flight_tol and positive (the force is not zero).
+    """
+    fly = make_flight(smooth_rhs, lowest_approaching, vertex_normal)
+    bu = np.array([0.02, 0.02, -0.04])
+    bv = np.array([-0.0267, 0.0533, -0.0267])
+    size = float(np.hypot(bu, bv).max())
+    x0 = (0.0, 0.05, 0.2, 0.3, 1.1, 6.0)
+    out = fly(*x0, 0.0, -1, False, G, 6e-4, bu, bv, size, 0, 0, knobs_bundle(step, 1e-12), 0)
+    status, vertex, *state, t, _steps, evals, rem = out
+    assert status == 0 and vertex >= 0
+    assert 0.0 < rem <= 1e-12
+
+    def rhs(_, s):
+        ax, ay, ao = smooth_rhs.py_func(s[3], s[4], s[5], s[2], G, 6e-4, 0, 0)
+        return [s[3], s[4], s[5], ax, ay, ao]
+
+    def height(k):
+        def ev(_, s):
+            return s[1] + math.sin(s[2]) * bu[k] + math.cos(s[2]) * bv[k]
+        ev.terminal = True
+        ev.direction = -1
+        return ev
+    sol = solve_ivp(rhs, (0.0, 2.0), list(x0), method='DOP853', rtol=1e-13, atol=1e-15,
+                    events=[height(k) for k in range(3)])
+    hit = [k for k in range(3) if sol.t_events[k].size]
+    assert hit == [vertex]
+    # inside a piece the motion is the interpolant's: positions of order NODES + 2 in the
+    # piece, velocities of order NODES + 1
+    assert t == pytest.approx(sol.t_events[vertex][0], abs=1e-11)
+    err = np.abs(np.array(state) - sol.y_events[vertex][0])
+    assert err[:3].max() < 1e-11 and err[3:].max() < 1e-9, err
+    assert evals < 20 * NODES * (1 + t / step)
+
+
+def test_kink_finder_finds_the_centre_crossing_an_edge():
+    """A motion whose instantaneous centre sweeps across the part: the first edge it crosses."""
+    space = generated()
+    dense = space['dense']
+    bu = np.array([0.02, 0.02, -0.04])
+    bv = np.array([-0.0267, 0.0533, -0.0267])
+    h = 0.04
+    c, _ = np.polynomial.legendre.leggauss(NODES)
+    acc = tuple([G] * NODES)
+    zero = tuple([0.0] * NODES)
+    # vy passes zero at t = 0.02 s: the centre z x v / om passes the CM then
+    cx = dense(0.0, 0.05, h, zero)
+    cy = dense(0.0, -G * 0.02, h, acc)
+    cp = dense(0.3, 5.0, h, zero)
+    t, k = first_kink(cx, cy, cp, h, bu, bv, 1e-9, 1e-13)
+    assert k >= 0 and 0.0 < t < h
+    # fine sampling: the first sign change of any edge's side that lies on the edge
+    ts = np.linspace(0.0, h, 400001)
+    first = math.inf
+    for j in range(3):
+        side = []
+        for tt in ts[::50]:
+            _, _, p, u, v, o = dense_state(cx, cy, cp, tt / h, h)
+            side.append(centre_edge(*body(u, v, p), o, bu, bv, j)[0])
+        side = np.array(side)
+        idx = np.flatnonzero(np.sign(side[1:]) != np.sign(side[:-1]))
+        for i in idx:
+            tt = ts[::50][i + 1]
+            _, _, p, u, v, o = dense_state(cx, cy, cp, tt / h, h)
+            along = centre_edge(*body(u, v, p), o, bu, bv, j)[1] / o
+            if -0.1 <= along <= 1.1:
+                first = min(first, tt)
+    assert t == pytest.approx(first, abs=h / 8000)
+
+
+def dense_state(cx, cy, cp, s, h):
+    from throwmap.picard import dense_state as ds
+    return ds(cx, cy, cp, s, h)
+
+
+def body(vx, vy, phi):
+    from throwmap.picard import body_velocity
+    return body_velocity(vx, vy, phi)
+
+
+# ------------------------------------------------------------------------ throw by throw
+def test_picard_flight_meets_the_bar_throw_by_throw(case):
+    """flight_step 0.08 s: issue 24's bar (1e-6 m) on every state; 0.02 s: 20x closer."""
+    name, (e, r), ref = case
+    coarse = worst(scene(name, **PICARD).model.f_batch(e, r), ref)
+    fine = worst(scene(name, **dict(PICARD, flight_step=0.02, flight_tol=1e-10)).model.f_batch(
+        e, r), ref)
+    assert coarse[0] == 0 and fine[0] == 0
+    assert coarse[1] < 1e-6, (name, coarse)
+    assert fine[1] < 2e-8 and (fine[1] < coarse[1] / 20 or fine[1] < 1e-10), (name, fine, coarse)
+
+
+def test_picard_flight_finds_the_same_first_contacts():
+    model = scene('plate', **dict(PICARD, flight_step=0.02, flight_tol=1e-10)).model
+    ref = scene('plate', **REFERENCE).model
+    e, r = states(model, 30, 6)
+    for i, rr in zip(e, r):
+        a, b = model.throw(int(i), float(rr)), ref.throw(int(i), float(rr))
+        assert a.first_contact_vertex == b.first_contact_vertex
+        assert a.flight_time == pytest.approx(b.flight_time, abs=2e-8)
+
+
+def test_picard_flight_without_plate_drag_is_the_base_model():
+    """mu_p = 0: the series is the ballistic flight itself (edges equal, |dR| < 1e-9 m)."""
+    plate0 = {'inclination_deg': math.degrees(math.asin(9.66 / 9.81)), 'g0': 9.81, 'mu': 0.0}
+    model = scene('plate', plate=plate0, **PICARD).model
+    base = ThrowModel(model.part, model.h, model.w, model.g)
+    e, r = states(base, 200, 3)
+    edges, dr = worst(model.f_batch(e, r), base.f_batch(e, r))
+    assert edges == 0 and dr < 1e-9
+
+
+def test_picard_is_a_knob_value():
+    from throwmap import InputError
+    assert scene('plate', flight_method='picard').model.knobs.flight_method == 'picard'
+    with pytest.raises(InputError, match='flight_method'):
+        scene('plate', flight_method='series')
+
+
+# ------------------------------------------------------------------------ the cheaper drag
+def test_plate_drag_series_of_any_order_is_exact_below_the_switch():
+    """Random eps below SERIES_EPS (the series' order follows eps): the 40-digit quadrature's."""
+    from reference_plate import plate_drag_mp
+    from throwmap.effects import backplate_friction
+    from throwmap.effects.backplate_friction import SERIES_EPS
+    model = scene('plate').model
+    prm = model.prm.backplate_friction
+    rng = np.random.default_rng(11)
+    for eps in np.concatenate([10.0 ** rng.uniform(-4, math.log10(SERIES_EPS), 6),
+                               [0.999 * SERIES_EPS, 0.5 * SERIES_EPS]]):
+        edge = int(rng.integers(model.part.n))
+        phi = rng.uniform(-3.0, 3.0)
+        ang = rng.uniform(-math.pi, math.pi)
+        speed = rng.uniform(0.3, 2.0)
+        vx, vy = speed * math.cos(ang), speed * math.sin(ang)
+        om = eps * speed / prm.size * rng.choice([-1.0, 1.0])
+        got = np.array(backplate_friction.body_force(vx, vy, om, phi, edge, prm))
+        c, s = math.cos(phi), math.sin(phi)
+        ou, ov = prm.OU[edge], prm.OV[edge]
+        outline = np.stack([c * ou - s * ov, s * ou + c * ov], axis=1)
+        ref = np.array(plate_drag_mp(outline, vx, vy, om, prm.coef))
+        err = np.abs(got - ref) / prm.coef
+        assert err[:2].max() < 1e-13 and err[2] < 1e-13 * prm.size, (eps, got, ref)

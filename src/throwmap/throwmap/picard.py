@@ -1,0 +1,533 @@
+# Copyright 2026 The feeder authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The event simulator's ``flight_method: picard``: flight as a series about the ballistic flight.
+
+The flight ODE is x'' = (fx, g + fy), phi'' = tq / rho^2 with the body force (fx, fy, tq)
+depending on the velocities and phi only. Without the force the flight is the closed-form
+ballistic one; the plate's drag is 1.8 % of gravity. So the flight is taken in pieces, and on
+each piece the accelerations are sought at NODES Gauss-Legendre nodes: positions and
+velocities are the start's plus the twice (once) integrated interpolant of the node
+accelerations, exact for the ballistic part. Each sweep evaluates the force along the current
+motion: a Picard iteration, the perturbation series about the ballistic flight term by term,
+from a predictor (the force at the piece's start and its rate at the previous piece's end). It
+contracts by about L h (L the force's Lipschitz constant in the velocities, h the piece);
+sweeps stop when the last one moved the piece's end by less than ``flight_tol`` (positions
+and velocities times h in m, phi times the part's size). That increment, times q / (1 - q)
+with q its ratio to the one before, is the series' remainder, reported (largest over the
+pieces) by ``fly``; a piece whose sweeps do not contract is quartered.
+
+Converged, a piece is Gauss collocation, of order 2 NODES at its end and NODES + 2 inside it
+(positions). The quadrature needs a smooth force: the plate's drag has a kink where the
+instantaneous centre of the velocity field crosses the outline (docs/effects.md), so a piece
+ends where the centre crosses an edge: looked for at KINK_SAMPLES points of the predicted
+motion (there interpolated linearly), then located by regula falsi on the first sweep's
+motion. A piece is at most ``flight_step``
+long. The error that remains is measured against the rk4 reference (docs/accuracy.md): where
+the centre passes close to the outline without crossing it the force is smooth but varies
+fast, which long pieces resolve less well.
+
+Contacts are looked for on the piece's polynomial motion: at points at least
+``integrator_step`` apart, farther where every vertex's height, normal velocity and a bound on
+its downward acceleration prove that it cannot reach the arm sooner (:func:`safe_step`), and
+located by regula falsi (the earliest of the vertices below the arm) to ``contact_root_tol``.
+
+Compiled code may not allocate, so a sweep is generated as straight-line code over the nodes
+(:func:`sweep_source`).
+"""
+
+import math
+
+import numpy as np
+
+from .jit import njit
+from .status import ERR_NONFINITE, ERR_SIM_CAP, OK
+
+NODES = 5           # Gauss-Legendre nodes per piece (collocation order 10 at a piece's end)
+KINK_SAMPLES = 8    # points per piece at which the centre's crossing of an edge is looked for
+KINK_MARGIN = 0.1   # a crossing of an edge's line this far (times the edge) past its ends counts
+MAX_SWEEPS = 12     # sweeps before a piece is quartered
+KINK_SKIP = 1e-3    # a kink this close (times the piece) after a piece's start is not split at
+KINK_REACH = 0.25   # how far about the predicted kink the first sweep's motion is searched
+KINK_TOL = 1e-8     # s, how exactly a kink is located (a piece's end off it by dt costs ~dt^3)
+EPS = 2.220446049250313e-16
+
+
+def tables(n=NODES):
+    """
+    Return the nodes c, the node integrals A1, A2 and the interpolant's monomial matrix VINV.
+
+    On [0, 1] with nodes c_i: l_j the Lagrange basis, l_j(s) = sum_k VINV[k, j] s^k;
+    A1[i, j] = int_0^c_i l_j, A2[i, j] = int_0^c_i (c_i - s) l_j(s) ds.
+    """
+    c, _ = np.polynomial.legendre.leggauss(n)
+    c = 0.5 * (c + 1.0)
+    vinv = np.linalg.inv(np.vander(c, n, increasing=True))
+    k = np.arange(n)
+    a1 = np.array([[np.sum(vinv[:, j] * ci ** (k + 1) / (k + 1)) for j in range(n)] for ci in c])
+    a2 = np.array([[np.sum(vinv[:, j] * ci ** (k + 2) / ((k + 1) * (k + 2))) for j in range(n)]
+                   for ci in c])
+    return c, a1, a2, vinv
+
+
+def sweep_source(n=NODES):
+    """
+    Return the source of ``sweep`` and ``dense`` over n nodes (straight-line code).
+
+    sweep(phi, vx, vy, om, h, ax, ay, ao, g, rho2, edge, prm) -> (ax, ay, ao): the
+    accelerations at the nodes of the motion whose node accelerations are (ax, ay, ao) (tuples
+    of n). dense(q, v, h, a) -> the coefficients (n + 2) of the position in s = t / h.
+    sub(a, b): a - b, node by node; linear(a, b, h): a + b t at the nodes of a piece of h.
+    """
+    c, a1, a2, vinv = tables(n)
+    r = repr
+    lines = ['def sweep(phi, vx, vy, om, h, ax, ay, ao, g, rho2, edge, prm):',
+             '    hh = h * h']
+    for i in range(n):
+        for name, base, comp in (('u', 'vx', 'ax'), ('v', 'vy', 'ay'), ('o', 'om', 'ao')):
+            terms = ' + '.join(f'{r(float(a1[i, j]))} * {comp}[{j}]' for j in range(n))
+            lines.append(f'    {name}{i} = {base} + h * ({terms})')
+        terms = ' + '.join(f'{r(float(a2[i, j]))} * ao[{j}]' for j in range(n))
+        lines.append(f'    p{i} = phi + h * {r(float(c[i]))} * om + hh * ({terms})')
+        lines.append(f'    x{i}, y{i}, z{i} = rhs(u{i}, v{i}, o{i}, p{i}, g, rho2, edge, prm)')
+    for name, comp in (('x', 'nx'), ('y', 'ny'), ('z', 'nz')):
+        lines.append(f'    {comp} = (' + ', '.join(f'{name}{i}' for i in range(n)) + ',)')
+    lines.append('    return nx, ny, nz')
+    lines.append('')
+    lines.append('def dense(q, v, h, a):')
+    lines.append('    hh = h * h')
+    coefs = ['q', 'h * v']
+    for k in range(n):
+        terms = ' + '.join(f'{r(float(vinv[k, j]))} * a[{j}]' for j in range(n))
+        coefs.append(f'hh * ({terms}) / {float((k + 1) * (k + 2))!r}')
+    lines.append('    return (' + ', '.join(coefs) + ',)')
+    lines.append('')
+    lines.append('def linear(a, b, h):')
+    nodes = ', '.join(f'a + b * h * {float(c[i])!r}' for i in range(n))
+    lines.append(f'    return ({nodes},)')
+    lines.append('')
+    lines.append('def sub(a, b):')
+    lines.append('    return (' + ', '.join(f'a[{j}] - b[{j}]' for j in range(n)) + ',)')
+    return '\n'.join(lines) + '\n'
+
+
+@njit
+def poly_at(c, s):
+    """Value and d/ds of the polynomial sum c[k] s^k."""
+    q = 0.0
+    dq = 0.0
+    for k in range(len(c) - 1, -1, -1):
+        dq = dq * s + q
+        q = q * s + c[k]
+    return q, dq
+
+
+@njit
+def dense_state(cx, cy, cp, s, h):
+    """State (x, y, phi, vx, vy, om) at s = t / h of a piece's polynomials."""
+    x, dx = poly_at(cx, s)
+    y, dy = poly_at(cy, s)
+    p, dp = poly_at(cp, s)
+    return x, y, p, dx / h, dy / h, dp / h
+
+
+@njit
+def body_velocity(vx, vy, phi):
+    """Return the CM's velocity in the body frame of the start edge."""
+    c = math.cos(phi)
+    s = math.sin(phi)
+    return c * vx + s * vy, -s * vx + c * vy
+
+
+@njit
+def centre_edge(bx, by, om, bu, bv, k):
+    """
+    Return om times (the side of edge k's line, the position along edge k) of the centre.
+
+    (bx, by): the CM's velocity in the body frame of the start edge (where bu, bv are). The
+    instantaneous centre is z x v / om from the CM; the side is the cross product of the edge
+    with (centre - vertex k), the position the dot product over the edge's squared length (0
+    and 1 at its ends): both times om, so smooth in the state.
+    """
+    kn = (k + 1) % bu.shape[0]
+    ex = bu[kn] - bu[k]
+    ey = bv[kn] - bv[k]
+    qx = -by - om * bu[k]
+    qy = bx - om * bv[k]
+    return ex * qy - ey * qx, (ex * qx + ey * qy) / (ex * ex + ey * ey)
+
+
+@njit
+def centre_side_at(cx, cy, cp, tau, h, bu, bv, k):
+    """Return om times (side, position along edge k) of the centre at time tau of a piece."""
+    _, _, p, u, v, o = dense_state(cx, cy, cp, tau / h, h)
+    bx, by = body_velocity(u, v, p)
+    return centre_edge(bx, by, o, bu, bv, k)
+
+
+@njit
+def side_root(cx, cy, cp, h, bu, bv, k, a, b, fa, fb, tol):
+    """
+    Return a time within ``tol`` after the centre crosses edge k's line in [a, b], or -1.
+
+    fa, fb: om times the side at a and b (a sign change: else -1). Regula falsi, Illinois.
+    """
+    if not ((fa > 0.0 and fb <= 0.0) or (fa < 0.0 and fb >= 0.0)):
+        return -1.0
+    side = 0
+    for _ in range(200):
+        if b - a <= tol:
+            break
+        m = b - fb * (b - a) / (fb - fa)
+        if not (a < m < b):
+            m = 0.5 * (a + b)
+        fm, _ = centre_side_at(cx, cy, cp, m, h, bu, bv, k)
+        if fm != 0.0 and (fm > 0.0) == (fa > 0.0):
+            a = m
+            fa = fm
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b = m
+            fb = fm
+            if side == 1:
+                fa *= 0.5
+            side = 1
+            if fm == 0.0:
+                break
+    return b
+
+
+@njit
+def first_kink(cx, cy, cp, h, bu, bv, t_min, tol, exact=True):
+    """
+    Return (time, edge) of the centre's first crossing of an edge in (t_min, h), else (h, -1).
+
+    Sampled at KINK_SAMPLES points; a sign change of an edge's side counts where the crossing
+    (interpolated linearly between the samples, then, if ``exact``, located to ``tol`` by
+    regula falsi) lies on the edge, within KINK_MARGIN of its length.
+    """
+    n = bu.shape[0]
+    _, _, pa, ua, va, oa = dense_state(cx, cy, cp, 0.0, h)
+    bxa, bya = body_velocity(ua, va, pa)
+    lo = 0.0
+    for i in range(1, KINK_SAMPLES + 1):
+        hi = h * i / KINK_SAMPLES
+        _, _, pb, ub, vb, ob = dense_state(cx, cy, cp, hi / h, h)
+        bxb, byb = body_velocity(ub, vb, pb)
+        best = h
+        best_k = -1
+        for k in range(n):
+            sa, la = centre_edge(bxa, bya, oa, bu, bv, k)
+            sb, lb = centre_edge(bxb, byb, ob, bu, bv, k)
+            if not ((sa > 0.0 and sb <= 0.0) or (sa < 0.0 and sb >= 0.0)):
+                continue
+            w = sa / (sa - sb)
+            along = ((1.0 - w) * la + w * lb) / ((1.0 - w) * oa + w * ob)
+            if not (-0.5 <= along <= 1.5):
+                continue        # clearly off the edge: the force is smooth there
+            if exact:
+                b = side_root(cx, cy, cp, h, bu, bv, k, lo, hi, sa, sb, tol)
+                _, _, p, u, v, o = dense_state(cx, cy, cp, b / h, h)
+                bx, by = body_velocity(u, v, p)
+                _, along = centre_edge(bx, by, o, bu, bv, k)
+                along /= o if o != 0.0 else 1.0
+            else:
+                b = lo + w * (hi - lo)
+            if b > t_min and -KINK_MARGIN <= along <= 1.0 + KINK_MARGIN and b < best:
+                best = b
+                best_k = k
+        if best_k >= 0:
+            return best, best_k
+        lo = hi
+        pa, ua, va, oa = pb, ub, vb, ob
+        bxa, bya = bxb, byb
+    return h, -1
+
+
+@njit
+def jerk_at_end(c, h):
+    """Return the third derivative in time at s = 1 of sum c[k] s^k, s = t / h."""
+    d3 = 0.0
+    for k in range(3, len(c)):
+        d3 += k * (k - 1) * (k - 2) * c[k]
+    return d3 / (h * h * h)
+
+
+@njit
+def acc_at_end(c, h):
+    """Return the second derivative in time at s = 1 of sum c[k] s^k, s = t / h."""
+    d2 = 0.0
+    for k in range(2, len(c)):
+        d2 += k * (k - 1) * c[k]
+    return d2 / (h * h)
+
+
+@njit
+def safe_step(y, phi, vy, om, bu, bv, skip, acc):
+    """
+    Return a time within which no vertex (but ``skip``) can reach the arm.
+
+    Vertex k at height h_k >= 0 rising at u_k stays above h_k + u_k t - acc t^2 / 2 while its
+    downward acceleration stays below ``acc``: until t = (u_k + sqrt(u_k^2 + 2 acc h_k)) / acc.
+    """
+    c = math.cos(phi)
+    s = math.sin(phi)
+    best = math.inf
+    for k in range(bu.shape[0]):
+        if k == skip:
+            continue
+        hk = max(y + s * bu[k] + c * bv[k], 0.0)
+        uk = vy + om * (c * bu[k] - s * bv[k])
+        disc = uk * uk + 2.0 * acc * hk
+        tk = (uk + math.sqrt(disc)) / acc if uk > 0.0 else 2.0 * hk / (math.sqrt(disc) - uk)
+        best = min(best, tk)
+    return best
+
+
+@njit
+def vertex_height(cx, cy, cp, tau, h, bu_k, bv_k):
+    """Height over the arm of the vertex (bu_k, bv_k) at time tau of a piece."""
+    y, _ = poly_at(cy, tau / h)
+    p, _ = poly_at(cp, tau / h)
+    return y + math.sin(p) * bu_k + math.cos(p) * bv_k
+
+
+@njit
+def vertex_crossing(cx, cy, cp, h, lo, hi, bu_k, bv_k, root):
+    """
+    Return a time in (lo, hi] within ``root`` after the vertex's height crosses zero, or -1.
+
+    The height is above zero at lo and at or below it at hi (else -1: the caller bisects);
+    the Illinois variant of regula falsi keeps the crossing bracketed.
+    """
+    fa = vertex_height(cx, cy, cp, lo, h, bu_k, bv_k)
+    fb = vertex_height(cx, cy, cp, hi, h, bu_k, bv_k)
+    if not (fa > 0.0 and fb <= 0.0):
+        return -1.0
+    a = lo
+    b = hi
+    side = 0
+    for _ in range(100):
+        if b - a <= root:
+            return b
+        m = b - fb * (b - a) / (fb - fa)
+        if not (a < m < b):
+            m = 0.5 * (a + b)
+        fm = vertex_height(cx, cy, cp, m, h, bu_k, bv_k)
+        if fm > 0.0:
+            a = m
+            fa = fm
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b = m
+            fb = fm
+            if side == 1:
+                fa *= 0.5
+            side = 1
+        if fm == 0.0 or (side == 1 and b - a > 0.0 and abs(fm) < 1e-300):
+            return b
+    return b
+
+
+def make_flight(rhs, lowest_approaching, vertex_normal, n=NODES):
+    """
+    Return the compiled Picard flight over the accelerations ``rhs`` (event_sim.build's).
+
+    ``fly(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge, prm, knobs,
+    steps)`` flies until a vertex meets the arm moving
+    down; returns (status, vertex, x, y, phi, vx, vy, om, t, steps, evaluations, remainder):
+    the state at the crossing, the force evaluations made and the largest remainder estimate
+    of a piece's series (m).
+    """
+    space = {'rhs': rhs}
+    exec(compile(sweep_source(n), '<picard sweep>', 'exec'), space)  # noqa: S102
+    sweep = njit(cache=False)(space['sweep'])
+    dense = njit(cache=False)(space['dense'])
+    sub = njit(cache=False)(space['sub'])
+    linear = njit(cache=False)(space['linear'])
+
+    @njit(cache=False)
+    def piece(x, y, phi, vx, vy, om, h, a0x, a0y, a0o, dax, day, dao, g, rho2, bu, bv, size,
+              edge, prm, tol, root):
+        """
+        Solve one piece from its start state, from the predictor a0 + da t of the accelerations.
+
+        Returns (ok, h, cx, cy, cp, evaluations, remainder): the piece, ended at the first
+        kink of the force (found on the predicted motion, then located on the first sweep's);
+        ok False when the sweeps did not converge.
+        """
+        ax = linear(a0x, dax, h)
+        ay = linear(a0y, day, h)
+        ao = linear(a0o, dao, h)
+        t_min = max(64.0 * root, KINK_SKIP * h)
+        kink_tol = max(root, KINK_TOL)
+        h_max = h
+        kink = -1
+        cx = dense(x, vx, h, ax)
+        cy = dense(y, vy, h, ay)
+        cp = dense(phi, om, h, ao)
+        h, kink = first_kink(cx, cy, cp, h, bu, bv, t_min, kink_tol, False)
+        evals = 0
+        prev = math.inf
+        rem = math.inf
+        for it in range(MAX_SWEEPS):
+            nx, ny, no = sweep(phi, vx, vy, om, h, ax, ay, ao, g, rho2, edge, prm)
+            evals += n
+            # the sweep's increment at the piece's end: positions, and velocities times h
+            ex, evx = poly_at(dense(0.0, 0.0, h, sub(nx, ax)), 1.0)
+            ey, evy = poly_at(dense(0.0, 0.0, h, sub(ny, ay)), 1.0)
+            ep, evp = poly_at(dense(0.0, 0.0, h, sub(no, ao)), 1.0)
+            inc = abs(ex) + abs(ey) + abs(evx) + abs(evy) + size * (abs(ep) + abs(evp))
+            ax, ay, ao = nx, ny, no
+            cx = dense(x, vx, h, ax)
+            cy = dense(y, vy, h, ay)
+            cp = dense(phi, om, h, ao)
+            if not (math.isfinite(inc)):
+                return False, h, cx, cy, cp, evals, inc
+            if it == 0 and kink >= 0:
+                # the predicted kink, located again on the first sweep's motion (near it; the
+                # motion's polynomials reach a little past the piece)
+                h_ext = min(h_max, (1.0 + KINK_REACH) * h)
+                ex_x = dense(x, vx, h_ext, ax)
+                ex_y = dense(y, vy, h_ext, ay)
+                ex_p = dense(phi, om, h_ext, ao)
+                a = (1.0 - KINK_REACH) * h
+                fa, _ = centre_side_at(ex_x, ex_y, ex_p, a, h_ext, bu, bv, kink)
+                fb, _ = centre_side_at(ex_x, ex_y, ex_p, h_ext, h_ext, bu, bv, kink)
+                hk = side_root(ex_x, ex_y, ex_p, h_ext, bu, bv, kink, a, h_ext, fa, fb, kink_tol)
+                if hk >= 0.0:
+                    _, _, p, u, v, o = dense_state(ex_x, ex_y, ex_p, hk / h_ext, h_ext)
+                    bx, by = body_velocity(u, v, p)
+                    _, along = centre_edge(bx, by, o, bu, bv, kink)
+                    along /= o if o != 0.0 else 1.0
+                    if not -KINK_MARGIN <= along <= 1.0 + KINK_MARGIN:
+                        hk = -1.0
+                if hk < 0.0:
+                    hk, kink = first_kink(ex_x, ex_y, ex_p, h_ext, bu, bv, t_min, kink_tol)
+                if abs(hk - h) > kink_tol:
+                    h = hk
+                    prev = math.inf
+                    continue
+            if inc <= tol:
+                q = inc / prev if prev < math.inf and prev > 0.0 else 0.0
+                rem = inc * q / (1.0 - q) if q < 1.0 else inc
+                return True, h, cx, cy, cp, evals, max(rem, inc)
+            if it >= 3 and inc > 0.5 * prev:
+                return False, h, cx, cy, cp, evals, inc
+            prev = inc
+        return False, h, cx, cy, cp, evals, rem
+
+    @njit(cache=False)
+    def fly(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge, prm, knobs,
+            steps):
+        nan = math.nan
+        H = knobs.flight_step
+        dts = knobs.integrator_step
+        root = knobs.contact_root_tol
+        tol = knobs.flight_tol
+        a0x, a0y, a0o = rhs(vx, vy, om, phi, g, rho2, edge, prm)
+        dax = 0.0
+        day = 0.0
+        dao = 0.0
+        evals = 1
+        worst = 0.0
+        h_try = H
+        while True:
+            steps += 1
+            if steps > knobs.max_sim_steps:
+                return ERR_SIM_CAP, -1, x, y, phi, vx, vy, om, t, steps, evals, worst
+            ok, h, cx, cy, cp, ne, rem = piece(x, y, phi, vx, vy, om, h_try, a0x, a0y, a0o, dax,
+                                               day, dao, g, rho2, bu, bv, size, edge, prm, tol,
+                                               root)
+            evals += ne
+            if not ok:
+                if not math.isfinite(rem) and h_try <= 64.0 * root:
+                    return ERR_NONFINITE, -1, x, y, phi, vx, vy, om, t, steps, evals, worst
+                h_try = 0.25 * h
+                if h_try <= 64.0 * root:
+                    return ERR_NONFINITE, -1, x, y, phi, vx, vy, om, t, steps, evals, worst
+                continue
+            worst = max(worst, rem)
+            h_try = H
+            x1, y1, p1, vx1, vy1, om1 = dense_state(cx, cy, cp, 1.0, h)
+            if not (math.isfinite(y1) and math.isfinite(om1) and math.isfinite(x1)):
+                return ERR_NONFINITE, -1, x, y, phi, vx, vy, om, t, steps, evals, worst
+            # Contact on the piece's motion: samples at least integrator_step apart, farther
+            # where every vertex's height, normal velocity and a bound on its downward
+            # acceleration prove that it cannot reach the arm sooner (safe_step).
+            acc = 1.25 * max(abs(a0y) + abs(a0o) * size + om * om * size,
+                             abs(acc_at_end(cy, h)) + abs(acc_at_end(cp, h)) * size
+                             + om1 * om1 * size) + 1e-9
+            tau = 0.0
+            hit = -1
+            lo = 0.0
+            xs, ys, ps, us, vs, os_ = x, y, phi, vx, vy, om
+            while tau < h:
+                lo = tau
+                tau = min(h, tau + max(safe_step(ys, ps, vs, os_, bu, bv, sep, acc), dts))
+                xs, ys, ps, us, vs, os_ = dense_state(cx, cy, cp, tau / h, h)
+                if sep >= 0:
+                    h1, un1 = vertex_normal(ys, ps, vs, os_, bu[sep], bv[sep])
+                    if h1 > 0.0 or (sep_rising and un1 < 0.0):
+                        sep = -1
+                k, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+                if k >= 0:
+                    hit = k
+                    break
+            if hit < 0:
+                x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
+                t += h
+                a0x, a0y, a0o = rhs(vx, vy, om, phi, g, rho2, edge, prm)
+                evals += 1
+                # the predictor's slope: the piece's acceleration's at its end
+                dax = jerk_at_end(cx, h)
+                day = jerk_at_end(cy, h)
+                dao = jerk_at_end(cp, h)
+                continue
+            # the earliest crossing of the vertices below the arm at tau (two may cross within
+            # one sample interval: a nearly flat landing)
+            hi = -1.0
+            for kv in range(bu.shape[0]):
+                if kv == sep or vertex_height(cx, cy, cp, tau, h, bu[kv], bv[kv]) > 0.0:
+                    continue
+                tk = vertex_crossing(cx, cy, cp, h, lo, tau, bu[kv], bv[kv], root)
+                if tk < 0.0:
+                    hi = -1.0
+                    break
+                if hi < 0.0 or tk < hi:
+                    hi = tk
+            if hi < 0.0:
+                hi = tau
+                while hi - lo > root:
+                    mid = 0.5 * (lo + hi)
+                    xs, ys, ps, us, vs, os_ = dense_state(cx, cy, cp, mid / h, h)
+                    km, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+                    if km >= 0:
+                        hi = mid
+                        hit = km
+                    else:
+                        lo = mid
+            xe, ye, pe, vxe, vye, ome = dense_state(cx, cy, cp, hi / h, h)
+            k2, _ = lowest_approaching(xe, ye, pe, vxe, vye, ome, bu, bv, sep)
+            if k2 >= 0:
+                hit = k2
+            return OK, hit, xe, ye, pe, vxe, vye, ome, t + hi, steps, evals, worst
+        return OK, -1, nan, nan, nan, nan, nan, nan, nan, steps, evals, worst
+
+    return fly
