@@ -145,7 +145,7 @@ def limit_spec(scene, cand, opt):
     f = cand.figures
     if f['status'] not in (D.ST_OK, D.ST_ARRIVAL_OUTSIDE):
         raise ThrowmapError(f'the design has no limit set: {D.STATUS_TEXT[int(f["status"])]}')
-    model = scene.model.at(cand.h, cand.w)
+    model = scene.model.at(cand.h, cand.w).nominal()    # as the design kernel: no noise
     e, _, rot = model.orbit_arrays(int(f['ref_edge']), f['ref_R'], opt.ref_throws)
     if e[-1] < 0:
         raise ThrowmapError(f'the part was lost at throw {len(e) - 1} of the reference orbit')
@@ -277,7 +277,7 @@ def search(scene, h_range, w_range, n_h=40, n_w=40, goals=None, fractions=(0.25,
 
 def library_guarantee(scene, cand, throws=10_000):
     """Return the guarantee radius of the library's own (10,000-throw) limit set for cand."""
-    model = scene.model.at(cand.h, cand.w)
+    model = scene.model.at(cand.h, cand.w).nominal()    # as the design kernel: no noise
     f = cand.figures
     ls = limit_set(model, int(f['ref_edge']), f['ref_R'], throws)
     return sensor_design(model, ls, cand.goal, scene.sensor_footprint,
