@@ -20,8 +20,9 @@ Each scene (a base-model design, e.g. what `throwmap design-search` wrote) gets 
 ``finite_arm`` with the arm length given (default 40 cm, the paper's), and its basin grid of
 starts (``throwmap.basins.default_grid``: every stable edge, R from R_min to R_max of Z) is
 iterated; a start counts as lost when a throw leaves the arm (or, with the arm, the domain of
-f). The design search takes the arm as endless (issue 21 item 2), so this is how a chosen
-design is checked against the real arm. Prints figures; asserts nothing.
+f). The design search keeps to the arm only when the scene names finite_arm (else it takes the
+arm as endless, and says so); this checks a chosen design against the real arm, for many more
+throws than the search's. Prints figures; asserts nothing.
 
     python bench/arm_check.py SCENE [SCENE ...] [--length-cm 40] [--throws 10000]
 """
