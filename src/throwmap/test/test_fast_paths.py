@@ -37,27 +37,7 @@ from throwmap import Scene
 from throwmap.event_sim import roll_turn, roll_u
 from throwmap.jit import njit
 from throwmap.rk8 import A8, B8, C8, make_step
-from throwmap_testing import PAPER_W, TRIANGLE_VERTICES
-
-BASE = {'name': 't', 'part': {'vertices': TRIANGLE_VERTICES}, 'arm': {'offset': -0.005},
-        'throw': {'release_speed': PAPER_W}}
-PLATE = {'inclination_deg': 80, 'g0': 9.81, 'mu': 0.1}
-AIR = {'density': 1.2, 'drag_coefficient': 1.2, 'frontal_area_cm2': 4.0, 'mass_g': 20.0}
-REFERENCE = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'contact_root_tol': 1e-13,
-             'roll_method': 'rk4', 'flight_method': 'rk4'}
-SETS = {
-    'plate': {'plate': PLATE, 'effects': ['backplate_friction']},
-    'air': {'gravity': -9.66, 'air': AIR, 'effects': ['air_drag']},
-    'plate and air': {'plate': PLATE, 'air': AIR, 'effects': ['backplate_friction', 'air_drag']},
-}
-
-
-def scene(effects, **accuracy):
-    data = copy.deepcopy(BASE)
-    data.update(copy.deepcopy(SETS[effects]))
-    if accuracy:
-        data['accuracy'] = accuracy
-    return Scene(data)
+from throwmap_testing import force_scene, FORCE_SETS, PLATE, REFERENCE_KNOBS, TRIANGLE_SCENE
 
 
 def states(model, count, seed):
@@ -67,9 +47,9 @@ def states(model, count, seed):
     return edges, lo + rng.uniform(0, 1, count) * (0.28 - lo)
 
 
-@pytest.fixture(scope='module', params=sorted(SETS))
+@pytest.fixture(scope='module', params=sorted(FORCE_SETS))
 def case(request):
-    model = scene(request.param, **REFERENCE).model
+    model = force_scene(request.param, **REFERENCE_KNOBS).model
     e, r = states(model, 120, 5)
     return request.param, (e, r), model.f_batch(e, r)
 
@@ -145,19 +125,20 @@ def test_the_roll_never_gains_energy_and_without_drag_conserves_it():
 
 def test_energy_roll_agrees_with_the_rk4_reference_throw_by_throw(case):
     name, (e, r), ref = case
-    got = scene(name).model.f_batch(e, r)           # the defaults: roll_method energy
+    got = force_scene(name).model.f_batch(e, r)           # the defaults: roll_method energy
     edges, dr = worst(got, ref)
     assert edges == 0
     # the default flight (rk4, 1 ms) dominates what is left: 1.6e-9 m before issue 24
     assert dr < 3e-9, (name, dr)
-    exact_roll = scene(name, **dict(REFERENCE, roll_method='energy')).model.f_batch(e, r)
+    exact_roll = force_scene(name, **dict(REFERENCE_KNOBS, roll_method='energy')).model
+    exact_roll = exact_roll.f_batch(e, r)
     edges, dr = worst(exact_roll, ref)
     assert edges == 0 and dr < 1e-11, (name, dr)
 
 
 def test_energy_roll_lands_with_the_reference_spin():
-    model = scene('plate and air').model
-    ref = scene('plate and air', **REFERENCE).model
+    model = force_scene('plate and air').model
+    ref = force_scene('plate and air', **REFERENCE_KNOBS).model
     e, r = states(model, 25, 8)
     for i, rr in zip(e, r):
         a, b = model.throw(int(i), float(rr)), ref.throw(int(i), float(rr))
@@ -169,18 +150,19 @@ def test_energy_roll_lands_with_the_reference_spin():
 
 def test_a_torque_of_another_form_rolls_with_rk4_steps_bit_for_bit():
     # the quadrature drag regularises every point: its torque about a pivot is not of the form
-    e, r = states(scene('plate').model, 40, 9)
+    e, r = states(force_scene('plate').model, 40, 9)
     knobs = {'plate_quadrature': 2}
-    energy = scene('plate', **knobs).model.f_batch(e, r)
-    rk4 = scene('plate', roll_method='rk4', **knobs).model.f_batch(e, r)
+    energy = force_scene('plate', **knobs).model.f_batch(e, r)
+    rk4 = force_scene('plate', roll_method='rk4', **knobs).model.f_batch(e, r)
     for key in ('edge', 'R', 'status', 'net_rotation'):
         assert np.array_equal(energy[key], rk4[key])
 
 
 def test_zero_drag_with_the_energy_roll_is_the_base_model():
-    base = Scene(dict(copy.deepcopy(BASE), gravity=-9.81 * math.sin(math.radians(80)))).model
-    model = scene('plate').model
-    zero = Scene(dict(copy.deepcopy(BASE), plate=dict(PLATE, mu=0.0),
+    base = Scene(dict(copy.deepcopy(TRIANGLE_SCENE),
+                      gravity=-9.81 * math.sin(math.radians(80)))).model
+    model = force_scene('plate').model
+    zero = Scene(dict(copy.deepcopy(TRIANGLE_SCENE), plate=dict(PLATE, mu=0.0),
                       effects=['backplate_friction'])).model
     e, r = states(model, 150, 4)
     edges, dr = worst(zero.f_batch(e, r), base.f_batch(e, r))
@@ -216,14 +198,15 @@ def test_rk8_step_converges_at_order_eight_on_a_smooth_flight():
 
 def test_rk8_flight_agrees_with_the_rk4_reference_throw_by_throw(case):
     name, (e, r), ref = case
-    got = scene(name, flight_method='rk8', flight_step=0.1, flight_tol=1e-10).model.f_batch(e, r)
+    got = force_scene(name, flight_method='rk8', flight_step=0.1,
+                      flight_tol=1e-10).model.f_batch(e, r)
     edges, dr = worst(got, ref)
     assert edges == 0 and dr < 2e-10, (name, dr)
 
 
 def test_rk8_flight_finds_the_same_first_contacts():
-    model = scene('plate', flight_method='rk8', flight_step=0.1, flight_tol=1e-10).model
-    ref = scene('plate', **REFERENCE).model
+    model = force_scene('plate', flight_method='rk8', flight_step=0.1, flight_tol=1e-10).model
+    ref = force_scene('plate', **REFERENCE_KNOBS).model
     e, r = states(model, 40, 6)
     for i, rr in zip(e, r):
         a, b = model.throw(int(i), float(rr)), ref.throw(int(i), float(rr))
@@ -236,4 +219,4 @@ def test_new_knobs_are_checked():
     for key, value in (('roll_method', 'euler'), ('flight_method', 'rk2'), ('flight_tol', 0.0),
                        ('flight_step', -1.0)):
         with pytest.raises(InputError, match=key):
-            scene('plate', **{key: value})
+            force_scene('plate', **{key: value})

@@ -28,40 +28,18 @@ flight_method 'picard' (issue 24): flight as a series about the ballistic flight
 Every comparison is a maximum over all states, not a median.
 """
 
-import copy
 import math
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
-from throwmap import Scene, ThrowModel
+from throwmap import ThrowModel
 from throwmap.event_sim import lowest_approaching, vertex_normal
 from throwmap.jit import njit
 from throwmap.picard import centre_edge, first_kink, make_flight, NODES, poly_at, sweep_source
-from throwmap_testing import PAPER_W, TRIANGLE_VERTICES
+from throwmap_testing import force_scene, FORCE_SETS, REFERENCE_KNOBS
 
-BASE = {'name': 't', 'part': {'vertices': TRIANGLE_VERTICES}, 'arm': {'offset': -0.005},
-        'throw': {'release_speed': PAPER_W}}
-PLATE = {'inclination_deg': 80, 'g0': 9.81, 'mu': 0.1}
-AIR = {'density': 1.2, 'drag_coefficient': 1.2, 'frontal_area_cm2': 4.0, 'mass_g': 20.0}
-REFERENCE = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'contact_root_tol': 1e-13,
-             'roll_method': 'rk4', 'flight_method': 'rk4'}
 PICARD = {'flight_method': 'picard', 'flight_step': 0.08, 'flight_tol': 1e-6}
-SETS = {
-    'plate': {'plate': PLATE, 'effects': ['backplate_friction']},
-    'air': {'gravity': -9.66, 'air': AIR, 'effects': ['air_drag']},
-    'plate and air': {'plate': PLATE, 'air': AIR, 'effects': ['backplate_friction', 'air_drag']},
-}
-
-
-def scene(effects, plate=None, **accuracy):
-    data = copy.deepcopy(BASE)
-    data.update(copy.deepcopy(SETS[effects]))
-    if plate is not None:
-        data['plate'] = plate
-    if accuracy:
-        data['accuracy'] = accuracy
-    return Scene(data)
 
 
 def states(model, count, seed):
@@ -78,9 +56,9 @@ def worst(got, ref):
     return int(np.sum(~same)), float(np.max(np.abs(got['R'] - ref['R'])[same]))
 
 
-@pytest.fixture(scope='module', params=sorted(SETS))
+@pytest.fixture(scope='module', params=sorted(FORCE_SETS))
 def case(request):
-    model = scene(request.param, **REFERENCE).model
+    model = force_scene(request.param, **REFERENCE_KNOBS).model
     e, r = states(model, 80, 7)
     return request.param, (e, r), model.f_batch(e, r)
 
@@ -221,8 +199,9 @@ def body(vx, vy, phi):
 def test_picard_flight_meets_the_bar_throw_by_throw(case):
     """flight_step 0.08 s: issue 24's bar (1e-6 m) on every state; 0.02 s: 20x closer."""
     name, (e, r), ref = case
-    coarse = worst(scene(name, **PICARD).model.f_batch(e, r), ref)
-    fine = worst(scene(name, **dict(PICARD, flight_step=0.02, flight_tol=1e-10)).model.f_batch(
+    coarse = worst(force_scene(name, **PICARD).model.f_batch(e, r), ref)
+    fine = worst(force_scene(name, **dict(PICARD, flight_step=0.02,
+                                          flight_tol=1e-10)).model.f_batch(
         e, r), ref)
     assert coarse[0] == 0 and fine[0] == 0
     assert coarse[1] < 1e-6, (name, coarse)
@@ -230,8 +209,8 @@ def test_picard_flight_meets_the_bar_throw_by_throw(case):
 
 
 def test_picard_flight_finds_the_same_first_contacts():
-    model = scene('plate', **dict(PICARD, flight_step=0.02, flight_tol=1e-10)).model
-    ref = scene('plate', **REFERENCE).model
+    model = force_scene('plate', **dict(PICARD, flight_step=0.02, flight_tol=1e-10)).model
+    ref = force_scene('plate', **REFERENCE_KNOBS).model
     e, r = states(model, 30, 6)
     for i, rr in zip(e, r):
         a, b = model.throw(int(i), float(rr)), ref.throw(int(i), float(rr))
@@ -242,7 +221,7 @@ def test_picard_flight_finds_the_same_first_contacts():
 def test_picard_flight_without_plate_drag_is_the_base_model():
     """mu_p = 0: the series is the ballistic flight itself (edges equal, |dR| < 1e-9 m)."""
     plate0 = {'inclination_deg': math.degrees(math.asin(9.66 / 9.81)), 'g0': 9.81, 'mu': 0.0}
-    model = scene('plate', plate=plate0, **PICARD).model
+    model = force_scene('plate', plate=plate0, **PICARD).model
     base = ThrowModel(model.part, model.h, model.w, model.g)
     e, r = states(base, 200, 3)
     edges, dr = worst(model.f_batch(e, r), base.f_batch(e, r))
@@ -251,9 +230,9 @@ def test_picard_flight_without_plate_drag_is_the_base_model():
 
 def test_picard_is_a_knob_value():
     from throwmap import InputError
-    assert scene('plate', flight_method='picard').model.knobs.flight_method == 'picard'
+    assert force_scene('plate', flight_method='picard').model.knobs.flight_method == 'picard'
     with pytest.raises(InputError, match='flight_method'):
-        scene('plate', flight_method='series')
+        force_scene('plate', flight_method='series')
 
 
 # ------------------------------------------------------------------------ the cheaper drag
@@ -262,7 +241,7 @@ def test_plate_drag_series_of_any_order_is_exact_below_the_switch():
     from reference_plate import plate_drag_mp
     from throwmap.effects import backplate_friction
     from throwmap.effects.backplate_friction import SERIES_EPS
-    model = scene('plate').model
+    model = force_scene('plate').model
     prm = model.prm.backplate_friction
     rng = np.random.default_rng(11)
     for eps in np.concatenate([10.0 ** rng.uniform(-4, math.log10(SERIES_EPS), 6),

@@ -19,16 +19,42 @@ A module of its own: every package's tests have a conftest.py, so `from conftest
 would be ambiguous when all suites run together.
 """
 
+import copy
 import math
 import pathlib
 
 import numpy as np
-from throwmap import Part
+from throwmap import Part, Scene
 
 REPO = pathlib.Path(__file__).resolve().parents[3]
 SCENES = REPO / 'scenes'
 TRIANGLE_VERTICES = [[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]]
 PAPER_W = math.radians(320.0)
+# The paper's triangle as scene data, and the effects' settings the simulator tests share: the
+# experiment's back plate, a 20 g part in air, and the event simulator's reference knobs.
+TRIANGLE_SCENE = {'name': 't', 'part': {'vertices': TRIANGLE_VERTICES},
+                  'arm': {'offset': -0.005}, 'throw': {'release_speed': PAPER_W}}
+PLATE = {'inclination_deg': 80, 'g0': 9.81, 'mu': 0.1}
+AIR = {'density': 1.2, 'drag_coefficient': 1.2, 'frontal_area_cm2': 4.0, 'mass_g': 20.0}
+REFERENCE_KNOBS = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'contact_root_tol': 1e-13,
+                   'roll_method': 'rk4', 'flight_method': 'rk4'}
+# The body-force effect sets the simulator tests throw the triangle with.
+FORCE_SETS = {
+    'plate': {'plate': PLATE, 'effects': ['backplate_friction']},
+    'air': {'gravity': -9.66, 'air': AIR, 'effects': ['air_drag']},
+    'plate and air': {'plate': PLATE, 'air': AIR, 'effects': ['backplate_friction', 'air_drag']},
+}
+
+
+def force_scene(effects, plate=None, **accuracy):
+    """Return the triangle with the FORCE_SETS entry ``effects``, a plate and accuracy knobs."""
+    data = copy.deepcopy(TRIANGLE_SCENE)
+    data.update(copy.deepcopy(FORCE_SETS[effects]))
+    if plate is not None:
+        data['plate'] = plate
+    if accuracy:
+        data['accuracy'] = accuracy
+    return Scene(data)
 
 
 def random_convex_vertices(rng, n_max=8, scale=0.05):
