@@ -131,7 +131,7 @@ def _call(name, slot, signature):
 
 
 def _slot(slot, fillers):
-    signature, rule, default, _ = SLOT_TABLE[slot]
+    signature, returns, rule, default, _ = SLOT_TABLE[slot]
     if not fillers:
         return f'{slot} = {default}\n'
     if rule == 'one' and len(fillers) > 1:
@@ -145,11 +145,13 @@ def _slot(slot, fillers):
             lines.append(f'    w, h = {_call(name, slot, signature)}')
         lines.append('    return w, h')
     elif rule == 'sum':
-        lines.append('    fx = 0.0\n    fy = 0.0\n    tq = 0.0')
+        totals = [name.strip() for name in returns.split(',')]
+        terms = [f'{name}_' for name in totals]
+        lines += [f'    {name} = 0.0' for name in totals]
         for name in fillers:
-            lines.append(f'    a, b, c = {_call(name, slot, signature)}')
-            lines.append('    fx += a\n    fy += b\n    tq += c')
-        lines.append('    return fx, fy, tq')
+            lines.append(f'    {", ".join(terms)} = {_call(name, slot, signature)}')
+            lines += [f'    {total} += {term}' for total, term in zip(totals, terms)]
+        lines.append(f'    return {returns}')
     elif rule == 'first_held':
         for name in fillers:
             lines.append(f'    held, turn = {_call(name, slot, signature)}')

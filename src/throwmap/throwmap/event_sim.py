@@ -20,13 +20,19 @@ The event-driven simulator of one throw and catch, for effects that break closed
 * ``body_force(vx, vy, om, phi, edge, prm) -> (fx, fy, torque)``: force and torque about the
   CM per unit mass on the part moving at (vx, vy, om), rotated by phi from its resting pose on
   the start edge; acts in flight and in every contact phase (backplate_friction, air_drag).
+* ``contact_load(phase, n, vslip, om, phi, edge, prm) -> (ft, torque)``: a load that the
+  contact itself makes, told the phase (PHASE_ROLL, PHASE_SLIDE, PHASE_FLAT) and the normal
+  force n per unit mass: a tangential force at the contact on top of the arm's friction and a
+  torque about the CM (rolling_resistance). Affine in n on either side of 0, so that the
+  contact equations, linear in n, are solved with it exactly.
 * ``static_hold(phi, om, turned, size, pu, pv, g, edge, prm) -> (held, turn)``: whether the
   body force holds the part at rest on its pivot (pu, pv) at a turning point of a roll (or a
   creep), and the turn that releases it (backplate_friction).
 * ``impact(rx, ry, vx, vy, om, rho2, prm) -> (vx, vy, om, bounces)``: the impact of the
   vertex at (rx, ry) from the CM (impact_restitution); ``bounces``: the part flies off again.
 
-Defaults (:func:`no_force`, :func:`no_hold`, :func:`sticking_law`) are the base model's. The
+Defaults (:func:`no_force`, :func:`no_contact_load`, :func:`no_hold`, :func:`sticking_law`) are
+the base model's. The
 contact's friction coefficient, whether a pivot may slide and lift off, and whether the impact
 law is the sticking one (then the exact settling rule holds) come as a :data:`ContactLaw`.
 The simulator names no effect.
@@ -85,6 +91,11 @@ MODE_CONTACT = 1
 MODE_FLAT = 2
 MODE_DONE = 3
 
+# The contact phase a contact_load hook is told.
+PHASE_ROLL = 0      # one vertex on the arm, sticking: the part rolls about it
+PHASE_SLIDE = 1     # one vertex on the arm, slipping along it
+PHASE_FLAT = 2      # an edge flat on the arm
+
 # Event codes of a contact phase (contact_trigger).
 NO_EVENT = 0
 LANDING = 1
@@ -99,6 +110,11 @@ PAINLEVE = 5
 def no_force(vx, vy, om, phi, edge, prm):
     """Return no body force: the base model's flight and rolling."""
     return 0.0, 0.0, 0.0
+
+
+@njit(cache=False)
+def no_contact_load(phase, n, vslip, om, phi, edge, prm):
+    return 0.0, 0.0
 
 
 @njit(cache=False)
@@ -304,7 +320,8 @@ def _event(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1):
 
 
 # ------------------------------------------------------------------------------- the builder
-def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
+def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold,
+          impact=sticking_law):
     """
     Return the simulator ``simulate`` compiled over these hooks.
 
@@ -314,6 +331,9 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
     net rotation, impacts, records written, the arm coordinates touched). ``prm`` is passed to
     every hook; ``law`` is a :data:`ContactLaw`.
     """
+    # A contact load depends on the normal force, which the roll's energy closed form does not
+    # know: with one, rolls about a pinned pivot take rk4 steps (roll_method 'energy' falls back).
+    contact_loaded = contact_load is not no_contact_load
 
     @njit(cache=False)
     def flight_rhs(vx, vy, om, phi, g, rho2, edge, prm):
@@ -517,12 +537,26 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         return -2.0 * un / an > root and -0.5 * un * un / an > 8.0 * EPS * scale
 
     @njit(cache=False)
+    def contact_load_affine(phase, sgn_n, vslip, om, phi, edge, prm):
+        """
+        Return the contact load as (ft0, tq0) + n (ft1, tq1) for n of sign sgn_n.
+
+        The hook is affine in n on either side of n = 0 (|n| in a Coulomb-type law).
+        """
+        ft0, tq0 = contact_load(phase, 0.0, vslip, om, phi, edge, prm)
+        ft_n, tq_n = contact_load(phase, sgn_n, vslip, om, phi, edge, prm)
+        return ft0, tq0, (ft_n - ft0) * sgn_n, (tq_n - tq0) * sgn_n
+
+    @njit(cache=False)
     def contact_accel(xp, phi, vxp, om, sliding, sigma, bu_p, bv_p, g, rho2, mu, edge, prm):
         """
         Accelerations (axp, alpha) and contact force (Ft, N) with vertex p on the arm.
 
-        sliding = False: p sticks (axp = 0); True: p slides with friction -mu N sigma. The
-        status flag is False when no consistent normal force exists (Painleve).
+        sliding = False: p sticks (axp = 0); True: p slides with friction -mu N sigma. Ft is
+        the arm's friction (the contact load's tangential force comes on top). The contact
+        load (ft0 + n ft1 at the contact, tq0 + n tq1 about the CM) enters the equations
+        exactly: they stay linear in N. The status flag is False when no consistent normal
+        force exists (Painleve).
         """
         c = math.cos(phi)
         s = math.sin(phi)
@@ -531,24 +565,34 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         vcx = vxp - om * cy
         vcy = om * cx
         fx, fy, tq = body_force(vcx, vcy, om, phi, edge, prm)
+        phase = PHASE_SLIDE if sliding else PHASE_ROLL
         if not sliding:
-            alpha = (tq + cx * (g + fy) - cy * fx) / (rho2 + cx * cx + cy * cy)
-            ft = -alpha * cy - om * om * cx - fx
-            n = alpha * cx - om * om * cy - g - fy
-            return 0.0, alpha, ft, n, True
+            # The arm takes any tangential load of a sticking contact: only the torque counts.
+            # Solved with N >= 0 first; a hinge pivot may need N < 0 (a load's other side).
+            for sgn_n in (1.0, -1.0):
+                ft0, tq0, ft1, tq1 = contact_load_affine(phase, sgn_n, vxp, om, phi, edge, prm)
+                alpha = ((tq + tq0 + tq1 * (-om * om * cy - g - fy) + cx * (g + fy) - cy * fx)
+                         / (rho2 + cx * cx + cy * cy - tq1 * cx))
+                n = alpha * cx - om * om * cy - g - fy
+                if n * sgn_n >= 0.0 or not contact_loaded:
+                    ft = -alpha * cy - om * om * cx - fx - (ft0 + ft1 * n)
+                    return 0.0, alpha, ft, n, True
+            return 0.0, 0.0, 0.0, 0.0, False
         # Friction -mu |N| sigma: solve with N >= 0 first; a hinge pivot (bilateral) may need
         # N < 0, then the friction term changes sign.
         for sgn_n in (1.0, -1.0):
+            ft0, tq0, ft1, tq1 = contact_load_affine(phase, sgn_n, vxp, om, phi, edge, prm)
+            tq_l = tq + tq0 + cy * ft0
             ms = mu * sigma * sgn_n
-            b = cx + ms * cy
+            b = cx + ms * cy - tq1 - cy * ft1
             den = rho2 + b * cx
             if den <= 1e-12 * rho2:
                 return 0.0, 0.0, 0.0, 0.0, False
-            alpha = (tq + b * (om * om * cy + g + fy)) / den
+            alpha = (tq_l + b * (om * om * cy + g + fy)) / den
             n = alpha * cx - om * om * cy - g - fy
             if n * sgn_n >= 0.0:
                 ft = -ms * n
-                axp = fx + ft + alpha * cy + om * om * cx
+                axp = fx + ft + ft0 + ft1 * n + alpha * cy + om * om * cx
                 return axp, alpha, ft, n, True
         return 0.0, 0.0, 0.0, 0.0, False
 
@@ -625,13 +669,15 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         """Flat on edge j: (ax, N_left, N_right) for sliding at vx."""
         fx, fy, tq = body_force(vx, 0.0, 0.0, phi, edge, prm)
         n = -(g + fy)
+        ft_l, tq_l = contact_load(PHASE_FLAT, n, vx, 0.0, phi, edge, prm)
         if vx != 0.0:
             ft = -mu * n * math.copysign(1.0, vx)
         else:
-            ft = -fx
+            ft = -(fx + ft_l)
             if abs(ft) > mu * n:
                 ft = math.copysign(mu * n, ft)
-        nb = -(tq + part.d[j] * ft + part.u_l[j] * n) / (part.u_r[j] - part.u_l[j])
+        ft += ft_l
+        nb = -(tq + tq_l + part.d[j] * ft + part.u_l[j] * n) / (part.u_r[j] - part.u_l[j])
         na = n - nb
         return fx + ft, na, nb
 
@@ -685,7 +731,7 @@ def build(body_force=no_force, static_hold=no_hold, impact=sticking_law):
         sep = -1
         sep_rising = False
         # closed-form rolls (roll_method 'energy', pinned pivot): the torque fit of pivot fit_p
-        roll_energy = knobs.roll_method == ROLL_ENERGY and not unilateral
+        roll_energy = knobs.roll_method == ROLL_ENERGY and not unilateral and not contact_loaded
         fit_p = -1
         fit_ok = False
         a0 = 0.0

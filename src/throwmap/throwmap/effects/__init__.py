@@ -34,8 +34,8 @@ effect is one module of this package that owns its scene keys, its parsing and i
     these parameters, and no code of it is compiled). A slot is filled by a compiled function
     of the module with the slot's name: ``perturb``, ``release``, ``check``,
     ``closed_motion`` (throwmap.pipeline; the last is the flight and catch when no effect
-    needs the event simulator), ``body_force``, ``static_hold``, ``impact``
-    (throwmap.event_sim).
+    needs the event simulator), ``body_force``, ``contact_load``, ``static_hold``, ``impact``
+    (throwmap.event_sim). ``SLOT_TABLE`` declares each one's arguments and results.
 ``bundle(params, part, knobs)``
     the named tuple of compiled parameters its hooks receive as ``prm``.
 
@@ -68,22 +68,27 @@ REGISTRY = (
 )
 MODULES = {name: importlib.import_module(f'{__name__}.{name}') for name in REGISTRY}
 NAMES = tuple(MODULES)
-# The one table of hooks: slot -> how its compiled function is called (its arguments), how the
-# hooks of several effects combine, the default when no effect fills it (a compiled function of
-# throwmap.pipeline or throwmap.event_sim), and whether it needs the event simulator (its
-# event slots are event_sim.build's parameters, in this order). throwmap.compose writes the
-# generated module from it; test_structure.py checks every effect's hooks against it.
-Slot = namedtuple('Slot', ['signature', 'combine', 'default', 'event'])
+# The one table of hooks: slot -> how its compiled function is called (its arguments), what it
+# returns, how the hooks of several effects combine, the default when no effect fills it (a
+# compiled function of throwmap.pipeline or throwmap.event_sim), and whether it needs the event
+# simulator (its event slots are event_sim.build's parameters, in this order). throwmap.compose
+# writes the generated module from it; test_structure.py checks every effect's hooks against it.
+Slot = namedtuple('Slot', ['signature', 'returns', 'combine', 'default', 'event'])
 SLOT_TABLE = {
-    'perturb': Slot('w, h, z0, z1, prm', 'chain_wh', 'pipeline.no_perturbation', False),
-    'release': Slot('edge, R, w, h, ctx, prm', 'one', 'pipeline.impulsive_release', False),
-    'body_force': Slot('vx, vy, om, phi, edge, prm', 'sum', 'event_sim.no_force', True),
-    'static_hold': Slot('phi, om, turned, size, pu, pv, g, edge, prm', 'first_held',
-                        'event_sim.no_hold', True),
-    'impact': Slot('rx, ry, vx, vy, om, rho2, prm', 'one', 'event_sim.sticking_law', True),
-    'check': Slot('outcome, release, edge, ctx, prm', 'first_change', 'pipeline.no_check',
-                  False),
-    'closed_motion': Slot('edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec', 'one',
+    'perturb': Slot('w, h, z0, z1, prm', 'w, h', 'chain_wh', 'pipeline.no_perturbation', False),
+    'release': Slot('edge, R, w, h, ctx, prm', 'status, x0, y0, phi0, vx, vy, om', 'one',
+                    'pipeline.impulsive_release', False),
+    'body_force': Slot('vx, vy, om, phi, edge, prm', 'fx, fy, tq', 'sum', 'event_sim.no_force',
+                       True),
+    'contact_load': Slot('phase, n, vslip, om, phi, edge, prm', 'ft, tq', 'sum',
+                         'event_sim.no_contact_load', True),
+    'static_hold': Slot('phi, om, turned, size, pu, pv, g, edge, prm', 'held, turn',
+                        'first_held', 'event_sim.no_hold', True),
+    'impact': Slot('rx, ry, vx, vy, om, rho2, prm', 'vx, vy, om, bounces', 'one',
+                   'event_sim.sticking_law', True),
+    'check': Slot('outcome, release, edge, ctx, prm', 'status', 'first_change',
+                  'pipeline.no_check', False),
+    'closed_motion': Slot('edge, x0, y0, phi0, vx, vy, om, ctx, prm, rec', 'outcome', 'one',
                           'pipeline.closed_motion', False),
 }
 SLOTS = tuple(SLOT_TABLE)
@@ -94,12 +99,12 @@ def event_simulated(filled):
     """
     Tell whether a throw with these filled slots runs in the event simulator.
 
-    A body force or a static hold needs it; so does an impact law, unless the same effect set
-    brings its own closed-form motion (liftoff: its impact law is for the event simulator it
-    runs itself, and for the whole throw when a force needs the simulator).
+    Every event slot needs it (a force, a contact load, a static hold), except an impact law
+    whose effect set brings its own closed-form motion (liftoff: its impact law is for the
+    event simulator it runs itself, and for the whole throw when a force needs the simulator).
     """
     filled = set(filled)
-    return bool(filled & {'body_force', 'static_hold'}) or (
+    return bool(filled & (set(EVENT_SLOTS) - {'impact'})) or (
         'impact' in filled and 'closed_motion' not in filled)
 
 

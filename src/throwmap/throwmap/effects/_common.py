@@ -15,8 +15,9 @@
 """
 Helpers shared by the effect modules.
 
-The scene's values, number parsing with clear errors, and the frictional impact law (Routh
-with Stronge's restitution) that impact_restitution and liftoff both use.
+The scene's values, number parsing with clear errors, the frictional impact law (Routh with
+Stronge's restitution) that impact_restitution and liftoff both use, and the holding zone of a
+torque that resists a roll (backplate_friction's static hold).
 """
 
 from dataclasses import dataclass
@@ -197,3 +198,27 @@ def routh_stronge_impact(rx, ry, vx, vy, om, rho2, e, mu):
         elif not ends_slip:
             break
     return vx + pt, vy + pn, om + (rx * pn - ry * pt) * inv
+
+
+@njit
+def hold_turn(phi, om, bu_p, bv_p, reach):
+    """
+    Return (held, turn) for a part at rest on pivot p that a resisting torque holds.
+
+    Held while the CM lies within ``reach`` of the pivot's vertical (there the resistance
+    outweighs gravity's torque). ``turn``: the rotation about p that brings the CM just past
+    the holding zone on the side it leans to (on om's side when straight above), where the
+    feeder's vibration lets it fall from rest.
+    """
+    c = math.cos(phi)
+    s = math.sin(phi)
+    cx = -(c * bu_p - s * bv_p)
+    cy = -(s * bu_p + c * bv_p)
+    if abs(cx) > reach:
+        return False, 0.0
+    lc = math.sqrt(cx * cx + cy * cy)
+    side = cx if cx != 0.0 else -om
+    target = math.copysign(min(1.01 * reach, lc), side)
+    alpha = math.atan2(cy, cx)
+    alpha_new = math.acos(target / lc)
+    return True, alpha_new - alpha

@@ -53,6 +53,7 @@ import math
 
 import numpy as np
 
+from ._common import hold_turn
 from ..errors import InputError
 from ..jit import njit
 
@@ -396,22 +397,10 @@ def plate_hold(phi, om, bu_p, bv_p, dmean, g, coef):
     """
     Return (held, turn): whether plate friction holds the part at rest on pivot p.
 
-    dmean: <|r - P|>. ``turn`` is the rotation about p that brings the CM just past the holding
-    zone on the side it leans to.
+    dmean: <|r - P|>: friction outweighs gravity while the CM is within coef dmean / |g| of
+    the pivot's vertical.
     """
-    c = math.cos(phi)
-    s = math.sin(phi)
-    cx = -(c * bu_p - s * bv_p)
-    cy = -(s * bu_p + c * bv_p)
-    reach = coef * dmean / abs(g)       # |c_x| below this: friction outweighs gravity
-    if abs(cx) > reach:
-        return False, 0.0
-    lc = math.sqrt(cx * cx + cy * cy)
-    side = cx if cx != 0.0 else -om
-    target = math.copysign(min(1.01 * reach, lc), side)
-    alpha = math.atan2(cy, cx)
-    alpha_new = math.acos(target / lc)
-    return True, alpha_new - alpha
+    return hold_turn(phi, om, bu_p, bv_p, coef * dmean / abs(g))
 
 
 @njit
