@@ -62,6 +62,7 @@ REGISTRY = (
     'finite_carry',
     'impact_restitution',
     'liftoff',
+    'rolling_resistance',
     'finite_arm',
     'release_noise',
     'sensor_noise',
