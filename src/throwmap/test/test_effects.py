@@ -428,8 +428,8 @@ def test_a_corner_held_by_the_plate_is_released_and_the_throw_settles():
     for R in (0.229999, 0.229791):
         res = model.throw(1, R)
         kinds = [i.kind for i in res.impacts]
-        assert 'held_by_plate' in kinds and model.part.stable[res.edge]
-        held = res.impacts[kinds.index('held_by_plate')]
-        after = res.impacts[kinds.index('held_by_plate') + 1]
+        assert 'held_on_corner' in kinds and model.part.stable[res.edge]
+        held = res.impacts[kinds.index('held_on_corner')]
+        after = res.impacts[kinds.index('held_on_corner') + 1]
         assert held.energy_after <= res.impacts[0].energy_after + 1e-12
         assert after.energy_before <= held.energy_after + 1e-12

@@ -159,3 +159,18 @@ def test_a_missing_or_negative_lever_is_refused_with_the_fix():
     data['effects'] = []
     with pytest.raises(InputError, match='effect rolling_resistance'):
         Scene(data)
+
+
+def test_the_foam_holds_more_parts_on_a_corner_as_b_grows():
+    # Held where the CM is within b of the corner's vertical at a turning point: a zone that
+    # widens with b.
+    held = []
+    for lever_mm in (0.0, 2.0, 5.0):
+        model = rolling_scene(lever_mm).model
+        count = 0
+        for edge in (0, 1, 2):
+            for R in np.linspace(0.06, 0.3, 60):
+                kinds = [i.kind for i in model.throw(edge, float(R)).impacts]
+                count += kinds.count('held_on_corner')
+        held.append(count)
+    assert held[0] == 0 < held[1] <= held[2]

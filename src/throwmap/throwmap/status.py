@@ -76,12 +76,12 @@ EV_TIP_FROM_REST = 3      # stopped on an unstable edge, the part tips over from
 EV_BOUNCE = 4             # an impact that sends the part back into flight (event_sim)
 EV_LIFTOFF = 5            # the normal force at the pivot reached zero: back into flight
 EV_SETTLE_SNAP = 6        # rocking energy below settle_energy: laid flat about the pivot
-EV_HELD = 7               # a body force held the part on a corner: released from its edge
+EV_HELD = 7               # a resisting torque held the part on a corner: released from its edge
 
 EVENT_NAMES = {EV_FLIGHT_IMPACT: 'flight', EV_LANDING: 'landing',
                EV_FLAT_LANDING: 'flat_landing', EV_TIP_FROM_REST: 'tip_from_rest',
                EV_BOUNCE: 'bounce', EV_LIFTOFF: 'liftoff', EV_SETTLE_SNAP: 'settle_snap',
-               EV_HELD: 'held_by_plate'}
+               EV_HELD: 'held_on_corner'}
 
 # Columns of a record row (one row per event). The rolling columns (pivot, alpha0, omega0,
 # alpha1, pivot x) describe the roll that ended in a landing (closed-form catch only; nan
