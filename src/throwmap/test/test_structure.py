@@ -35,7 +35,7 @@ from throwmap_testing import SCENES
 PKG = pathlib.Path(__file__).resolve().parents[1] / 'throwmap'
 LAYERS = [
     ('errors', 'jit'),
-    ('status',),
+    ('status', 'bracket'),
     ('part', 'accuracy', 'sensor', 'rk8', 'picard'),
     ('grasp', 'trajectory'),
     ('ballistic',),

@@ -70,6 +70,7 @@ from collections import namedtuple
 import math
 
 from .accuracy import FLIGHT_PICARD, FLIGHT_RK8, ROLL_ENERGY
+from .bracket import make_first_event
 from .catch import flat_landing_edge, record, stays_on_edge, sticking_impact, tip_pivot
 from .jit import njit
 from .picard import make_flight
@@ -319,6 +320,85 @@ def _event(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1):
     return record(rec, nrec, kind, vertex, edge, x, w0, w1, e0, e1, nan, nan, nan, nan, nan)
 
 
+# ------------------------------------------------------------------------------- the state
+# The simulator's state between steps: one record, which every step function takes and returns
+# anew (compiled code does not allocate, so it is a value, not a buffer).
+SimState = namedtuple('SimState', [
+    'mode',                             # MODE_FLIGHT, MODE_CONTACT, MODE_FLAT, MODE_DONE
+    't', 'x', 'y', 'phi', 'vx', 'vy', 'om',     # time; the CM's pose and velocity (frame F)
+    'sep', 'sep_rising',                # flight: the vertex that just left the arm; bounced?
+    'p', 'xp', 'vxp', 'sliding', 'sigma',       # contact: the pivot, its x and slip, slip sign
+    'fit_p', 'fit_ok', 'a0', 'a2',      # roll_method energy: pivot fit_p's torque fit
+    'j_flat',                           # flat: the edge on the arm
+    'out_edge', 'out_r',                # done: the resting edge and R
+    'steps', 'impacts', 'nrec', 't_first', 'k_first', 'x_lo', 'x_hi'])   # what it reports
+# A throw's constants: the start edge, g, the part's, knobs', contact law's and effects'
+# bundles, the event records, the vertices in the start edge's frame and the part's size.
+SimEnv = namedtuple('SimEnv', ['edge', 'g', 'part', 'knobs', 'law', 'prm', 'rec', 'bu', 'bv',
+                               'size'])
+
+
+@njit(inline=True)
+def moved(st, t, x, y, phi, vx, vy, om, steps):
+    return SimState(st.mode, t, x, y, phi, vx, vy, om, st.sep, st.sep_rising, st.p, st.xp,
+                    st.vxp, st.sliding, st.sigma, st.fit_p, st.fit_ok, st.a0, st.a2, st.j_flat,
+                    st.out_edge, st.out_r, steps, st.impacts, st.nrec, st.t_first, st.k_first,
+                    st.x_lo, st.x_hi)
+
+
+@njit(inline=True)
+def counted(st):
+    return moved(st, st.t, st.x, st.y, st.phi, st.vx, st.vy, st.om, st.steps + 1)
+
+
+@njit(inline=True)
+def with_slip(st, vxp, sliding, sigma):
+    return SimState(st.mode, st.t, st.x, st.y, st.phi, st.vx, st.vy, st.om, st.sep,
+                    st.sep_rising, st.p, st.xp, vxp, sliding, sigma, st.fit_p, st.fit_ok, st.a0,
+                    st.a2, st.j_flat, st.out_edge, st.out_r, st.steps, st.impacts, st.nrec,
+                    st.t_first, st.k_first, st.x_lo, st.x_hi)
+
+
+@njit(inline=True)
+def with_fit(st, fit_p, fit_ok, a0, a2):
+    return SimState(st.mode, st.t, st.x, st.y, st.phi, st.vx, st.vy, st.om, st.sep,
+                    st.sep_rising, st.p, st.xp, st.vxp, st.sliding, st.sigma, fit_p, fit_ok, a0,
+                    a2, st.j_flat, st.out_edge, st.out_r, st.steps, st.impacts, st.nrec,
+                    st.t_first, st.k_first, st.x_lo, st.x_hi)
+
+
+@njit(inline=True)
+def with_end(st, out_edge, out_r):
+    return SimState(MODE_DONE, st.t, st.x, st.y, st.phi, st.vx, st.vy, st.om, st.sep,
+                    st.sep_rising, st.p, st.xp, st.vxp, st.sliding, st.sigma, st.fit_p,
+                    st.fit_ok, st.a0, st.a2, st.j_flat, out_edge, out_r, st.steps, st.impacts,
+                    st.nrec, st.t_first, st.k_first, st.x_lo, st.x_hi)
+
+
+@njit(inline=True)
+def ended(st, status):
+    """Return the Outcome of a simulation that stops with ``status`` (not OK)."""
+    return Outcome(status, -1, math.nan, st.t_first, math.nan, st.impacts, st.k_first, st.nrec,
+                   st.x_lo, st.x_hi)
+
+
+@njit(inline=True)
+def hermite_centre_event(tau, args):
+    """Tell whether the instantaneous centre has crossed edge kc's line at tau of a step."""
+    cx, cy, cp, h, bu, bv, kc, side0 = args
+    _, _, ps, us, vs, os_ = hermite_at(cx, cy, cp, tau, h)
+    return (0 if centre_side(us, vs, os_, ps, bu, bv, kc) * side0 > 0.0 else 1), 0
+
+
+@njit(inline=True)
+def hermite_contact_event(tau, args):
+    """Return the vertex at or below the arm and moving down at tau of a step, if any."""
+    cx, cy, cp, h, bu, bv, sep = args
+    xs, ys, ps, us, vs, os_ = hermite_at(cx, cy, cp, tau, h)
+    k, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+    return (1 if k >= 0 else 0), k
+
+
 # ------------------------------------------------------------------------------- the builder
 def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold,
           impact=sticking_law):
@@ -362,6 +442,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
 
     rk8_step = make_step(flight_rhs)
     picard_flight = make_flight(flight_rhs, lowest_approaching, vertex_normal)
+    centre_crossing_in = make_first_event(hermite_centre_event)
+    contact_in_step = make_first_event(hermite_contact_event)
 
     @njit(cache=False)
     def flight_to_contact(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size,
@@ -418,13 +500,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 # higher derivatives blow up on either side. Approach it in steps that shrink
                 # geometrically (GRADE), end a step just past it, and leave it likewise.
                 side0 = centre_side(ua, va, oa, pa, bu, bv, kc)
-                while hi - lo > root:
-                    mid = 0.5 * (lo + hi)
-                    _, _, ps, us, vs, os_ = hermite_at(cx, cy, cp, mid, h_try)
-                    if centre_side(us, vs, os_, ps, bu, bv, kc) * side0 > 0.0:
-                        lo = mid
-                    else:
-                        hi = mid
+                hi, _, _ = centre_crossing_in(lo, hi, root, 1, 0,
+                                              (cx, cy, cp, h_try, bu, bv, kc, side0))
                 passed = hi <= h_fine
                 h_step = hi if passed else (1.0 - 1.0 / GRADE) * hi
                 x1, y1, p1, vx1, vy1, om1, ax1, ay1, ao1, err = rk8_step(
@@ -465,16 +542,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 ax0, ay0, ao0 = ax1, ay1, ao1
                 t += h_step
                 continue
-            hi = tau
-            while hi - lo > root:
-                mid = 0.5 * (lo + hi)
-                xs, ys, ps, us, vs, os_ = hermite_at(cx, cy, cp, mid, h_step)
-                km, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
-                if km >= 0:
-                    hi = mid
-                    hit = km
-                else:
-                    lo = mid
+            hi, _, hit = contact_in_step(lo, tau, root, 1, hit,
+                                         (cx, cy, cp, h_step, bu, bv, sep))
             xe, ye, pe, vxe, vye, ome, _, _, _, _ = rk8_step(x, y, phi, vx, vy, om, hi, ax0, ay0,
                                                              ao0, g, rho2, edge, prm)
             k2, _ = lowest_approaching(xe, ye, pe, vxe, vye, ome, bu, bv, sep)
@@ -681,447 +750,528 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         na = n - nb
         return fx + ft, na, nb
 
+    # ------------------------------------------------------------ the step functions
+    # Each takes the simulator's state (a SimState) and the throw's constants (a SimEnv) and
+    # returns the next state; simulate runs them by mode.
+
+    @njit(cache=False, inline=True)
+    def rk4_flight_event(tau, args):
+        """Return the vertex that meets the arm at the end of an rk4 flight step of tau."""
+        x, y, phi, vx, vy, om, g, rho2, edge, prm, bu, bv, sep = args
+        xm, ym, pm, vxm, vym, omm = flight_step(x, y, phi, vx, vy, om, tau, g, rho2, edge, prm)
+        k, _ = lowest_approaching(xm, ym, pm, vxm, vym, omm, bu, bv, sep)
+        return (1 if k >= 0 else 0), k
+
+    contact_in_rk4_step = make_first_event(rk4_flight_event)
+
+    @njit(cache=False)
+    def rk4_flight_to_contact(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, edge,
+                              prm, knobs, steps):
+        """
+        Fly with RK4 steps of integrator_step until a vertex meets the arm moving down.
+
+        Returns (status, vertex, x, y, phi, vx, vy, om, t, steps) at the crossing, bisected on
+        re-integrated sub-steps. A graze shorter than a step is missed.
+        """
+        dt = knobs.integrator_step
+        while True:
+            x1, y1, p1, vx1, vy1, om1 = flight_step(x, y, phi, vx, vy, om, dt, g, rho2, edge, prm)
+            if not (math.isfinite(y1) and math.isfinite(om1)):
+                return ERR_NONFINITE, -1, x, y, phi, vx, vy, om, t, steps
+            if sep >= 0:
+                h1, un1 = vertex_normal(y1, p1, vy1, om1, bu[sep], bv[sep])
+                if h1 > 0.0 or (sep_rising and un1 < 0.0):
+                    sep = -1
+            k, _ = lowest_approaching(x1, y1, p1, vx1, vy1, om1, bu, bv, sep)
+            if k >= 0:
+                break
+            x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
+            t += dt
+            steps += 1
+            if steps > knobs.max_sim_steps:
+                return ERR_SIM_CAP, -1, x, y, phi, vx, vy, om, t, steps
+        hi, _, k = contact_in_rk4_step(
+            0.0, dt, knobs.contact_root_tol, 1, k,
+            (x, y, phi, vx, vy, om, g, rho2, edge, prm, bu, bv, sep))
+        x, y, phi, vx, vy, om = flight_step(x, y, phi, vx, vy, om, hi, g, rho2, edge, prm)
+        k2, _ = lowest_approaching(x, y, phi, vx, vy, om, bu, bv, sep)
+        if k2 >= 0:
+            k = k2
+        return OK, k, x, y, phi, vx, vy, om, t + hi, steps
+
+    @njit(cache=False, inline=True)
+    def fly(st, env):
+        """Fly to the next contact: return (status, vertex, the state there)."""
+        knobs = env.knobs
+        rho2 = env.part.rho2
+        if knobs.flight_method == FLIGHT_RK8:
+            code, k, x, y, phi, vx, vy, om, t, steps = flight_to_contact(
+                st.x, st.y, st.phi, st.vx, st.vy, st.om, st.t, st.sep, st.sep_rising, env.g,
+                rho2, env.bu, env.bv, env.size, env.edge, env.prm, knobs, st.steps)
+        elif knobs.flight_method == FLIGHT_PICARD:
+            code, k, x, y, phi, vx, vy, om, t, steps, _, _ = picard_flight(
+                st.x, st.y, st.phi, st.vx, st.vy, st.om, st.t, st.sep, st.sep_rising, env.g,
+                rho2, env.bu, env.bv, env.size, env.edge, env.prm, knobs, st.steps)
+        else:
+            code, k, x, y, phi, vx, vy, om, t, steps = rk4_flight_to_contact(
+                st.x, st.y, st.phi, st.vx, st.vy, st.om, st.t, st.sep, st.sep_rising, env.g,
+                rho2, env.bu, env.bv, env.edge, env.prm, knobs, st.steps)
+        return code, k, moved(st, t, x, y, phi, vx, vy, om, steps)
+
+    @njit(cache=False, inline=True)
+    def lay_flat(st, env, q, j, xq, om_before, e_before, kind):
+        """
+        Land edge j flat with its vertex q at xq: the two-point plastic impact.
+
+        Vertical velocity and rotation stop; the tangential impulse is clipped to mu times the
+        normal one. With settle_rule first_stable a stable edge ends the catch.
+        """
+        part = env.part
+        x_l = xq if j == q else xq - part.edge_len[j]
+        vx, om, vy = flat_impact(st.vx, st.vy, env.law.mu)
+        x = x_l - part.u_l[j]
+        y = part.d[j]
+        nrec = _event(env.rec, st.nrec, kind, q, j, xq, om_before, 0.0, e_before,
+                      energy(vx, vy, om, y, env.g, part.rho2))
+        mode = MODE_FLAT
+        out_edge = -1
+        out_r = math.nan
+        if env.knobs.first_stable and part.stable[j]:
+            mode = MODE_DONE
+            out_edge = j
+            out_r = x
+        return SimState(mode, st.t, x, y, st.phi, vx, vy, om, st.sep, st.sep_rising, st.p,
+                        st.xp, st.vxp, st.sliding, st.sigma, st.fit_p, st.fit_ok, st.a0, st.a2,
+                        j, out_edge, out_r, st.steps, st.impacts, nrec, st.t_first, st.k_first,
+                        min(st.x_lo, x_l), max(st.x_hi, x_l + part.edge_len[j]))
+
+    @njit(cache=False, inline=True)
+    def on_pivot(st, env, p, xp, vx, vy, om, ry, nrec):
+        """Begin a contact phase at vertex p (rolling, or sliding as contact_mode says)."""
+        vxp = vx - om * ry
+        sliding, sigma = contact_mode(vxp, xp, st.phi, om, p, env.bu, env.bv, env.g,
+                                      env.part.rho2, env.law, env.edge, env.prm)
+        return SimState(MODE_CONTACT, st.t, st.x, st.y, st.phi, vx, vy, om, -1, False, p, xp,
+                        vxp, sliding, sigma, st.fit_p, st.fit_ok, st.a0, st.a2, st.j_flat,
+                        st.out_edge, st.out_r, st.steps, st.impacts, nrec, st.t_first,
+                        st.k_first, st.x_lo, st.x_hi)
+
+    @njit(cache=False, inline=True)
+    def resolve_impact(st, env, q, j, pivot, xq, rx, ry, e_before, kind):
+        """
+        Resolve vertex q hitting the arm at xq, (rx, ry) from the CM: the one impact code.
+
+        ``pivot``: the vertex the part rolled or slid on (-1 from flight); ``j``: the edge
+        from it to q (-1: none). The impact hook gives the velocities after; if they would
+        drive the old pivot into the arm, edge j lands flat instead. A bounce the simulation
+        resolves flies on; else the vertex stays on the arm (its normal velocity removed, a
+        pinned pivot caught sticking), the catch ends on a stable edge j when the settle rule
+        says so, or a contact phase begins at q. ``kind``: the event recorded for a vertex
+        that stays (EV_FLIGHT_IMPACT, EV_LANDING).
+        """
+        part = env.part
+        g = env.g
+        rho2 = part.rho2
+        bu = env.bu
+        bv = env.bv
+        vx, vy, om, y = st.vx, st.vy, st.om, st.y
+        vxa, vya, oma, bounces = impact(rx, ry, vx, vy, om, rho2, env.prm)
+        if pivot >= 0 and j >= 0:
+            c = math.cos(st.phi)
+            s = math.sin(st.phi)
+            if vya + oma * (c * bu[pivot] - s * bv[pivot]) < 0.0:
+                return lay_flat(st, env, q, j, xq, om, e_before, EV_LANDING)
+        if bounces and bounce_resolved(rx, ry, vxa, vya, oma, st.phi, g, rho2,
+                                       env.knobs.contact_root_tol,
+                                       abs(st.x) + abs(y) + env.size, env.edge, env.prm,
+                                       env.law.unilateral):
+            nrec = _event(env.rec, st.nrec, EV_BOUNCE, q, j, xq, om, oma, e_before,
+                          energy(vxa, vya, oma, y, g, rho2))
+            mode = MODE_FLIGHT
+            out_edge = -1
+            out_r = math.nan
+            if env.knobs.first_stable and j >= 0 and part.stable[j]:
+                mode = MODE_DONE
+                out_edge = j
+                out_r = (xq if j == q else xq - part.edge_len[j]) - part.u_l[j]
+            return SimState(mode, st.t, st.x, y, st.phi, vxa, vya, oma, q, True, st.p, st.xp,
+                            st.vxp, st.sliding, st.sigma, st.fit_p, st.fit_ok, st.a0, st.a2,
+                            st.j_flat, out_edge, out_r, st.steps, st.impacts, nrec, st.t_first,
+                            st.k_first, st.x_lo, st.x_hi)
+        vxa, vya, oma = remove_normal(rx, ry, vxa, vya, oma, rho2)
+        if not env.law.unilateral:
+            # a pinned pivot: the foam catches a vertex that is still slipping
+            vxa, vya, oma = sticking_impact(rx, ry, vxa, vya, oma, rho2)
+        e_after = energy(vxa, vya, oma, y, g, rho2)
+        nrec = _event(env.rec, st.nrec, kind, q, j, xq, om, oma, e_before, e_after)
+        if j >= 0 and part.stable[j]:
+            x_l = xq if j == q else xq - part.edge_len[j]
+            g_abs = -g
+            ke = e_after - g_abs * part.d[j]
+            lq = math.sqrt(bu[q] * bu[q] + bv[q] * bv[q])
+            lp = math.sqrt(bu[pivot] * bu[pivot] + bv[pivot] * bv[pivot])
+            exact_rule = env.law.sticking and math.isinf(env.law.mu)
+            settled = env.knobs.first_stable or (
+                exact_rule and stays_on_edge(ke, lq, lp, part.d[j], g_abs))
+            if not settled and not exact_rule and ke <= env.knobs.settle_energy:
+                nrec = _event(env.rec, nrec, EV_SETTLE_SNAP, q, j, xq, oma, 0.0, e_after,
+                              g_abs * part.d[j])
+                settled = True
+            if settled:
+                return SimState(MODE_DONE, st.t, st.x, y, st.phi, vxa, vya, oma, st.sep,
+                                st.sep_rising, st.p, st.xp, st.vxp, st.sliding, st.sigma,
+                                st.fit_p, st.fit_ok, st.a0, st.a2, st.j_flat, j,
+                                x_l - part.u_l[j], st.steps, st.impacts, nrec, st.t_first,
+                                st.k_first, st.x_lo, st.x_hi)
+        return on_pivot(st, env, q, xq, vxa, vya, oma, ry, nrec)
+
+    @njit(cache=False, inline=True)
+    def touch_down(st, env, k):
+        """Flight ends with vertex k on the arm: an edge at k lying flat lands, else impact."""
+        part = env.part
+        c = math.cos(st.phi)
+        s = math.sin(st.phi)
+        rx = c * env.bu[k] - s * env.bv[k]
+        ry = s * env.bu[k] + c * env.bv[k]
+        y = -ry      # put the vertex exactly on the arm (error below root_tol * |v|)
+        t_first, k_first = st.t_first, st.k_first
+        if k_first < 0:
+            k_first = k
+            t_first = st.t
+        xk = st.x + rx
+        e_before = energy(st.vx, st.vy, st.om, y, env.g, part.rho2)
+        alpha = math.atan2(-ry, -rx)
+        jf = flat_landing_edge(alpha, k, env.knobs.flat_landing_tol, part)
+        phi = st.phi
+        if jf >= 0:
+            # An edge at V^k lies flat: laid exactly flat at the vertex that hit (a
+            # sub-tolerance turn about it), it lands on both corners.
+            phi += (part.acw[k] if jf == k else part.accw[k]) - alpha
+        st = SimState(st.mode, st.t, st.x, y, phi, st.vx, st.vy, st.om, -1, st.sep_rising, st.p,
+                      st.xp, st.vxp, st.sliding, st.sigma, st.fit_p, st.fit_ok, st.a0, st.a2,
+                      st.j_flat, st.out_edge, st.out_r, st.steps, st.impacts + 1, st.nrec,
+                      t_first, k_first, min(st.x_lo, xk), max(st.x_hi, xk))
+        if jf >= 0:
+            return lay_flat(st, env, k, jf, xk, st.om, e_before, EV_FLAT_LANDING)
+        return resolve_impact(st, env, k, -1, -1, xk, rx, ry, e_before, EV_FLIGHT_IMPACT)
+
+    @njit(cache=False, inline=True)
+    def contact_event_at(tau, args):
+        """Return the event a contact step of tau ends in, and the landing vertex."""
+        xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm = args
+        xm, pm, vm, omm = contact_step(xp, phi, vxp, om, tau, sliding, sigma, bu[p], bv[p], g,
+                                       rho2, law.mu, edge, prm)
+        return contact_trigger(xm, pm, vm, omm, sliding, sigma, p, bu, bv, g, rho2, law, edge,
+                               prm)
+
+    event_in_contact_step = make_first_event(contact_event_at)
+
+    @njit(cache=False, inline=True)
+    def closed_roll(st, env):
+        """
+        Roll about the pinned pivot in closed form (roll_method energy).
+
+        Returns (landing vertex or -1, state): on to the next landing, or to the turning point
+        (then the hold test, and the next roll from rest); -1 with fit_ok cleared when the
+        part rests on the pivot with no hold rule (rk4 steps decide).
+        """
+        part = env.part
+        g = env.g
+        p = st.p
+        bu = env.bu
+        bv = env.bv
+        phi, om, vxp, nrec, fit_ok = st.phi, st.om, st.vxp, st.nrec, st.fit_ok
+        a0, a2 = st.a0, st.a2
+        c = math.cos(phi)
+        s = math.sin(phi)
+        cx = -(c * bu[p] - s * bv[p])
+        cy = -(s * bu[p] + c * bv[p])
+        alpha = math.atan2(cy, cx)
+        lp = math.sqrt(bu[p] * bu[p] + bv[p] * bv[p])
+        inertia = part.rho2 + lp * lp
+        if om > 0.0:
+            sd = 1.0
+        elif om < 0.0:
+            sd = -1.0
+        elif cx > 0.0:
+            sd = -1.0
+        elif cx < 0.0:
+            sd = 1.0
+        else:
+            sd = 1.0 if alpha <= part.acw[p] else -1.0
+        kk = -1
+        if om == 0.0 and sd * g * lp * math.cos(alpha) - a0 <= 0.0:
+            fit_ok = False      # held at rest with no hold rule: rk4 decides
+        else:
+            target = part.acw[p] if sd < 0.0 else part.accw[p]
+            psi_end = max(sd * (target - alpha), 0.0)
+            psi_t = roll_turn(0.5 * om * om, alpha, sd, psi_end, g, lp, inertia, a0, a2)
+            vxp = 0.0
+            if psi_t >= 0.0:
+                phi += sd * psi_t
+                om = 0.0
+                held, dphi = static_hold(phi, 0.0, True, env.size, bu[p], bv[p], g, env.edge,
+                                         env.prm)
+                if held:
+                    phi += dphi
+                    e_now = -g * contact_to_cm(st.xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
+                    nrec = _event(env.rec, nrec, EV_HELD, p, -1, st.xp, 0.0, 0.0, e_now, e_now)
+            else:
+                u_end, _ = roll_u(psi_end, 0.5 * om * om, alpha, sd, g, lp, inertia, a0, a2)
+                phi += target - alpha
+                om = sd * math.sqrt(max(2.0 * u_end, 0.0))
+                kk = (p + 1) % part.n if sd < 0.0 else (p - 1) % part.n
+        return kk, SimState(st.mode, st.t, st.x, st.y, phi, st.vx, st.vy, om, st.sep,
+                            st.sep_rising, p, st.xp, vxp, st.sliding, st.sigma, st.fit_p, fit_ok,
+                            a0, a2, st.j_flat, st.out_edge, st.out_r, st.steps, st.impacts,
+                            nrec, st.t_first, st.k_first, st.x_lo, st.x_hi)
+
+    @njit(cache=False, inline=True)
+    def rk4_contact(st, env):
+        """
+        Run the contact phase in rk4 steps of roll_step to its next event, bisected.
+
+        Returns (status, event code, landing vertex, state); status ERR_SIM_CAP when the
+        steps run out, ERR_NONFINITE when a step is not finite.
+        """
+        part = env.part
+        g = env.g
+        law = env.law
+        edge = env.edge
+        prm = env.prm
+        p = st.p
+        bu = env.bu
+        bv = env.bv
+        rho2 = part.rho2
+        xp, phi, vxp, om = st.xp, st.phi, st.vxp, st.om
+        sliding, sigma = st.sliding, st.sigma
+        rdt = env.knobs.roll_step
+        nrec = st.nrec
+        t = st.t
+        steps = st.steps
+        x_lo, x_hi = st.x_lo, st.x_hi
+        status = OK
+        while True:
+            code, kk = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law,
+                                       edge, prm)
+            if code != NO_EVENT:
+                break
+            xp1, p1, v1, o1 = contact_step(xp, phi, vxp, om, rdt, sliding, sigma, bu[p], bv[p],
+                                           g, rho2, law.mu, edge, prm)
+            if not (math.isfinite(p1) and math.isfinite(o1)):
+                status = ERR_NONFINITE
+                break
+            code, kk = contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, g, rho2, law,
+                                       edge, prm)
+            if code != NO_EVENT:
+                hi, code, kk = event_in_contact_step(
+                    0.0, rdt, env.knobs.contact_root_tol, code, kk,
+                    (xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm))
+                xp, phi, vxp, om = contact_step(xp, phi, vxp, om, hi, sliding, sigma, bu[p],
+                                                bv[p], g, rho2, law.mu, edge, prm)
+                t += hi
+                x_lo = min(x_lo, xp)
+                x_hi = max(x_hi, xp)
+                code2, kk2 = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g,
+                                             rho2, law, edge, prm)
+                if code2 != NO_EVENT:
+                    code = code2
+                    kk = kk2
+                break
+            turned = om * o1 <= 0.0
+            xp, phi, vxp, om = xp1, p1, v1, o1
+            t += rdt
+            x_lo = min(x_lo, xp)
+            x_hi = max(x_hi, xp)
+            if not sliding:
+                held, dphi = static_hold(phi, om, turned, env.size, bu[p], bv[p], g, edge, prm)
+                if held:
+                    # A resisting torque holds the part balanced on a corner; the feeder's
+                    # vibration breaks the tie: turned to the edge of the holding zone on its
+                    # CM's side, it falls from rest.
+                    phi += dphi
+                    e_now = -g * contact_to_cm(xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
+                    om = 0.0
+                    nrec = _event(env.rec, nrec, EV_HELD, p, -1, xp, 0.0, 0.0, e_now, e_now)
+            steps += 1
+            if steps > env.knobs.max_sim_steps:
+                status = ERR_SIM_CAP
+                break
+        return status, code, kk, SimState(st.mode, t, st.x, st.y, phi, st.vx, st.vy, om, st.sep,
+                                          st.sep_rising, p, xp, vxp, sliding, sigma, st.fit_p,
+                                          st.fit_ok, st.a0, st.a2, st.j_flat, st.out_edge,
+                                          st.out_r, steps, st.impacts, nrec, st.t_first,
+                                          st.k_first, x_lo, x_hi)
+
+    @njit(cache=False, inline=True)
+    def contact_event(st, env, code, kk):
+        """Apply a contact phase's event: a slip change, liftoff, or vertex kk landing."""
+        part = env.part
+        g = env.g
+        p = st.p
+        bu = env.bu
+        bv = env.bv
+        rho2 = part.rho2
+        if code == SLIP_REVERSAL:
+            sliding, sigma = contact_mode(0.0, st.xp, st.phi, st.om, p, bu, bv, g, rho2, env.law,
+                                          env.edge, env.prm)
+            return with_slip(st, 0.0, sliding, sigma)
+        if code == STICK_TO_SLIP:
+            _, _, ft, _, _ = contact_accel(st.xp, st.phi, 0.0, st.om, False, 0.0, bu[p], bv[p],
+                                           g, rho2, env.law.mu, env.edge, env.prm)
+            return with_slip(st, st.vxp, True, -math.copysign(1.0, ft))
+        phi, om = st.phi, st.om
+        x, y, vx, vy = contact_to_cm(st.xp, phi, st.vxp, om, bu[p], bv[p])
+        if code == LIFTOFF:
+            e_now = energy(vx, vy, om, y, g, rho2)
+            nrec = _event(env.rec, st.nrec, EV_LIFTOFF, p, -1, st.xp, om, om, e_now, e_now)
+            return SimState(MODE_FLIGHT, st.t, x, y, phi, vx, vy, om, p, False, p, st.xp,
+                            st.vxp, st.sliding, st.sigma, st.fit_p, st.fit_ok, st.a0, st.a2,
+                            st.j_flat, st.out_edge, st.out_r, st.steps, st.impacts, nrec,
+                            st.t_first, st.k_first, st.x_lo, st.x_hi)
+        # Landing of vertex kk while rolling/sliding about p.
+        q = kk
+        n = part.n
+        if q == (p + 1) % n:
+            j = p
+        elif q == (p - 1) % n:
+            j = q
+        else:
+            j = -1
+        e_before = energy(vx, vy, om, y, g, rho2)
+        if j >= 0:
+            # Turn about p until the edge is exactly flat (a sub-root_tol correction), so that
+            # both of its vertices lie on the arm.
+            c = math.cos(phi)
+            s = math.sin(phi)
+            alpha_q = math.atan2(-(s * bu[q] + c * bv[q]), -(c * bu[q] - s * bv[q]))
+            phi += (part.acw[q] if j == q else part.accw[q]) - alpha_q
+            x, y, vx, vy = contact_to_cm(st.xp, phi, st.vxp, om, bu[p], bv[p])
+        c = math.cos(phi)
+        s = math.sin(phi)
+        rx = c * bu[q] - s * bv[q]
+        ry = s * bu[q] + c * bv[q]
+        xq = x + rx
+        st = SimState(st.mode, st.t, x, y, phi, vx, vy, om, st.sep, st.sep_rising, p, st.xp,
+                      st.vxp, st.sliding, st.sigma, st.fit_p, st.fit_ok, st.a0, st.a2, st.j_flat,
+                      st.out_edge, st.out_r, st.steps, st.impacts + 1, st.nrec, st.t_first,
+                      st.k_first, min(st.x_lo, xq), max(st.x_hi, xq))
+        return resolve_impact(st, env, q, j, p, xq, rx, ry, e_before, EV_LANDING)
+
+    @njit(cache=False, inline=True)
+    def flat_step(st, env):
+        """
+        One step flat on edge j_flat.
+
+        At rest on a stable edge the catch ends; a corner whose share of N turns negative (or
+        rest on an unstable edge) starts a roll about the other corner; else the part slides
+        on (RK2: the friction has a constant sign).
+        """
+        part = env.part
+        g = env.g
+        j = st.j_flat
+        x, vx = st.x, st.vx
+        if vx == 0.0 and part.stable[j]:
+            return with_end(st, j, x)
+        mu = env.law.mu
+        ax, na, nb = flat_forces(vx, j, part, g, mu, st.phi, env.edge, env.prm)
+        t = st.t
+        if vx == 0.0 or na < 0.0 or nb < 0.0:
+            # Tip about the vertex that keeps the load; at rest (on an unstable edge) the one
+            # the CM lies beyond.
+            x_l = x + part.u_l[j]
+            if vx == 0.0:
+                p = tip_pivot(j, part)[0]
+            elif na < 0.0:
+                p = (j + 1) % part.n
+            else:
+                p = j
+            xp = x_l + part.edge_len[j] if p != j else x_l
+            om = 0.0
+            vy = 0.0
+            c = math.cos(st.phi)
+            s = math.sin(st.phi)
+            bu = env.bu
+            bv = env.bv
+            if not env.law.unilateral and vx != 0.0:
+                vx, vy, om = sticking_impact(c * bu[p] - s * bv[p], s * bu[p] + c * bv[p], vx,
+                                             0.0, 0.0, part.rho2)
+            e_now = energy(vx, vy, om, st.y, g, part.rho2)
+            nrec = _event(env.rec, st.nrec, EV_TIP_FROM_REST, p, j, xp, 0.0, 0.0, e_now, e_now)
+            st = SimState(st.mode, t, x, st.y, st.phi, vx, vy, om, st.sep, st.sep_rising, st.p,
+                          st.xp, st.vxp, st.sliding, st.sigma, st.fit_p, st.fit_ok, st.a0,
+                          st.a2, j, st.out_edge, st.out_r, st.steps, st.impacts, st.nrec,
+                          st.t_first, st.k_first, min(st.x_lo, xp), max(st.x_hi, xp))
+            st = on_pivot(st, env, p, xp, vx, vy, om, s * bu[p] + c * bv[p], nrec)
+            return st if st.sliding else with_slip(st, 0.0, False, st.sigma)
+        rdt = env.knobs.roll_step
+        v_half = vx + 0.5 * rdt * ax
+        v1 = -vx
+        if v_half * vx > 0.0:
+            ax2, _, _ = flat_forces(v_half, j, part, g, mu, st.phi, env.edge, env.prm)
+            v1 = vx + rdt * ax2
+        if v1 * vx <= 0.0:
+            # Stops within the step: constant deceleration to zero.
+            tau = -vx / ax if ax != 0.0 else 0.0
+            x += 0.5 * vx * tau
+            vx = 0.0
+            t += tau
+        else:
+            x += 0.5 * (vx + v1) * rdt
+            vx = v1
+            t += rdt
+        return SimState(st.mode, t, x, st.y, st.phi, vx, st.vy, st.om, st.sep, st.sep_rising,
+                        st.p, st.xp, st.vxp, st.sliding, st.sigma, st.fit_p, st.fit_ok, st.a0,
+                        st.a2, j, st.out_edge, st.out_r, st.steps, st.impacts, st.nrec,
+                        st.t_first, st.k_first, min(st.x_lo, x + part.u_l[j]),
+                        max(st.x_hi, x + part.u_r[j]))
+
     @njit(cache=False)
     def simulate(edge, x0, y0, phi0, vx0, vy0, om0, g, part, knobs, law, prm, rec):
-        n = part.n
-        rho2 = part.rho2
-        d = part.d
-        u_l = part.u_l
-        edge_len = part.edge_len
-        acw = part.acw
-        accw = part.accw
-        stable = part.stable
-        mu = law.mu
-        unilateral = law.unilateral
-        dt = knobs.integrator_step
-        rdt = knobs.roll_step
-        root = knobs.contact_root_tol
-        settle_e = knobs.settle_energy
-        flat_tol = knobs.flat_landing_tol
-        max_steps = knobs.max_sim_steps
-        max_imp = knobs.max_impacts
-        first_stable = knobs.first_stable
-        exact_rule = law.sticking and math.isinf(mu)
         bu = part.U[edge]
         bv = part.V[edge]
         size = 0.0
-        for k in range(n):
+        for k in range(part.n):
             size = max(size, math.sqrt(bu[k] * bu[k] + bv[k] * bv[k]))
-        g_abs = -g
-        nan = math.nan
-        x, y, phi, vx, vy, om = x0, y0, phi0, vx0, vy0, om0
-        mode = MODE_FLIGHT
-        t = 0.0
-        t_first = nan
-        k_first = -1
-        impacts = 0
-        nrec = 0
-        x_lo = math.inf
-        x_hi = -math.inf
-        steps = 0
-        # contact state
-        p = -1
-        xp = 0.0
-        vxp = 0.0
-        sliding = False
-        sigma = 0.0
-        # The vertex that just left the arm is ignored in flight until it is seen above it, or,
-        # after a bounce (sep_rising: it left moving up), until it is seen coming down again:
-        # a re-contact within one step is then found by the bisection like any other.
-        sep = -1
-        sep_rising = False
-        # closed-form rolls (roll_method 'energy', pinned pivot): the torque fit of pivot fit_p
-        roll_energy = knobs.roll_method == ROLL_ENERGY and not unilateral and not contact_loaded
-        fit_p = -1
-        fit_ok = False
-        a0 = 0.0
-        a2 = 0.0
-        # flat state
-        j_flat = -1
-        out_edge = -1
-        out_r = nan
+        env = SimEnv(edge, g, part, knobs, law, prm, rec, bu, bv, size)
+        st = SimState(MODE_FLIGHT, 0.0, x0, y0, phi0, vx0, vy0, om0, -1, False, -1, 0.0, 0.0,
+                      False, 0.0, -1, False, 0.0, 0.0, -1, -1, math.nan, 0, 0, 0, math.nan, -1,
+                      math.inf, -math.inf)
+        roll_energy = (knobs.roll_method == ROLL_ENERGY and not law.unilateral
+                       and not contact_loaded)
         while True:
-            steps += 1
-            if steps > max_steps:
-                return Outcome(ERR_SIM_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
-                               x_hi)
-            if impacts > max_imp:
-                return Outcome(ERR_SETTLE_CAP, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
-                               x_hi)
-            if mode == MODE_FLIGHT:
-                if knobs.flight_method == FLIGHT_RK8:
-                    code, k, x, y, phi, vx, vy, om, t, steps = flight_to_contact(
-                        x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge,
-                        prm, knobs, steps)
-                    if code != OK:
-                        return Outcome(code, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
-                                       x_hi)
-                elif knobs.flight_method == FLIGHT_PICARD:
-                    code, k, x, y, phi, vx, vy, om, t, steps, _, _ = picard_flight(
-                        x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge,
-                        prm, knobs, steps)
-                    if code != OK:
-                        return Outcome(code, -1, nan, t_first, nan, impacts, k_first, nrec, x_lo,
-                                       x_hi)
+            st = counted(st)
+            if st.steps > knobs.max_sim_steps:
+                return ended(st, ERR_SIM_CAP)
+            if st.impacts > knobs.max_impacts:
+                return ended(st, ERR_SETTLE_CAP)
+            if st.mode == MODE_FLIGHT:
+                code, k, st = fly(st, env)
+                if code != OK:
+                    return ended(st, code)
+                st = touch_down(st, env, k)
+            elif st.mode == MODE_CONTACT:
+                if roll_energy and not st.sliding and st.fit_p != st.p:
+                    fit_ok, a0, a2 = roll_torque_fit(st.phi, bu[st.p], bv[st.p], edge, prm)
+                    st = with_fit(st, st.p, fit_ok, a0, a2)
+                if roll_energy and not st.sliding and st.fit_ok:
+                    kk, st = closed_roll(st, env)
+                    code = NO_EVENT if kk < 0 else LANDING
                 else:
-                    x1, y1, p1, vx1, vy1, om1 = flight_step(x, y, phi, vx, vy, om, dt, g, rho2,
-                                                            edge, prm)
-                    if not (math.isfinite(y1) and math.isfinite(om1)):
-                        return Outcome(ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first,
-                                       nrec, x_lo, x_hi)
-                    if sep >= 0:
-                        h1, un1 = vertex_normal(y1, p1, vy1, om1, bu[sep], bv[sep])
-                        if h1 > 0.0 or (sep_rising and un1 < 0.0):
-                            sep = -1
-                    k, _ = lowest_approaching(x1, y1, p1, vx1, vy1, om1, bu, bv, sep)
-                    if k < 0:
-                        x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
-                        t += dt
-                        continue
-                    lo = 0.0
-                    hi = dt
-                    while hi - lo > root:
-                        mid = 0.5 * (lo + hi)
-                        xm, ym, pm, vxm, vym, omm = flight_step(x, y, phi, vx, vy, om, mid, g,
-                                                                rho2, edge, prm)
-                        km, _ = lowest_approaching(xm, ym, pm, vxm, vym, omm, bu, bv, sep)
-                        if km >= 0:
-                            hi = mid
-                            k = km
-                        else:
-                            lo = mid
-                    x, y, phi, vx, vy, om = flight_step(x, y, phi, vx, vy, om, hi, g, rho2,
-                                                        edge, prm)
-                    t += hi
-                    k2, _ = lowest_approaching(x, y, phi, vx, vy, om, bu, bv, sep)
-                    if k2 >= 0:
-                        k = k2
-                sep = -1
-                c = math.cos(phi)
-                s = math.sin(phi)
-                rx = c * bu[k] - s * bv[k]
-                ry = s * bu[k] + c * bv[k]
-                y = -ry      # put the vertex exactly on the arm (error below root_tol * |v|)
-                if k_first < 0:
-                    k_first = k
-                    t_first = t
-                xk = x + rx
-                x_lo = min(x_lo, xk)
-                x_hi = max(x_hi, xk)
-                e_before = energy(vx, vy, om, y, g, rho2)
-                impacts += 1
-                alpha = math.atan2(-ry, -rx)
-                jf = flat_landing_edge(alpha, k, flat_tol, part)
-                if jf >= 0:
-                    # An edge at V^k lies flat: two-point landing on it, laid exactly flat at
-                    # the vertex that hit (a sub-tolerance turn).
-                    j_flat = jf
-                    phi += (acw[k] if jf == k else accw[k]) - alpha
-                    mode = MODE_FLAT
-                    c = math.cos(phi)
-                    s = math.sin(phi)
-                    x = xk - (c * bu[k] - s * bv[k])
-                    y = d[j_flat]
-                    om_before = om
-                    vx, om, vy = flat_impact(vx, vy, mu)
-                    x_l = x + u_l[j_flat]
-                    x_lo = min(x_lo, x_l)
-                    x_hi = max(x_hi, x_l + edge_len[j_flat])
-                    nrec = _event(rec, nrec, EV_FLAT_LANDING, k, j_flat, xk, om_before, 0.0,
-                                  e_before, energy(vx, vy, om, y, g, rho2))
-                    continue
-                vxa, vya, oma, bounces = impact(rx, ry, vx, vy, om, rho2, prm)
-                if bounces and bounce_resolved(rx, ry, vxa, vya, oma, phi, g, rho2, root,
-                                               abs(x) + abs(y) + size, edge, prm,
-                                               unilateral):
-                    nrec = _event(rec, nrec, EV_BOUNCE, k, -1, xk, om, oma, e_before,
-                                  energy(vxa, vya, oma, y, g, rho2))
-                    vx, vy, om = vxa, vya, oma
-                    sep = k
-                    sep_rising = True
-                    continue
-                vxa, vya, oma = remove_normal(rx, ry, vxa, vya, oma, rho2)
-                if not unilateral:
-                    # a pinned pivot: the foam catches a vertex that is still slipping
-                    vxa, vya, oma = sticking_impact(rx, ry, vxa, vya, oma, rho2)
-                nrec = _event(rec, nrec, EV_FLIGHT_IMPACT, k, -1, xk, om, oma, e_before,
-                              energy(vxa, vya, oma, y, g, rho2))
-                vx, vy, om = vxa, vya, oma
-                p = k
-                xp = xk
-                vxp = vx - om * ry
-                mode = MODE_CONTACT
-                sliding, sigma = contact_mode(vxp, xp, phi, om, p, bu, bv, g, rho2, law, edge,
-                                              prm)
-                continue
-            if mode == MODE_CONTACT:
-                if roll_energy and not sliding and fit_p != p:
-                    fit_ok, a0, a2 = roll_torque_fit(phi, bu[p], bv[p], edge, prm)
-                    fit_p = p
-                if roll_energy and not sliding and fit_ok:
-                    # Roll about the pinned pivot p in closed form: on to the next landing, or to
-                    # the turning point (then the hold test, and the next roll from rest).
-                    c = math.cos(phi)
-                    s = math.sin(phi)
-                    cx = -(c * bu[p] - s * bv[p])
-                    cy = -(s * bu[p] + c * bv[p])
-                    alpha = math.atan2(cy, cx)
-                    lp = math.sqrt(bu[p] * bu[p] + bv[p] * bv[p])
-                    inertia = rho2 + lp * lp
-                    if om > 0.0:
-                        sd = 1.0
-                    elif om < 0.0:
-                        sd = -1.0
-                    elif cx > 0.0:
-                        sd = -1.0
-                    elif cx < 0.0:
-                        sd = 1.0
-                    else:
-                        sd = 1.0 if alpha <= acw[p] else -1.0
-                    if om == 0.0 and sd * g * lp * math.cos(alpha) - a0 <= 0.0:
-                        fit_ok = False      # held at rest with no hold rule: rk4 decides
-                        continue
-                    target = acw[p] if sd < 0.0 else accw[p]
-                    psi_end = max(sd * (target - alpha), 0.0)
-                    psi_t = roll_turn(0.5 * om * om, alpha, sd, psi_end, g, lp, inertia, a0, a2)
-                    if psi_t >= 0.0:
-                        phi += sd * psi_t
-                        om = 0.0
-                        vxp = 0.0
-                        held, dphi = static_hold(phi, 0.0, True, size, bu[p], bv[p], g, edge, prm)
-                        if held:
-                            phi += dphi
-                            e_now = -g * contact_to_cm(xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
-                            nrec = _event(rec, nrec, EV_HELD, p, -1, xp, 0.0, 0.0, e_now, e_now)
-                        continue
-                    u_end, _ = roll_u(psi_end, 0.5 * om * om, alpha, sd, g, lp, inertia, a0, a2)
-                    phi += target - alpha
-                    om = sd * math.sqrt(max(2.0 * u_end, 0.0))
-                    vxp = 0.0
-                    code = LANDING
-                    kk = (p + 1) % n if sd < 0.0 else (p - 1) % n
-                else:
-                    code, kk = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g,
-                                               rho2, law, edge, prm)
-                    if code == NO_EVENT:
-                        xp1, p1, v1, o1 = contact_step(xp, phi, vxp, om, rdt, sliding, sigma,
-                                                       bu[p], bv[p], g, rho2, mu, edge, prm)
-                        if not (math.isfinite(p1) and math.isfinite(o1)):
-                            return Outcome(ERR_NONFINITE, -1, nan, t_first, nan, impacts, k_first,
-                                           nrec, x_lo, x_hi)
-                        code, kk = contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, g,
-                                                   rho2, law, edge, prm)
-                        if code == NO_EVENT:
-                            turned = om * o1 <= 0.0
-                            xp, phi, vxp, om = xp1, p1, v1, o1
-                            t += rdt
-                            x_lo = min(x_lo, xp)
-                            x_hi = max(x_hi, xp)
-                            if not sliding:
-                                held, dphi = static_hold(phi, om, turned, size, bu[p], bv[p], g,
-                                                         edge, prm)
-                                if held:
-                                    # The body force holds the part balanced on a corner; the
-                                    # feeder's vibration breaks the tie: turned to the edge of the
-                                    # holding zone on its CM's side, it falls from rest.
-                                    phi += dphi
-                                    e_now = -g * contact_to_cm(xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
-                                    om = 0.0
-                                    nrec = _event(rec, nrec, EV_HELD, p, -1, xp, 0.0, 0.0, e_now,
-                                                  e_now)
-                            continue
-                        lo = 0.0
-                        hi = rdt
-                        while hi - lo > root:
-                            mid = 0.5 * (lo + hi)
-                            xm, pm, vm, omm = contact_step(xp, phi, vxp, om, mid, sliding, sigma,
-                                                           bu[p], bv[p], g, rho2, mu, edge, prm)
-                            cm_, km_ = contact_trigger(xm, pm, vm, omm, sliding, sigma, p, bu,
-                                                       bv, g, rho2, law, edge, prm)
-                            if cm_ != NO_EVENT:
-                                hi = mid
-                                code = cm_
-                                kk = km_
-                            else:
-                                lo = mid
-                        xp, phi, vxp, om = contact_step(xp, phi, vxp, om, hi, sliding, sigma,
-                                                        bu[p], bv[p], g, rho2, mu, edge, prm)
-                        t += hi
-                        x_lo = min(x_lo, xp)
-                        x_hi = max(x_hi, xp)
-                        code2, kk2 = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv,
-                                                     g, rho2, law, edge, prm)
-                        if code2 != NO_EVENT:
-                            code = code2
-                            kk = kk2
+                    status, code, kk, st = rk4_contact(st, env)
+                    if status != OK:
+                        return ended(st, status)
                 if code == PAINLEVE:
-                    return Outcome(ERR_PAINLEVE, -1, nan, t_first, nan, impacts, k_first, nrec,
-                                   x_lo, x_hi)
-                if code == SLIP_REVERSAL:
-                    vxp = 0.0
-                    sliding, sigma = contact_mode(0.0, xp, phi, om, p, bu, bv, g, rho2, law,
-                                                  edge, prm)
-                    continue
-                if code == STICK_TO_SLIP:
-                    _, _, ft, _, _ = contact_accel(xp, phi, 0.0, om, False, 0.0, bu[p], bv[p], g,
-                                                   rho2, mu, edge, prm)
-                    sliding = True
-                    sigma = -math.copysign(1.0, ft)
-                    continue
-                x, y, vx, vy = contact_to_cm(xp, phi, vxp, om, bu[p], bv[p])
-                if code == LIFTOFF:
-                    e_now = energy(vx, vy, om, y, g, rho2)
-                    nrec = _event(rec, nrec, EV_LIFTOFF, p, -1, xp, om, om, e_now, e_now)
-                    mode = MODE_FLIGHT
-                    sep = p
-                    sep_rising = False
-                    continue
-                # Landing of vertex kk while rolling/sliding about p.
-                q = kk
-                if q == (p + 1) % n:
-                    j = p
-                elif q == (p - 1) % n:
-                    j = q
-                else:
-                    j = -1
-                e_before = energy(vx, vy, om, y, g, rho2)
-                if j >= 0:
-                    # Turn about p until the edge is exactly flat (a sub-root_tol correction),
-                    # so that both of its vertices lie on the arm.
-                    c = math.cos(phi)
-                    s = math.sin(phi)
-                    alpha_q = math.atan2(-(s * bu[q] + c * bv[q]), -(c * bu[q] - s * bv[q]))
-                    phi += (acw[q] if j == q else accw[q]) - alpha_q
-                    x, y, vx, vy = contact_to_cm(xp, phi, vxp, om, bu[p], bv[p])
-                c = math.cos(phi)
-                s = math.sin(phi)
-                rx = c * bu[q] - s * bv[q]
-                ry = s * bu[q] + c * bv[q]
-                xq = x + rx
-                x_lo = min(x_lo, xq)
-                x_hi = max(x_hi, xq)
-                impacts += 1
-                vxa, vya, oma, bounces = impact(rx, ry, vx, vy, om, rho2, prm)
-                # Does the old pivot move into the arm after the impact at q?
-                rpx = c * bu[p] - s * bv[p]
-                vpn = vya + oma * rpx
-                if j >= 0 and vpn < 0.0:
-                    x_l = xq if j == q else xq - edge_len[j]
-                    om_before = om
-                    vx, om, vy = flat_impact(vx, vy, mu)
-                    x = x_l - u_l[j]
-                    y = d[j]
-                    j_flat = j
-                    mode = MODE_FLAT
-                    nrec = _event(rec, nrec, EV_LANDING, q, j, xq, om_before, 0.0, e_before,
-                                  energy(vx, vy, om, y, g, rho2))
-                    if first_stable and stable[j]:
-                        out_edge = j
-                        out_r = x
-                        mode = MODE_DONE
-                    continue
-                if bounces and bounce_resolved(rx, ry, vxa, vya, oma, phi, g, rho2, root,
-                                               abs(x) + abs(y) + size, edge, prm,
-                                               unilateral):
-                    nrec = _event(rec, nrec, EV_BOUNCE, q, j, xq, om, oma, e_before,
-                                  energy(vxa, vya, oma, y, g, rho2))
-                    vx, vy, om = vxa, vya, oma
-                    mode = MODE_FLIGHT
-                    sep = q
-                    sep_rising = True
-                    if first_stable and j >= 0 and stable[j]:
-                        out_edge = j
-                        out_r = (xq if j == q else xq - edge_len[j]) - u_l[j]
-                        mode = MODE_DONE
-                    continue
-                vxa, vya, oma = remove_normal(rx, ry, vxa, vya, oma, rho2)
-                if not unilateral:
-                    vxa, vya, oma = sticking_impact(rx, ry, vxa, vya, oma, rho2)
-                e_after = energy(vxa, vya, oma, y, g, rho2)
-                nrec = _event(rec, nrec, EV_LANDING, q, j, xq, om, oma, e_before, e_after)
-                vx, vy, om = vxa, vya, oma
-                if j >= 0 and stable[j]:
-                    x_l = xq if j == q else xq - edge_len[j]
-                    ke = e_after - g_abs * d[j]
-                    lq = math.sqrt(bu[q] * bu[q] + bv[q] * bv[q])
-                    lp = math.sqrt(bu[p] * bu[p] + bv[p] * bv[p])
-                    if first_stable or (exact_rule and stays_on_edge(ke, lq, lp, d[j], g_abs)):
-                        out_edge = j
-                        out_r = x_l - u_l[j]
-                        mode = MODE_DONE
-                        continue
-                    if not exact_rule and ke <= settle_e:
-                        nrec = _event(rec, nrec, EV_SETTLE_SNAP, q, j, xq, oma, 0.0, e_after,
-                                      g_abs * d[j])
-                        out_edge = j
-                        out_r = x_l - u_l[j]
-                        mode = MODE_DONE
-                        continue
-                p = q
-                xp = xq
-                vxp = vx - om * ry
-                sliding, sigma = contact_mode(vxp, xp, phi, om, p, bu, bv, g, rho2, law, edge,
-                                              prm)
-                continue
-            if mode == MODE_FLAT:
-                j = j_flat
-                if vx == 0.0 and stable[j]:
-                    out_edge = j
-                    out_r = x
-                    mode = MODE_DONE
-                    continue
-                ax, na, nb = flat_forces(vx, j, part, g, mu, phi, edge, prm)
-                if vx == 0.0 or na < 0.0 or nb < 0.0:
-                    # Tip about the vertex that keeps the load; at rest (on an unstable edge)
-                    # the one the CM lies beyond.
-                    x_l = x + u_l[j]
-                    if vx == 0.0:
-                        p = tip_pivot(j, part)[0]
-                    elif na < 0.0:
-                        p = (j + 1) % n
-                    else:
-                        p = j
-                    xp = x_l + edge_len[j] if p != j else x_l
-                    x_lo = min(x_lo, xp)
-                    x_hi = max(x_hi, xp)
-                    om = 0.0
-                    vy = 0.0
-                    c = math.cos(phi)
-                    s = math.sin(phi)
-                    if not unilateral and vx != 0.0:
-                        vx, vy, om = sticking_impact(c * bu[p] - s * bv[p],
-                                                     s * bu[p] + c * bv[p], vx, 0.0, 0.0, rho2)
-                    vxp = vx - om * (s * bu[p] + c * bv[p])
-                    e_now = energy(vx, vy, om, y, g, rho2)
-                    nrec = _event(rec, nrec, EV_TIP_FROM_REST, p, j, xp, 0.0, 0.0, e_now, e_now)
-                    mode = MODE_CONTACT
-                    sliding, sigma = contact_mode(vxp, xp, phi, om, p, bu, bv, g, rho2, law,
-                                                  edge, prm)
-                    if not sliding:
-                        vxp = 0.0
-                    continue
-                # Slide flat: ax is constant-sign friction plus the body force; RK2 is plenty.
-                v_half = vx + 0.5 * rdt * ax
-                v1 = -vx
-                if v_half * vx > 0.0:
-                    ax2, _, _ = flat_forces(v_half, j, part, g, mu, phi, edge, prm)
-                    v1 = vx + rdt * ax2
-                if v1 * vx <= 0.0:
-                    # Stops within the step: constant deceleration to zero.
-                    tau = -vx / ax if ax != 0.0 else 0.0
-                    x += 0.5 * vx * tau
-                    vx = 0.0
-                    t += tau
-                else:
-                    x += 0.5 * (vx + v1) * rdt
-                    vx = v1
-                    t += rdt
-                x_lo = min(x_lo, x + u_l[j])
-                x_hi = max(x_hi, x + part.u_r[j])
-                continue
-            # MODE_DONE: snap the net rotation to the resting pose on out_edge.
-            target = part.rest_angle[out_edge] - part.rest_angle[edge]
-            rot = target + 2.0 * math.pi * round((phi - target) / (2.0 * math.pi))
-            return Outcome(OK, out_edge, out_r, t_first, rot, impacts, k_first, nrec, x_lo, x_hi)
+                    return ended(st, ERR_PAINLEVE)
+                if code != NO_EVENT:
+                    st = contact_event(st, env, code, kk)
+            elif st.mode == MODE_FLAT:
+                st = flat_step(st, env)
+            else:
+                # MODE_DONE: snap the net rotation to the resting pose on out_edge.
+                target = part.rest_angle[st.out_edge] - part.rest_angle[edge]
+                rot = target + 2.0 * math.pi * round((st.phi - target) / (2.0 * math.pi))
+                return Outcome(OK, st.out_edge, st.out_r, st.t_first, rot, st.impacts,
+                               st.k_first, st.nrec, st.x_lo, st.x_hi)
 
     return simulate

@@ -52,6 +52,7 @@ import math
 
 import numpy as np
 
+from .bracket import make_crossing, make_first_event
 from .jit import njit
 from .status import ERR_NONFINITE, ERR_SIM_CAP, OK
 
@@ -177,38 +178,29 @@ def centre_side_at(cx, cy, cp, tau, h, bu, bv, k):
     return centre_edge(bx, by, o, bu, bv, k)
 
 
+@njit(inline=True)
+def signed_centre_side(tau, args):
+    """Return om times the centre's side of edge k at tau, times ``sign``."""
+    cx, cy, cp, h, bu, bv, k, sign = args
+    return sign * centre_side_at(cx, cy, cp, tau, h, bu, bv, k)[0]
+
+
+centre_side_crossing = make_crossing(signed_centre_side)
+
+
 @njit
 def side_root(cx, cy, cp, h, bu, bv, k, a, b, fa, fb, tol):
     """
     Return a time within ``tol`` after the centre crosses edge k's line in [a, b], or -1.
 
-    fa, fb: om times the side at a and b (a sign change: else -1). Regula falsi, Illinois.
+    fa, fb: om times the side at a and b (a sign change: else -1). Regula falsi, Illinois
+    (throwmap.bracket), on the side signed to start positive.
     """
     if not ((fa > 0.0 and fb <= 0.0) or (fa < 0.0 and fb >= 0.0)):
         return -1.0
-    side = 0
-    for _ in range(200):
-        if b - a <= tol:
-            break
-        m = b - fb * (b - a) / (fb - fa)
-        if not (a < m < b):
-            m = 0.5 * (a + b)
-        fm, _ = centre_side_at(cx, cy, cp, m, h, bu, bv, k)
-        if fm != 0.0 and (fm > 0.0) == (fa > 0.0):
-            a = m
-            fa = fm
-            if side == -1:
-                fb *= 0.5
-            side = -1
-        else:
-            b = m
-            fb = fm
-            if side == 1:
-                fa *= 0.5
-            side = 1
-            if fm == 0.0:
-                break
-    return b
+    sign = 1.0 if fa > 0.0 else -1.0
+    return centre_side_crossing(a, b, sign * fa, sign * fb, tol, 200,
+                                (cx, cy, cp, h, bu, bv, k, sign))
 
 
 @njit
@@ -306,43 +298,29 @@ def vertex_height(cx, cy, cp, tau, h, bu_k, bv_k):
     return y + math.sin(p) * bu_k + math.cos(p) * bv_k
 
 
+@njit(inline=True)
+def vertex_height_of(tau, args):
+    """Return the height over the arm of the vertex (bu_k, bv_k) at tau of a piece."""
+    cx, cy, cp, h, bu_k, bv_k = args
+    return vertex_height(cx, cy, cp, tau, h, bu_k, bv_k)
+
+
+vertex_height_crossing = make_crossing(vertex_height_of)
+
+
 @njit
 def vertex_crossing(cx, cy, cp, h, lo, hi, bu_k, bv_k, root):
     """
     Return a time in (lo, hi] within ``root`` after the vertex's height crosses zero, or -1.
 
     The height is above zero at lo and at or below it at hi (else -1: the caller bisects);
-    the Illinois variant of regula falsi keeps the crossing bracketed.
+    Illinois regula falsi (throwmap.bracket) keeps the crossing bracketed.
     """
     fa = vertex_height(cx, cy, cp, lo, h, bu_k, bv_k)
     fb = vertex_height(cx, cy, cp, hi, h, bu_k, bv_k)
     if not (fa > 0.0 and fb <= 0.0):
         return -1.0
-    a = lo
-    b = hi
-    side = 0
-    for _ in range(100):
-        if b - a <= root:
-            return b
-        m = b - fb * (b - a) / (fb - fa)
-        if not (a < m < b):
-            m = 0.5 * (a + b)
-        fm = vertex_height(cx, cy, cp, m, h, bu_k, bv_k)
-        if fm > 0.0:
-            a = m
-            fa = fm
-            if side == -1:
-                fb *= 0.5
-            side = -1
-        else:
-            b = m
-            fb = fm
-            if side == 1:
-                fa *= 0.5
-            side = 1
-        if fm == 0.0 or (side == 1 and b - a > 0.0 and abs(fm) < 1e-300):
-            return b
-    return b
+    return vertex_height_crossing(lo, hi, fa, fb, root, 100, (cx, cy, cp, h, bu_k, bv_k))
 
 
 def make_flight(rhs, lowest_approaching, vertex_normal, n=NODES):
@@ -361,6 +339,16 @@ def make_flight(rhs, lowest_approaching, vertex_normal, n=NODES):
     dense = njit(cache=False)(space['dense'])
     sub = njit(cache=False)(space['sub'])
     linear = njit(cache=False)(space['linear'])
+
+    @njit(cache=False, inline=True)
+    def contact_at(tau, args):
+        """Return the vertex at or below the arm and moving down at tau of a piece, if any."""
+        cx, cy, cp, h, bu, bv, sep = args
+        xs, ys, ps, us, vs, os_ = dense_state(cx, cy, cp, tau / h, h)
+        k, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+        return (1 if k >= 0 else 0), k
+
+    contact_in_piece = make_first_event(contact_at)
 
     @njit(cache=False)
     def piece(x, y, phi, vx, vy, om, h, a0x, a0y, a0o, dax, day, dao, g, rho2, bu, bv, size,
@@ -513,16 +501,7 @@ def make_flight(rhs, lowest_approaching, vertex_normal, n=NODES):
                 if hi < 0.0 or tk < hi:
                     hi = tk
             if hi < 0.0:
-                hi = tau
-                while hi - lo > root:
-                    mid = 0.5 * (lo + hi)
-                    xs, ys, ps, us, vs, os_ = dense_state(cx, cy, cp, mid / h, h)
-                    km, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
-                    if km >= 0:
-                        hi = mid
-                        hit = km
-                    else:
-                        lo = mid
+                hi, _, hit = contact_in_piece(lo, tau, root, 1, hit, (cx, cy, cp, h, bu, bv, sep))
             xe, ye, pe, vxe, vye, ome = dense_state(cx, cy, cp, hi / h, h)
             k2, _ = lowest_approaching(xe, ye, pe, vxe, vye, ome, bu, bv, sep)
             if k2 >= 0:
