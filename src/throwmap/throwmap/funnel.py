@@ -156,6 +156,7 @@ class CellSystem:
     footprint: float
     arm_length: float
     samples: int
+    progress: np.ndarray = field(default=None, repr=False)  # (K, N): least outward jog, m
     succ_f: np.ndarray = field(default=None, repr=False)   # float32 copy for batched images
 
     @property
@@ -234,9 +235,10 @@ def build_system(scene, speeds, robust=0.005, cells=160, samples=5, sensor_radiu
     N = E * cells
     succ = np.zeros((K, N, N), dtype=np.bool_)
     escape = np.zeros((K, N), dtype=np.bool_)
+    progress = np.zeros((K, N))
     lo = hi = None
     for k, w in enumerate(speeds):
-        c_lo, c_hi, s_lo, s_hi, esc, _ = cell_map(model, model.h, float(w), dh, robust * w,
+        c_lo, c_hi, s_lo, s_hi, esc, prog = cell_map(model, model.h, float(w), dh, robust * w,
                                                   arm, cells, samples)
         if lo is None:
             lo, hi = c_lo[edges].copy(), c_hi[edges].copy()
@@ -244,6 +246,7 @@ def build_system(scene, speeds, robust=0.005, cells=160, samples=5, sensor_radiu
         assert np.allclose(lo, c_lo[edges]) and np.allclose(hi, c_hi[edges])
         for i, e in enumerate(edges):
             escape[k, i * cells:(i + 1) * cells] = esc[e]
+            progress[k, i * cells:(i + 1) * cells] = prog[e]
             for j, f in enumerate(edges):
                 a = s_lo[e, :, f]
                 b = s_hi[e, :, f]
@@ -266,7 +269,7 @@ def build_system(scene, speeds, robust=0.005, cells=160, samples=5, sensor_radiu
     return CellSystem(np.asarray(speeds, dtype=float), float(model.h), dh,
                       robust * np.asarray(speeds, dtype=float), float(robust), edges, cells,
                       lo, hi, succ, escape, can_see, can_miss, goal, int(goal_edge),
-                      float(sensor_radius), float(footprint), float(arm), samples,
+                      float(sensor_radius), float(footprint), float(arm), samples, progress,
                       succ.astype(np.float32))
 
 
@@ -681,3 +684,40 @@ class Tracker:
             return 'anomaly'
         self.know = know
         return 'ready' if self.system.proven(know, bit) else 'tracking'
+
+
+def plot_throws(result, path, title=''):
+    """Write a PNG: throws to the first proven ready per start of the grid, per policy."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    edges, radii = result.starts
+    order = np.lexsort((radii, edges))
+    x = np.arange(len(order))
+    fig, ax = plt.subplots(figsize=(10, 4.5))
+    cap = 0.0
+    series = [('full-knowledge bound', result.bound, 'k', 'v')]
+    series += [(name, result.runs[name].throws, color, marker) for name, color, marker in
+               (('fixed', 'tab:blue', 'o'), ('open-loop', 'tab:orange', 's'),
+                ('sensor-based', 'tab:green', 'D'))]
+    for _, t, _, _ in series:
+        finite = t[np.isfinite(t)]
+        cap = max(cap, float(finite.max()) if finite.size else 0.0)
+    cap = 1.1 * cap + 1.0
+    for name, t, color, marker in series:
+        shown = np.where(np.isfinite(t), t, cap)[order]
+        f = summary(t)
+        label = (f'{name}: mean {f["mean"]:.1f}, p95 {f["p95"]:.0f}, worst {f["worst"]:.0f}'
+                 + (f' ({f["never"]} never, drawn at the top)' if f['never'] else ''))
+        ax.plot(x, shown, marker=marker, ms=3.5, lw=0.8, color=color, label=label)
+    ticks = [i for i in range(len(order)) if i == 0 or edges[order[i]] != edges[order[i - 1]]]
+    ax.set_xticks(ticks, [f'edge {edges[order[i]]}' for i in ticks])
+    ax.set_xlabel('start of the grid (by edge, then R from R_min up)')
+    ax.set_ylabel('throws to the first proven ready')
+    ax.set_yscale('symlog', linthresh=10)
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
