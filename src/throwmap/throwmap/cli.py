@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""``throwmap`` command line: grasp, throw, orbit, limit-set, basin, design, plot, design-search, funnel."""
+"""``throwmap`` command line: grasp, throw, orbit, limit-set, basin, design, plot, ..., funnel."""
 
 import argparse
 import itertools
@@ -785,8 +785,8 @@ def cmd_funnel(scene, args, out):
               f'..{math.degrees(s.speeds[-1]):.1f} deg/s, per-throw errors s = {s.robust:g} '
               f'(+-{s.dh * 1000:.3f} mm offset, +-s w speed), {s.m} cells per edge up to the '
               f"arm's end {s.arm_length * 100:.1f} cm; sensor {s.sensor_radius * 100:.2f} cm, "
-              f'goal edge {s.goal_edge}; {len(res.starts[0])} starts (the design search\'s '
-              f'grid); {seconds:.1f} s\n')
+              f'goal edge {s.goal_edge}; {len(res.starts[0])} starts (the design search grid); '
+              f'{seconds:.1f} s\n')
     out.write('  throws to the first proven ready (a detection with every cell of the '
               'knowledge on the goal edge):\n')
     rows = [_funnel_row('full-knowledge bound', figures['bound'])]
@@ -880,7 +880,7 @@ def build_parser():
     p.add_argument('--scheduler', help='Dask scheduler address for a catalogue (default: a '
                    'local cluster on 127.0.0.1)')
     p.add_argument('--out', help='write heat maps, the Pareto plot and the chosen scene here')
-    p = add('funnel', 'choose each throw\'s release speed from the sensor\'s bits: throws to '
+    p = add('funnel', "choose each throw's release speed from the sensor's bits: throws to "
             'the first proven ready for the fixed design, an open-loop and a sensor-based '
             'policy, and the full-knowledge bound (docs/funnel.md)')
     p.add_argument('--speeds', required=True, help='the speeds the actuator allows, deg/s: '

@@ -104,7 +104,7 @@ def arm_scene(scene, arm_length=None):
     if length is None:
         raise InputError('arm.length', f'{scene.name} gives no arm length, and the funnel needs '
                          "the arm's end (a throw past it loses the part)",
-                         'give --arm-length CM (the paper\'s arm: --arm-length 40), or '
+                         "give --arm-length CM (the paper's arm: --arm-length 40), or "
                          'arm: {length_cm: ...} in the scene')
     if not (math.isfinite(length) and length > 0):
         raise InputError('--arm-length', f'must be a length > 0, got {length!r}',
@@ -238,8 +238,8 @@ def build_system(scene, speeds, robust=0.005, cells=160, samples=5, sensor_radiu
     progress = np.zeros((K, N))
     lo = hi = None
     for k, w in enumerate(speeds):
-        c_lo, c_hi, s_lo, s_hi, esc, prog = cell_map(model, model.h, float(w), dh, robust * w,
-                                                  arm, cells, samples)
+        c_lo, c_hi, s_lo, s_hi, esc, prog = cell_map(model, model.h, float(w), dh,
+                                                     robust * w, arm, cells, samples)
         if lo is None:
             lo, hi = c_lo[edges].copy(), c_hi[edges].copy()
         # The cells depend on h, dh and the arm only, so every speed's map has the same cells.
@@ -288,7 +288,7 @@ def start_knowledge(system, starts):
     """Return the knowledge of a fresh part: every cell between the lowest and highest start."""
     know = np.zeros(system.n, dtype=np.bool_)
     edges, radii = starts
-    for e in set(int(x) for x in edges):
+    for e in {int(x) for x in edges}:
         rs = radii[edges == e]
         a = system.cell(e, float(rs.min()))
         b = system.cell(e, float(rs.max()))
@@ -571,7 +571,7 @@ def plan(scene, speeds, robust=0.005, cells=200, samples=5, radii_per_edge=20,
     thrower = Thrower(scene, system)
     runs, noisy = {}, {}
     for name in POLICIES:
-        kw = dict(chooser=chooser, sequence=sequence, fixed=home, max_throws=max_throws)
+        kw = {'chooser': chooser, 'sequence': sequence, 'fixed': home, 'max_throws': max_throws}
         runs[name] = simulate(system, thrower, starts, name, **kw)
         noisy[name] = simulate(system, thrower, starts, name, errors='random', seed=noisy_seed,
                                **kw)
@@ -629,7 +629,7 @@ def system_from_dict(d):
     if d.get('format') != POLICY_FORMAT:
         raise InputError('policy file', f'format {d.get("format")!r} is not {POLICY_FORMAT}',
                          'write it again with throwmap funnel --out DIR')
-    E, m = len(d['edges']), int(d['cells_per_edge'])
+    m = int(d['cells_per_edge'])
     ranges = np.asarray(d['successors'], dtype=np.int64)
     K, N = ranges.shape[:2]
     succ = np.zeros((K, N, N), dtype=np.bool_)
@@ -670,7 +670,7 @@ class Tracker:
         self.last = -1
 
     def speed(self):
-        """Return the next throw's release speed (rad/s), or None when no speed is safe."""
+        """Choose the next throw's release speed, rad/s; None when no speed is safe."""
         self.last = self.chooser(self.know)
         return None if self.last < 0 else float(self.system.speeds[self.last])
 
@@ -714,7 +714,8 @@ def plot_throws(result, path, title=''):
     ax.set_xticks(ticks, [f'edge {edges[order[i]]}' for i in ticks])
     ax.set_xlabel('start of the grid (by edge, then R from R_min up)')
     ax.set_ylabel('throws to the first proven ready')
-    ax.set_yscale('symlog', linthresh=10)
+    ax.set_yscale('log')
+    ax.set_ylim(0.8, cap * 1.3)
     ax.set_title(title)
     ax.legend(fontsize=8)
     fig.tight_layout()
