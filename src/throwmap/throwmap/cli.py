@@ -776,8 +776,9 @@ def cmd_funnel(scene, args, out):
                'figures': figures, 'design_search_fixed': res.search_figures,
                'open_loop_speeds_deg': [None if k < 0 else math.degrees(s.speeds[k])
                                         for k in res.sequence[:50]],
+               'safe_speeds_deg': [math.degrees(s.speeds[k]) for k in res.safe_speeds],
                'per_start': {'edge': res.starts[0], 'R': res.starts[1],
-                             'bound': res.bound,
+                             'bound': res.bound, 'safe_speed_bound': res.safe_bound,
                              **{n: r.throws for n, r in res.runs.items()}},
                'notes': notes, 'written': written, 'seconds': seconds}, out)
         return 0
@@ -789,7 +790,8 @@ def cmd_funnel(scene, args, out):
               f'{seconds:.1f} s\n')
     out.write('  throws to the first proven ready (a detection with every cell of the '
               'knowledge on the goal edge):\n')
-    rows = [_funnel_row('full-knowledge bound', figures['bound'])]
+    rows = [_funnel_row('full-knowledge bound', figures['bound']),
+            _funnel_row('full knowledge, safe speeds', figures['safe-speed bound'])]
     for name in ('fixed', 'open-loop', 'sensor-based'):
         rows.append(_funnel_row(name, figures[name]))
         rows.append(_funnel_row(f'{name} (errors)', figures[f'{name} (errors)']))
@@ -802,6 +804,10 @@ def cmd_funnel(scene, args, out):
     seq = ' '.join('-' if k < 0 else f'{math.degrees(s.speeds[k]):.0f}'
                    for k in res.sequence[:20])
     out.write(f'  open-loop speeds (deg/s), first 20: {seq}\n')
+    safe = [math.degrees(s.speeds[k]) for k in res.safe_speeds]
+    out.write('  full knowledge, safe speeds: the bound with only the speeds no start cell can '
+              f'be lost by ({", ".join(f"{w:.0f}" for w in safe)} deg/s; not a bound on the '
+              'policies, which may use others once the knowledge narrows)\n')
     out.write('  (errors): each throw at a corner, edge midpoint or centre of the error box, '
               'drawn at random (seeded)\n')
     for n in notes:

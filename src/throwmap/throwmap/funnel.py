@@ -301,14 +301,14 @@ def start_knowledge(system, starts):
 
 # ------------------------------------------------------------------------------ the bound
 
-def full_knowledge_bound(system):
+def full_knowledge_bound(system, speeds=None):
     """
     Return per cell the fewest throws to rest on the goal edge where the sensor may see it.
 
     Full knowledge of the cell, any speed that cannot escape from it, any successor the cell
     map allows (optimistic): a lower bound on the throws any policy needs to its first ready
     from a start in that cell, under nominal throws or any throws within the error box (as
-    far as the cell map holds them). inf: never.
+    far as the cell map holds them). inf: never. ``speeds``: only these speed indices.
     """
     target = system.goal & system.can_see
     dist = np.full(system.n, np.inf)
@@ -317,7 +317,7 @@ def full_knowledge_bound(system):
     while True:
         t += 1
         pre = np.zeros(system.n, dtype=np.bool_)
-        for k in range(len(system.speeds)):
+        for k in range(len(system.speeds)) if speeds is None else speeds:
             pre |= system.succ[k][:, reach].any(axis=1) & ~system.escape[k]
         new = pre & ~np.isfinite(dist)
         if not new.any():
@@ -522,12 +522,14 @@ class FunnelResult:
     runs: dict                  # policy -> Run (nominal throws)
     noisy: dict                 # policy -> Run (throws drawn in the error box)
     bound: np.ndarray           # per start: full-knowledge fewest throws
+    safe_bound: np.ndarray      # the same with only the speeds safe from the start set
+    safe_speeds: list           # those speeds (indices)
     sequence: list              # the open-loop speeds (indices)
     notes: list
     search_figures: dict        # the design kernel's own first-ready figures, fixed design
 
     def figures(self):
-        rows = {'bound': summary(self.bound)}
+        rows = {'bound': summary(self.bound), 'safe-speed bound': summary(self.safe_bound)}
         for name, run in self.runs.items():
             rows[name] = dict(run.figures(), false_readies=run.false_readies,
                               knowledge_lost=run.knowledge_lost, lost=run.lost)
@@ -564,7 +566,12 @@ def plan(scene, speeds, robust=0.005, cells=200, samples=5, radii_per_edge=20,
                          '(the first cells, at R_min itself, escape in the cell map)',
                          'give more --cells (each then lies nearer R_min than the starts)')
     dist = full_knowledge_bound(system)
-    bound = np.array([dist[system.cell(int(e), float(r))] for e, r in zip(*starts)])
+    cells0 = [system.cell(int(e), float(r)) for e, r in zip(*starts)]
+    bound = dist[cells0]
+    # Not a bound on the policies (narrower knowledge may allow more speeds): what full
+    # knowledge gives with only the speeds no start can be lost by, to show what the arm costs.
+    safe = [k for k in range(len(speeds)) if system.allowed(know0, k)]
+    safe_bound = full_knowledge_bound(system, safe)[cells0]
     chooser = Chooser(system, home)
     sequence = open_loop_sequence(system, know0, Chooser(system, home, home_first=True),
                                   max_throws)
@@ -583,8 +590,8 @@ def plan(scene, speeds, robust=0.005, cells=200, samples=5, radii_per_edge=20,
                       'p95': float(sensor[D.S_COLS.index('first_ready_p95')]),
                       'worst': float(sensor[D.S_COLS.index('first_ready_max')]),
                       'sensor_radius': float(sensor[D.S_COLS.index('sensor_radius')])}
-    return FunnelResult(system, starts, home, runs, noisy, bound, sequence, notes,
-                        search_figures)
+    return FunnelResult(system, starts, home, runs, noisy, bound, safe_bound, safe, sequence,
+                        notes, search_figures)
 
 
 # ------------------------------------------------------------------------------ the file
