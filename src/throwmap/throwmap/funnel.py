@@ -54,10 +54,13 @@ import math
 
 import numpy as np
 
+from . import design as D
+from .analysis import scene_analysis
 from .basins import default_grid, design_radii
 from .errors import InputError
 from .robustness import cell_map
 from .scene import Scene
+from .sensor import sees
 
 
 # ------------------------------------------------------------------------------ speeds, arm
@@ -220,7 +223,6 @@ def build_system(scene, speeds, robust=0.005, cells=160, samples=5, sensor_radiu
     if not math.isfinite(arm):
         raise InputError('arm.length', 'the scene has no arm end', 'call arm_scene first')
     if sensor_radius is None or goal_edge is None or footprint is None:
-        from .analysis import scene_analysis
         an = scene_analysis(scene, sensor_radius or 0.0)
         sensor_radius = an.sensor.radius if sensor_radius is None else sensor_radius
         goal_edge = an.sensor.goal_edge if goal_edge is None else goal_edge
@@ -463,7 +465,6 @@ def simulate(system, thrower, starts, policy, chooser=None, sequence=None, fixed
     drawn uniformly, seeded). A ready is counted only when :meth:`CellSystem.proven` says so;
     it is checked against the true state (``false_readies``).
     """
-    from .sensor import sees
     part = thrower.scene.model.part
     rng = np.random.default_rng(seed)
     edges, radii = starts
@@ -582,7 +583,6 @@ def plan(scene, speeds, robust=0.005, cells=200, samples=5, radii_per_edge=20,
         runs[name] = simulate(system, thrower, starts, name, **kw)
         noisy[name] = simulate(system, thrower, starts, name, errors='random', seed=noisy_seed,
                                **kw)
-    from . import design as D
     res = D.evaluate_grid(scene, [scene.h], [w0], goals=[system.goal_edge], workers=1)
     k = 0
     sensor = res.sensor[k, 0, 0]
