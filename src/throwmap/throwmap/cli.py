@@ -741,13 +741,18 @@ def _funnel_row(name, f):
     return {'policy': name, 'mean': num(f['mean'], '%.2f'), 'p95': num(f['p95'], '%.1f'),
             'worst': num(f['worst'], '%.0f'), 'never ready': f.get('never', 0),
             'false readies': f.get('false_readies', ''),
-            'knowledge lost': f.get('knowledge_lost', ''), 'part lost': f.get('lost', '')}
+            'knowledge lost': f.get('knowledge_lost', ''), 'part lost': f.get('lost', ''),
+            'no safe speed': f.get('no_safe_speed', '')}
 
 
 def cmd_funnel(scene, args, out):
     speeds = funnel.parse_speeds(args.speeds)
     if args.cells < 20:
         raise ThrowmapError(f'--cells: at least 20 cells per edge, got {args.cells}')
+    if args.arm_length is not None and not (math.isfinite(args.arm_length)
+                                            and args.arm_length > 0):
+        raise ThrowmapError(f'--arm-length: must be a length > 0 cm, got {args.arm_length}; '
+                            "give the arm's length in cm, e.g. --arm-length 40")
     arm = None if args.arm_length is None else args.arm_length / 100.0
     on_arm, note = funnel.arm_scene(scene, arm)
     t0 = time.perf_counter()
@@ -796,7 +801,12 @@ def cmd_funnel(scene, args, out):
         rows.append(_funnel_row(name, figures[name]))
         rows.append(_funnel_row(f'{name} (errors)', figures[f'{name} (errors)']))
     _table(rows, ['policy', 'mean', 'p95', 'worst', 'never ready', 'false readies',
-                  'knowledge lost', 'part lost'], out)
+                  'knowledge lost', 'part lost', 'no safe speed'], out)
+    if any(f.get('no_safe_speed') for f in figures.values()):
+        out.write('  no safe speed: starts whose knowledge reached a set from which every '
+                  'allowed speed may lose the part (a throw off the arm, or a failing one); '
+                  'they stop there without a ready (a throw that may lose the part is never '
+                  'chosen)\n')
     sf = res.search_figures
     out.write(f"  the design search's figure for the fixed design (its warm-up rule, no errors, "
               f'sensor {sf["sensor_radius"] * 100:.2f} cm): mean {sf["mean"]:.2f}, p95 '

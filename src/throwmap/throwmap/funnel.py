@@ -30,22 +30,25 @@ detection after the warm-up proves the goal edge", where the warm-up is the time
 no state reachable from the starts shows another edge to the sensor) with the reachable set
 narrowed by the bits seen and widened by the error box.
 
-Policies (:class:`Policy`, a finite controller over knowledge sets, written to a JSON file):
+Policies (:func:`simulate` runs them; docs/funnel.md has the measured figures):
 
-* **fixed**: one speed every throw (the scene's design), readies by the rule above;
-* **open-loop**: one speed sequence, found by beam search over the knowledge sets a sequence
-  reaches without bits, that takes the whole start set into the goal edge's always-seen cells
-  (then the next bit is 1 and proves the ready); readies before the end by the same rule;
-* **sensor-based**: a rollout policy: from the knowledge set, the speed whose worst bit leads
-  to the shortest open-loop funnel (one-step minimax lookahead over the open-loop plan's
-  length as cost to go), ties to the smaller knowledge sets.
+* **fixed**: the scene's own speed every throw, readies by the rule above;
+* **sensor-based**: :class:`Chooser`, a one-step rule on the knowledge: the speed after which a
+  detection would prove a ready with the largest chance (the part taken as equally likely in
+  any cell of the image), then the fewest cells of other edges the sensor may see, then the
+  scene's own speed. A heuristic; the proof never depends on it;
+* **open-loop**: the same rule on the knowledge without bits, which gives one speed sequence
+  for every part (:func:`open_loop_sequence`); its readies use that bit-free knowledge too.
 
-Both are evaluated exactly on the cell abstraction (:func:`explore`: every knowledge set the
-policy reaches under every bit; the worst case is the longest path to a ready) and point by
-point from every start of the design search's grid, through the scene's model (nominal throws,
-and throws with errors drawn in the box). :func:`full_knowledge_bound`: the shortest path with
-the cell known (any allowed speed, any successor: optimistic), a lower bound on every policy's
-throws from that start.
+No exact minimax over knowledge sets: near R_min the cells are their own successors at every
+speed (the jogs there are far shorter than a cell), so a knowledge set can never exclude that a
+part placed there is still there, and every policy's worst case on the cell abstraction is
+unbounded. The figures are measured point by point from every start of the design search's
+grid through the scene's model (nominal throws, and throws drawn in the error box), every
+ready checked against the true state. :func:`full_knowledge_bound`: the shortest path with the
+cell known (any speed that cannot escape from it, any successor: optimistic), a lower bound on
+every policy's throws from that start. :func:`policy_dict` writes the sensor-based policy for
+the nodes; :class:`Tracker` runs it on line (numpy only).
 """
 
 import copy
@@ -110,8 +113,8 @@ def arm_scene(scene, arm_length=None):
                          "give --arm-length CM (the paper's arm: --arm-length 40), or "
                          'arm: {length_cm: ...} in the scene')
     if not (math.isfinite(length) and length > 0):
-        raise InputError('--arm-length', f'must be a length > 0, got {length!r}',
-                         "give the arm's length in cm, e.g. --arm-length 40")
+        raise InputError('arm length', f'must be > 0, got {length!r} m',
+                         "give the arm's length, e.g. --arm-length 40 (cm)")
     effects = list(scene.data.get('effects') or [])
     if length == scene.arm_length and 'finite_arm' in effects:
         return scene, None
@@ -159,13 +162,9 @@ class CellSystem:
     footprint: float
     arm_length: float
     samples: int
-    progress: np.ndarray = field(default=None, repr=False)  # (K, N): least outward jog, m
-    succ_f: np.ndarray = field(default=None, repr=False)   # float32 copy for batched images
-
-    @property
-    def target(self):
-        """Cells on the goal edge the sensor sees wherever the part lies in them."""
-        return self.goal & ~self.can_miss
+    # (K, N): the cell map's least outward jog of a cell that jogs outwards (0: none), m; not
+    # used by the rules yet (a clock for the knowledge near R_min: docs/funnel.md)
+    progress: np.ndarray = field(default=None, repr=False)
 
     @property
     def n(self):
@@ -271,8 +270,7 @@ def build_system(scene, speeds, robust=0.005, cells=160, samples=5, sensor_radiu
     return CellSystem(np.asarray(speeds, dtype=float), float(model.h), dh,
                       robust * np.asarray(speeds, dtype=float), float(robust), edges, cells,
                       lo, hi, succ, escape, can_see, can_miss, goal, int(goal_edge),
-                      float(sensor_radius), float(footprint), float(arm), samples, progress,
-                      succ.astype(np.float32))
+                      float(sensor_radius), float(footprint), float(arm), samples, progress)
 
 
 def start_grid(scene, radii_per_edge=20):
@@ -412,6 +410,7 @@ class Run:
     knowledge_lost: int         # the true state left the knowledge (the cell map missed it)
     lost: int                   # starts whose part left the arm or whose throw failed
     speeds_used: list           # per start, the speeds (indices) thrown
+    stuck: int = 0              # starts whose knowledge reached a set no speed is safe from
 
     def figures(self):
         return summary(self.throws)
@@ -470,7 +469,7 @@ def simulate(system, thrower, starts, policy, chooser=None, sequence=None, fixed
     edges, radii = starts
     know0 = start_knowledge(system, starts)
     out = np.full(len(edges), np.inf)
-    false_readies = knowledge_lost = lost = 0
+    false_readies = knowledge_lost = lost = stuck = 0
     used = []
     for i, (e, R) in enumerate(zip(edges, radii)):
         e, R = int(e), float(R)
@@ -485,6 +484,7 @@ def simulate(system, thrower, starts, policy, chooser=None, sequence=None, fixed
             else:
                 k = chooser(know)
             if k < 0:
+                stuck += 1
                 break
             speeds.append(k)
             u_w, u_h = ((0, 0) if errors is None
@@ -508,7 +508,7 @@ def simulate(system, thrower, starts, policy, chooser=None, sequence=None, fixed
                     false_readies += 1
                 break
         used.append(speeds)
-    return Run(out, false_readies, knowledge_lost, lost, used)
+    return Run(out, false_readies, knowledge_lost, lost, used, stuck)
 
 
 # ------------------------------------------------------------------------------ the plan
@@ -533,13 +533,14 @@ class FunnelResult:
         rows = {'bound': summary(self.bound), 'safe-speed bound': summary(self.safe_bound)}
         for name, run in self.runs.items():
             rows[name] = dict(run.figures(), false_readies=run.false_readies,
-                              knowledge_lost=run.knowledge_lost, lost=run.lost)
+                              knowledge_lost=run.knowledge_lost, lost=run.lost,
+                              no_safe_speed=run.stuck)
             noisy = self.noisy.get(name)
             if noisy is not None:
                 rows[name + ' (errors)'] = dict(noisy.figures(),
                                                 false_readies=noisy.false_readies,
                                                 knowledge_lost=noisy.knowledge_lost,
-                                                lost=noisy.lost)
+                                                lost=noisy.lost, no_safe_speed=noisy.stuck)
         return rows
 
 
