@@ -54,7 +54,7 @@ LAYERS = [
     ('part_on_arm',),
     ('design',),
     ('robustness',),
-    ('search',),
+    ('search', 'funnel'),
     ('internal', 'plots'),
     ('cli',),
     ('__init__',),

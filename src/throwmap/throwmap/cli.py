@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""``throwmap`` command line: grasp, throw, orbit, limit-set, basin, design, plot."""
+"""``throwmap`` command line: grasp, throw, orbit, limit-set, basin, design, plot, ..., funnel."""
 
 import argparse
 import itertools
@@ -27,6 +27,7 @@ import warnings
 import numpy as np
 
 from . import design as design_kernel
+from . import funnel
 from . import search as design_search
 from .analysis import analyse
 from .basins import basin, default_grid
@@ -734,9 +735,101 @@ def cmd_catalogue(args, out):
     return 0
 
 
+def _funnel_row(name, f):
+    def num(x, fmt):
+        return 'never' if x is None or (isinstance(x, float) and math.isinf(x)) else fmt % x
+    return {'policy': name, 'mean': num(f['mean'], '%.2f'), 'p95': num(f['p95'], '%.1f'),
+            'worst': num(f['worst'], '%.0f'), 'never ready': f.get('never', 0),
+            'false readies': f.get('false_readies', ''),
+            'knowledge lost': f.get('knowledge_lost', ''), 'part lost': f.get('lost', ''),
+            'no safe speed': f.get('no_safe_speed', '')}
+
+
+def cmd_funnel(scene, args, out):
+    speeds = funnel.parse_speeds(args.speeds)
+    if args.cells < 20:
+        raise ThrowmapError(f'--cells: at least 20 cells per edge, got {args.cells}')
+    if args.arm_length is not None and not (math.isfinite(args.arm_length)
+                                            and args.arm_length > 0):
+        raise ThrowmapError(f'--arm-length: must be a length > 0 cm, got {args.arm_length}; '
+                            "give the arm's length in cm, e.g. --arm-length 40")
+    arm = None if args.arm_length is None else args.arm_length / 100.0
+    on_arm, note = funnel.arm_scene(scene, arm)
+    t0 = time.perf_counter()
+    res = funnel.plan(on_arm, speeds, robust=args.robust, cells=args.cells,
+                      max_throws=args.throws)
+    seconds = time.perf_counter() - t0
+    s = res.system
+    notes = ([note] if note else []) + res.notes
+    figures = res.figures()
+    written = {}
+    if args.out:
+        os.makedirs(args.out, exist_ok=True)
+        written['plot'] = funnel.plot_throws(
+            res, os.path.join(args.out, f'{scene.name}_funnel.png'),
+            f'{scene.name}: throws to the first proven ready, speeds '
+            f'{math.degrees(s.speeds[0]):.0f}-{math.degrees(s.speeds[-1]):.0f} deg/s, '
+            f'errors s = {s.robust:g}')
+        path = os.path.join(args.out, f'{scene.name}_funnel_policy.json')
+        with open(path, 'w') as fh:
+            json.dump(funnel.policy_dict(res, args.scene), fh)
+        written['policy'] = path
+    if args.json:
+        _dump({'scene': args.scene, 'speeds_deg': np.degrees(s.speeds), 'robust': s.robust,
+               'arm_length': s.arm_length, 'cells_per_edge': s.m, 'goal_edge': s.goal_edge,
+               'sensor_radius': s.sensor_radius, 'starts': len(res.starts[0]),
+               'figures': figures, 'design_search_fixed': res.search_figures,
+               'open_loop_speeds_deg': [None if k < 0 else math.degrees(s.speeds[k])
+                                        for k in res.sequence[:50]],
+               'safe_speeds_deg': [math.degrees(s.speeds[k]) for k in res.safe_speeds],
+               'per_start': {'edge': res.starts[0], 'R': res.starts[1],
+                             'bound': res.bound, 'safe_speed_bound': res.safe_bound,
+                             **{n: r.throws for n, r in res.runs.items()}},
+               'notes': notes, 'written': written, 'seconds': seconds}, out)
+        return 0
+    out.write(f'{scene.name}: funnel over {len(s.speeds)} speeds {math.degrees(s.speeds[0]):.1f}'
+              f'..{math.degrees(s.speeds[-1]):.1f} deg/s, per-throw errors s = {s.robust:g} '
+              f'(+-{s.dh * 1000:.3f} mm offset, +-s w speed), {s.m} cells per edge up to the '
+              f"arm's end {s.arm_length * 100:.1f} cm; sensor {s.sensor_radius * 100:.2f} cm, "
+              f'goal edge {s.goal_edge}; {len(res.starts[0])} starts (the design search grid); '
+              f'{seconds:.1f} s\n')
+    out.write('  throws to the first proven ready (a detection with every cell of the '
+              'knowledge on the goal edge):\n')
+    rows = [_funnel_row('full-knowledge bound', figures['bound']),
+            _funnel_row('full knowledge, safe speeds', figures['safe-speed bound'])]
+    for name in ('fixed', 'open-loop', 'sensor-based'):
+        rows.append(_funnel_row(name, figures[name]))
+        rows.append(_funnel_row(f'{name} (errors)', figures[f'{name} (errors)']))
+    _table(rows, ['policy', 'mean', 'p95', 'worst', 'never ready', 'false readies',
+                  'knowledge lost', 'part lost', 'no safe speed'], out)
+    if any(f.get('no_safe_speed') for f in figures.values()):
+        out.write('  no safe speed: starts whose knowledge reached a set from which every '
+                  'allowed speed may lose the part (a throw off the arm, or a failing one); '
+                  'they stop there without a ready (a throw that may lose the part is never '
+                  'chosen)\n')
+    sf = res.search_figures
+    out.write(f"  the design search's figure for the fixed design (its warm-up rule, no errors, "
+              f'sensor {sf["sensor_radius"] * 100:.2f} cm): mean {sf["mean"]:.2f}, p95 '
+              f'{sf["p95"]:.0f}, worst {sf["worst"]:.0f}\n')
+    seq = ' '.join('-' if k < 0 else f'{math.degrees(s.speeds[k]):.0f}'
+                   for k in res.sequence[:20])
+    out.write(f'  open-loop speeds (deg/s), first 20: {seq}\n')
+    safe = [math.degrees(s.speeds[k]) for k in res.safe_speeds]
+    out.write('  full knowledge, safe speeds: the bound with only the speeds no start cell can '
+              f'be lost by ({", ".join(f"{w:.0f}" for w in safe)} deg/s; not a bound on the '
+              'policies, which may use others once the knowledge narrows)\n')
+    out.write('  (errors): each throw at a corner, edge midpoint or centre of the error box, '
+              'drawn at random (seeded)\n')
+    for n in notes:
+        out.write(f'  note: {n}\n')
+    for what, path in written.items():
+        out.write(f'  wrote {what}: {path}\n')
+    return 0
+
+
 COMMANDS = {'grasp': cmd_grasp, 'throw': cmd_throw, 'orbit': cmd_orbit,
             'limit-set': cmd_limit_set, 'basin': cmd_basin, 'design': cmd_design,
-            'plot': cmd_plot, 'design-search': cmd_design_search}
+            'plot': cmd_plot, 'design-search': cmd_design_search, 'funnel': cmd_funnel}
 
 
 def build_parser():
@@ -803,6 +896,20 @@ def build_parser():
     p.add_argument('--scheduler', help='Dask scheduler address for a catalogue (default: a '
                    'local cluster on 127.0.0.1)')
     p.add_argument('--out', help='write heat maps, the Pareto plot and the chosen scene here')
+    p = add('funnel', "choose each throw's release speed from the sensor's bits: throws to "
+            'the first proven ready for the fixed design, an open-loop and a sensor-based '
+            'policy, and the full-knowledge bound (docs/funnel.md)')
+    p.add_argument('--speeds', required=True, help='the speeds the actuator allows, deg/s: '
+                   'A:B:STEP (e.g. 120:600:20) or a list A,B,C')
+    p.add_argument('--robust', type=float, default=0.005, help='per-throw error bound s: '
+                   'every throw within +-s w of its speed and +-s d_min of the offset '
+                   '(default 0.005)')
+    p.add_argument('--arm-length', type=float, help="the arm's length, cm (default: the "
+                   "scene's; a scene without one needs it)")
+    p.add_argument('--cells', type=int, default=200, help='cells per stable edge (default 200)')
+    p.add_argument('--throws', type=int, default=200, help='throws per start at most '
+                   '(default 200)')
+    p.add_argument('--out', help='write the plot and the policy file (JSON) here')
     return parser
 
 
