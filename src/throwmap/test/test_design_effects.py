@@ -25,7 +25,6 @@ box) through the scene's model stays in the closure the graph proves, and no edg
 reaches the sensor there.
 """
 
-import itertools
 import math
 
 import numpy as np
@@ -85,26 +84,10 @@ def test_robustness_of_a_liftoff_design_holds_on_exhaustive_worst_case_sequences
     dh, dw = s * part.d_min, s * w
     verdict, cmap = RB.robust_check(liftoff.model, h, w, dh, dw, spec, with_map=True)
     assert verdict.ok, verdict.reason
-    lo, hi, succ_lo = cmap[0], cmap[1], cmap[2]
-    m = succ_lo.shape[1]
-
-    def cell(e, r):
-        return int(e), int(math.floor((r - lo[e]) / ((hi[e] - lo[e]) / m)))
-
-    corners = [liftoff.model.at(h + sh * dh, w + sw * dw)
-               for sh, sw in itertools.product((-1, 1), (-1, 1))]
     e, r, _ = liftoff.model.at(h, w).orbit_arrays(1, 1.5 * liftoff.model.at(h, w).r_min(1),
                                                   400)
-    edges, radii = e[300:], r[300:]
-    assert all(cell(a, b) in verdict.closure for a, b in zip(edges, radii))
-    u_max = part.U.max(axis=1)
-    for _ in range(5):
-        outs = [model.f_batch(edges, radii) for model in corners]
-        assert all(np.all(o['status'] == OK) for o in outs), 'a worst-case throw lost the part'
-        edges = np.concatenate([o['edge'] for o in outs])
-        radii = np.concatenate([o['R'] for o in outs])
-        # A* is closed under every sequence, and in it no edge but the goal reaches the sensor.
-        assert all(cell(a, b) in verdict.closure for a, b in zip(edges, radii))
-        other = edges != 1
-        assert np.all(radii[other] + u_max[edges[other]] < spec.x)
-    assert edges.size == (len(e) - 300) * 4 ** 5
+    counts = RB.worst_case_sequences(liftoff.model, h, w, dh, dw, cmap, verdict, spec, e[300:],
+                                     r[300:], depth=5)
+    # A* is closed under every sequence, and in it no edge but the goal reaches the sensor.
+    assert counts == {'throws': (len(e) - 300) * sum(4 ** k for k in range(1, 6)), 'lost': 0,
+                      'outside': 0, 'seen_other': 0}

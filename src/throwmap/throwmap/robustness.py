@@ -225,6 +225,43 @@ def audit(model, h, w, dh, dw, cmap, samples=2000, seed=0):
     return Audit(thrown, misses, int(out[2]), bound)
 
 
+def worst_case_sequences(model, h, w, dh, dw, cmap, verdict, limit, edges, radii, depth=5):
+    """
+    Check a robustness verdict by brute force: every sequence of ``depth`` worst-case throws.
+
+    From each state (edges, radii) (the nominal limit set's, say), every throw at each corner
+    of the error box (offset h +- dh, speed w +- dw) through the scene's own model: 4^depth
+    sequences per state, independent of the cell map but for its cells. Returns counts:
+    ``throws``; ``lost`` (a throw that did not come to rest in f's domain); ``outside`` (a
+    state outside the closure A* the graph proved); ``seen_other`` (a state on an edge other
+    than the goal whose part reaches the sensor at ``limit.x``).
+    """
+    lo, hi, succ_lo = cmap[0], cmap[1], cmap[2]
+    width = (hi - lo) / succ_lo.shape[1]
+    u_max = model.part.U.max(axis=1)
+    corners = [model.at(h + sh * dh, w + sw * dw) for sh in (-1, 1) for sw in (-1, 1)]
+    edges = np.asarray(edges, dtype=int)
+    radii = np.asarray(radii, dtype=float)
+    counts = {'throws': 0, 'lost': 0, 'outside': 0, 'seen_other': 0}
+
+    def tally(e, r):
+        cells = np.floor((r - lo[e]) / width[e]).astype(int)
+        counts['outside'] += sum((a, b) not in verdict.closure for a, b in zip(e, cells))
+        other = e != limit.goal
+        counts['seen_other'] += int(np.sum(r[other] + u_max[e[other]] >= limit.x))
+
+    tally(edges, radii)
+    for _ in range(depth):
+        outs = [c.f_batch(edges, radii) for c in corners]
+        counts['throws'] += edges.size * len(corners)
+        ok = [o['status'] == OK for o in outs]
+        counts['lost'] += int(sum(np.sum(~k) for k in ok))
+        edges = np.concatenate([o['edge'][k] for o, k in zip(outs, ok)]).astype(int)
+        radii = np.concatenate([o['R'][k] for o, k in zip(outs, ok)])
+        tally(edges, radii)
+    return counts
+
+
 @dataclass(frozen=True)
 class GraphVerdict:
     """check_graph's answer: ``ok`` and, if not, the first reason; A* and the transient bound."""
