@@ -34,7 +34,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from throwmap import ThrowModel
-from throwmap.event_sim import lowest_approaching, vertex_normal
+from throwmap.event_sim import arm_contact, lowest_approaching
 from throwmap.jit import njit
 from throwmap.picard import centre_edge, first_kink, make_flight, NODES, poly_at, sweep_source
 from throwmap_testing import force_scene, FORCE_SETS, REFERENCE_KNOBS
@@ -118,7 +118,7 @@ def test_flight_meets_an_independent_integration_at_the_first_contact(step):
     The triangle thrown up from 5 cm over the arm, spinning; the remainder reported is below
     flight_tol and positive (the force is not zero).
     """
-    fly = make_flight(smooth_rhs, lowest_approaching, vertex_normal)
+    fly = make_flight(smooth_rhs, lowest_approaching, arm_contact)
     bu = np.array([0.02, 0.02, -0.04])
     bv = np.array([-0.0267, 0.0533, -0.0267])
     size = float(np.hypot(bu, bv).max())

@@ -162,6 +162,22 @@ def vertex_normal(y, phi, vy, om, bu_k, bv_k):
     return y + s * bu_k + c * bv_k, vy + om * (c * bu_k - s * bv_k)
 
 
+@njit(inline=True)
+def arm_contact(x, y, phi, vx, vy, om, bu, bv, sep, sep_rising):
+    """
+    Return (the vertex at or below the arm and moving down, else -1; sep after the look).
+
+    The vertex that just left the arm (sep) counts again once it is seen above the arm, or,
+    after a bounce (sep_rising: it left moving up), once it is seen coming down again.
+    """
+    if sep >= 0:
+        h1, un1 = vertex_normal(y, phi, vy, om, bu[sep], bv[sep])
+        if h1 > 0.0 or (sep_rising and un1 < 0.0):
+            sep = -1
+    k, _ = lowest_approaching(x, y, phi, vx, vy, om, bu, bv, sep)
+    return k, sep
+
+
 @njit
 def energy(vx, vy, om, y, g, rho2):
     """Energy per unit mass over the arm surface."""
@@ -441,7 +457,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         return x_new, y_new, p_new, vx_new, vy_new, om_new
 
     rk8_step = make_step(flight_rhs)
-    picard_flight = make_flight(flight_rhs, lowest_approaching, vertex_normal)
+    picard_flight = make_flight(flight_rhs, lowest_approaching, arm_contact)
     centre_crossing_in = make_first_event(hermite_centre_event)
     contact_in_step = make_first_event(hermite_contact_event)
 
@@ -529,11 +545,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 lo = tau
                 tau = min(h_step, tau + max(gap, dts))
                 xs, ys, ps, us, vs, os_ = hermite_at(cx, cy, cp, tau, h_step)
-                if sep >= 0:
-                    h1, un1 = vertex_normal(ys, ps, vs, os_, bu[sep], bv[sep])
-                    if h1 > 0.0 or (sep_rising and un1 < 0.0):
-                        sep = -1
-                k, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+                k, sep = arm_contact(xs, ys, ps, us, vs, os_, bu, bv, sep, sep_rising)
                 if k >= 0:
                     hit = k
                     break
@@ -778,11 +790,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
             x1, y1, p1, vx1, vy1, om1 = flight_step(x, y, phi, vx, vy, om, dt, g, rho2, edge, prm)
             if not (math.isfinite(y1) and math.isfinite(om1)):
                 return ERR_NONFINITE, -1, x, y, phi, vx, vy, om, t, steps
-            if sep >= 0:
-                h1, un1 = vertex_normal(y1, p1, vy1, om1, bu[sep], bv[sep])
-                if h1 > 0.0 or (sep_rising and un1 < 0.0):
-                    sep = -1
-            k, _ = lowest_approaching(x1, y1, p1, vx1, vy1, om1, bu, bv, sep)
+            k, sep = arm_contact(x1, y1, p1, vx1, vy1, om1, bu, bv, sep, sep_rising)
             if k >= 0:
                 break
             x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1

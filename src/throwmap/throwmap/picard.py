@@ -323,9 +323,12 @@ def vertex_crossing(cx, cy, cp, h, lo, hi, bu_k, bv_k, root):
     return vertex_height_crossing(lo, hi, fa, fb, root, 100, (cx, cy, cp, h, bu_k, bv_k))
 
 
-def make_flight(rhs, lowest_approaching, vertex_normal, n=NODES):
+def make_flight(rhs, lowest_approaching, arm_contact, n=NODES):
     """
     Return the compiled Picard flight over the accelerations ``rhs`` (event_sim.build's).
+
+    ``lowest_approaching`` and ``arm_contact`` are the event simulator's contact tests
+    (throwmap.event_sim).
 
     ``fly(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge, prm, knobs,
     steps)`` flies until a vertex meets the arm moving
@@ -470,11 +473,7 @@ def make_flight(rhs, lowest_approaching, vertex_normal, n=NODES):
                 lo = tau
                 tau = min(h, tau + max(safe_step(ys, ps, vs, os_, bu, bv, sep, acc), dts))
                 xs, ys, ps, us, vs, os_ = dense_state(cx, cy, cp, tau / h, h)
-                if sep >= 0:
-                    h1, un1 = vertex_normal(ys, ps, vs, os_, bu[sep], bv[sep])
-                    if h1 > 0.0 or (sep_rising and un1 < 0.0):
-                        sep = -1
-                k, _ = lowest_approaching(xs, ys, ps, us, vs, os_, bu, bv, sep)
+                k, sep = arm_contact(xs, ys, ps, us, vs, os_, bu, bv, sep, sep_rising)
                 if k >= 0:
                     hit = k
                     break
