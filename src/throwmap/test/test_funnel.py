@@ -221,6 +221,16 @@ def test_bad_speeds_are_refused_with_the_fix(speeds, capsys):
     assert err.count('\n') == 1 and '--speeds' in err and 'A:B:STEP' in err
 
 
+def test_huge_ranges_and_cell_counts_are_refused_before_any_allocation(capsys):
+    # 1e18 speeds: counted, not allocated.
+    assert main(['funnel', TRIANGLE, '--speeds=1:1e9:1e-9', '--arm-length', '40']) == 2
+    err = capsys.readouterr().err
+    assert 'too many' in err and 'coarser STEP' in err
+    assert main(['funnel', TRIANGLE, '--speeds=120:600:20', '--arm-length', '40',
+                 '--cells', str(10 ** 9)]) == 2
+    assert '--cells: 20 to' in capsys.readouterr().err
+
+
 def test_unknown_scene_and_missing_arm_are_refused(capsys):
     assert main(['funnel', str(SCENES / 'no_such_scene.yaml'), '--speeds', '120:600:20']) == 2
     err = capsys.readouterr().err

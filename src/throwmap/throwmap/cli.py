@@ -747,8 +747,8 @@ def _funnel_row(name, f):
 
 def cmd_funnel(scene, args, out):
     speeds = funnel.parse_speeds(args.speeds)
-    if args.cells < 20:
-        raise ThrowmapError(f'--cells: at least 20 cells per edge, got {args.cells}')
+    if not 20 <= args.cells <= funnel.MAX_CELLS:
+        raise ThrowmapError(f'--cells: 20 to {funnel.MAX_CELLS} cells per edge, got {args.cells}')
     if args.arm_length is not None and not (math.isfinite(args.arm_length)
                                             and args.arm_length > 0):
         raise ThrowmapError(f'--arm-length: must be a length > 0 cm, got {args.arm_length}; '

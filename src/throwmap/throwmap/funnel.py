@@ -68,6 +68,10 @@ from .sensor import sees
 
 # ------------------------------------------------------------------------------ speeds, arm
 
+MAX_SPEEDS = 200      # each speed is a cell map of cells x 45 throws per cell
+MAX_CELLS = 2000      # cells per stable edge: the knowledge sets are sets of cells
+
+
 def parse_speeds(text):
     """
     Return the allowed release speeds (rad/s, ascending) from ``A:B:STEP`` or ``A,B,...`` (deg/s).
@@ -78,23 +82,28 @@ def parse_speeds(text):
            'or a list of speeds in deg/s (e.g. 200,320,400)')
     text = str(text).strip()
     try:
-        if ':' in text:
-            parts = [float(x) for x in text.split(':')]
-            if len(parts) != 3:
-                raise InputError('--speeds', f'{text!r} is not A:B:STEP', fix)
-            a, b, step = parts
-            if not (0 < a <= b and step > 0 and all(map(math.isfinite, parts))):
-                raise InputError('--speeds', f'bad range {text!r}', fix)
-            deg = np.arange(a, b + 1e-9 * max(1.0, b), step)
-        else:
-            deg = np.array(sorted({float(x) for x in text.split(',') if x.strip()}))
-            if not deg.size or not np.all(np.isfinite(deg)) or np.any(deg <= 0):
-                raise InputError('--speeds', f'bad list {text!r}', fix)
+        parts = [float(x) for x in (text.split(':') if ':' in text else
+                                    (x for x in text.split(',') if x.strip()))]
     except ValueError:
         raise InputError('--speeds', f'{text!r} is not a number range or list', fix) from None
-    if deg.size > 200:
+    if ':' in text:
+        if len(parts) != 3:
+            raise InputError('--speeds', f'{text!r} is not A:B:STEP', fix)
+        a, b, step = parts
+        if not (all(map(math.isfinite, parts)) and 0 < a <= b and step > 0):
+            raise InputError('--speeds', f'bad range {text!r}', fix)
+        count = math.floor((b - a) / step * (1.0 + 1e-12)) + 1    # before allocating them
+        if count > MAX_SPEEDS:
+            raise InputError('--speeds', f'{count} speeds: too many (each is a cell map)',
+                             f'use a coarser STEP (at most {MAX_SPEEDS} speeds)')
+        deg = np.arange(a, b + 1e-9 * max(1.0, b), step)
+    else:
+        deg = np.array(sorted(set(parts)))
+        if not deg.size or not np.all(np.isfinite(deg)) or np.any(deg <= 0):
+            raise InputError('--speeds', f'bad list {text!r}', fix)
+    if deg.size > MAX_SPEEDS:
         raise InputError('--speeds', f'{deg.size} speeds: too many (each is a cell map)',
-                         'use a coarser STEP (at most 200 speeds)')
+                         f'use a coarser STEP (at most {MAX_SPEEDS} speeds)')
     return np.radians(deg)
 
 
