@@ -39,7 +39,8 @@ from throwmap.cli import main
 from throwmap.errors import InputError, ThrowmapError
 from throwmap.model import ThrowModel
 from throwmap.sensor import sees
-from throwmap_testing import SCENES
+from throwmap_testing import SCENES, shipped_scene
+import yaml
 
 PAPER = (-0.005, 5.5851)
 SMALL = {'radii_per_edge': 8, 'throws': 90, 'ref_throws': 600}
@@ -47,7 +48,9 @@ SMALL = {'radii_per_edge': 8, 'throws': 90, 'ref_throws': 600}
 
 @pytest.fixture(scope='module')
 def triangle():
-    return load_scene(str(SCENES / 'triangle.yaml'))
+    # The design logic on the paper's triangle with an endless arm (test_design_arm.py: on the
+    # 40 cm arm the scene states).
+    return shipped_scene('triangle', endless=True)
 
 
 def test_kernel_agrees_with_the_public_api_design_by_design(triangle):
@@ -258,13 +261,11 @@ def test_chosen_design_is_a_scene_every_command_loads(triangle, tmp_path):
     # The search is deterministic and the triangle's 5x5 grid has designs above the default
     # floor: a missing choice is a failure, not a reason to skip the round trip.
     assert result['chosen'] is not None, 'no design met the floor on the 5x5 grid'
-    # The triangle gives no arm length: the output says the arm was taken as endless, and how
-    # far out the chosen design puts the part and the sensor (issue 21 item 2, in part).
-    chosen = result['chosen']['figures']
-    endless = [n for n in result['notes'] if n.startswith('the arm is taken as endless')]
-    assert len(endless) == 1
-    assert f'up to R = {chosen["r_hi"] * 100:.1f} cm' in endless[0]
-    assert f'sensor at {chosen["sensor_radius"] * 100:.1f} cm' in endless[0]
+    # The paper's triangle states its 40 cm arm: no endless-arm note, and the chosen design
+    # keeps the part and the sensor on the arm (issue 21 item 2).
+    figures = result['chosen']['figures']
+    assert not [n for n in result['notes'] if n.startswith('the arm is taken as endless')]
+    assert figures['r_hi'] < 0.40 and figures['sensor_radius'] < 0.40
     path = tmp_path / 'triangle_design.yaml'
     scene = load_scene(str(path))
     chosen = result['chosen']
@@ -273,6 +274,22 @@ def test_chosen_design_is_a_scene_every_command_loads(triangle, tmp_path):
     an = scene_analysis(scene, scene.sensor_radius)      # what the sim and the monitor call
     assert an.sensor.radius == pytest.approx(chosen['figures']['sensor_radius'])
     assert main(['design', str(path), '--json'], out=io.StringIO()) == 0
+
+
+def test_a_scene_without_an_arm_length_is_searched_on_an_endless_arm_and_says_so(tmp_path):
+    path = tmp_path / 'endless.yaml'
+    path.write_text(yaml.safe_dump(shipped_scene('triangle', endless=True).data))
+    out = io.StringIO()
+    assert main(['design-search', str(path), '--grid', '5x5', '--top', '1', '--json', '--quiet'],
+                out=out) in (0, 1)
+    result = json.loads(out.getvalue())
+    # The output says the arm was taken as endless, and how far out the chosen design puts the
+    # part and the sensor.
+    chosen = result['chosen']['figures']
+    endless = [n for n in result['notes'] if n.startswith('the arm is taken as endless')]
+    assert len(endless) == 1
+    assert f'up to R = {chosen["r_hi"] * 100:.1f} cm' in endless[0]
+    assert f'sensor at {chosen["sensor_radius"] * 100:.1f} cm' in endless[0]
 
 
 def test_a_scene_design_without_a_limit_set_is_not_robust_and_no_error():

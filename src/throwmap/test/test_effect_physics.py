@@ -29,19 +29,13 @@ import pytest
 from reference_impact import routh_impact, sticking_impulse
 from throwmap import Scene
 from throwmap.internal import routh_stronge_impact, sticking_impact
-from throwmap_testing import SCENES
+from throwmap_testing import SCENES, shipped_scene
 import yaml
 
 
 def triangle(**sections):
-    with open(SCENES / 'triangle.yaml', encoding='utf-8') as fh:
-        data = yaml.safe_load(fh)
-    for key, value in sections.items():
-        if value is None:
-            data.pop(key, None)
-        else:
-            data[key] = copy.deepcopy(value)
-    return Scene(data)
+    # The paper's triangle on an endless arm: these tests compare effects with the base model.
+    return shipped_scene('triangle', endless=True, **sections)
 
 
 def routh(args, e, mu, steps):

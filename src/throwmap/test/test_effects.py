@@ -56,7 +56,7 @@ def base():
 
 def test_one_model_class_a_scene_without_effects_is_the_empty_set():
     for model in (scene().model, scene(effects=[]).model,
-                  load_scene(str(SCENES / 'triangle.yaml')).model):
+                  load_scene(str(SCENES / 'hard' / 'sweet_spot.yaml')).model):
         assert type(model) is ThrowModel and model.slots == {} and not model.prm
         assert model.composed.__name__.startswith('throwmap_composed_none_')
     experiment = load_scene(str(SCENES / 'experiment.yaml')).model

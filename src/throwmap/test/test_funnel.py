@@ -235,7 +235,9 @@ def test_unknown_scene_and_missing_arm_are_refused(capsys):
     assert main(['funnel', str(SCENES / 'no_such_scene.yaml'), '--speeds', '120:600:20']) == 2
     err = capsys.readouterr().err
     assert 'no_such_scene.yaml' in err and 'no such file' in err and 'give the path' in err
-    assert main(['funnel', TRIANGLE, '--speeds', '120:600:20']) == 2
+    # A scene without an arm length (the paper's triangle and bracket state its 40 cm).
+    armless = str(SCENES / 'hard' / 'sweet_spot.yaml')
+    assert main(['funnel', armless, '--speeds', '120:600:20']) == 2
     err = capsys.readouterr().err
     assert 'arm' in err and '--arm-length' in err
 

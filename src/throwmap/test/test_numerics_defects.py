@@ -25,26 +25,17 @@ Issue 24, item 3: four numerics defects, each checked against physics, not earli
    liftoff equals the consistent model (impact_restitution, e = 0, unilateral, same mu).
 """
 
-import copy
 import math
 
 import numpy as np
 import pytest
-from throwmap import Scene
 from throwmap.status import LOST, OK
-from throwmap_testing import SCENES
-import yaml
+from throwmap_testing import shipped_scene
 
 
 def scene(name, **sections):
-    with open(SCENES / f'{name}.yaml', encoding='utf-8') as fh:
-        data = yaml.safe_load(fh)
-    for key, value in sections.items():
-        if value is None:
-            data.pop(key, None)
-        else:
-            data[key] = copy.deepcopy(value)
-    return Scene(data)
+    # The shipped scene on an endless arm: these tests compare effects with the base model.
+    return shipped_scene(name, endless=True, **sections)
 
 
 # ------------------------------------------------------------ 1: the plate drag of a slow spin

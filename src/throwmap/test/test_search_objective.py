@@ -27,13 +27,12 @@ import math
 import numpy as np
 import pytest
 from throwmap import design as D
-from throwmap import load_scene
 from throwmap import search as S
 from throwmap.cli import main
 from throwmap.errors import InputError
 from throwmap.model import ThrowModel
 from throwmap.sensor import sees
-from throwmap_testing import SCENES
+from throwmap_testing import SCENES, shipped_scene
 
 PAPER = (-0.005, 5.5851)
 # Small but long enough that every start of the paper's design gets a first ready.
@@ -44,7 +43,8 @@ GRID = {'h_range': (-0.012, -0.004), 'w_range': (4.0, 6.5), 'n_h': 4, 'n_w': 4, 
 
 @pytest.fixture(scope='module')
 def triangle():
-    return load_scene(str(SCENES / 'triangle.yaml'))
+    # The objectives on the paper's triangle with an endless arm, as they were introduced.
+    return shipped_scene('triangle', endless=True)
 
 
 def _seconds_by_orbits(triangle, opt, row, starts, first_rows):

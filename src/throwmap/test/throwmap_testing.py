@@ -25,6 +25,7 @@ import pathlib
 
 import numpy as np
 from throwmap import Part, Scene
+import yaml
 
 REPO = pathlib.Path(__file__).resolve().parents[3]
 SCENES = REPO / 'scenes'
@@ -79,3 +80,28 @@ def random_state(model, rng, spread=3.0):
     lo = model.r_min(edge) * 1.0001 + 1e-9
     R = lo + rng.uniform(0, spread) * max(lo, part.r)
     return edge, float(R)
+
+
+def shipped_scene(name, endless=False, **sections):
+    """
+    Return the shipped scene ``scenes/<name>.yaml`` with sections replaced (None: removed).
+
+    ``endless``, or an ``effects`` list without finite_arm: the scene's arm is taken as endless
+    (its length removed), as before the paper's scenes stated the 40 cm arm (issue 21): what a
+    test of other physics compares against the base model.
+    """
+    with open(SCENES / f'{name}.yaml', encoding='utf-8') as fh:
+        data = yaml.safe_load(fh)
+    for key, value in sections.items():
+        if value is None:
+            data.pop(key, None)
+        else:
+            data[key] = copy.deepcopy(value)
+    effects = data.get('effects') or []
+    if endless or 'finite_arm' not in effects:
+        for key in ('length', 'length_cm'):
+            data.get('arm', {}).pop(key, None)
+        data['effects'] = [e for e in effects if e != 'finite_arm']
+        if not data['effects']:
+            data.pop('effects')
+    return Scene(data)
