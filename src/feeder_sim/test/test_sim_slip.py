@@ -44,6 +44,7 @@ def standin(tmp_path):
     from feeder_sim.standin_node import StandInNode
     scene = yaml.safe_load((REPO / 'scenes' / 'triangle.yaml').read_text())
     scene.update(name='triangle_slip', effects=['liftoff'], liftoff={'mu': 1.0})
+    scene['arm'].pop('length_cm', None)     # no arm length: stranded, not lost off the end
     path = tmp_path / 'slip.yaml'
     path.write_text(yaml.safe_dump(scene))
     ctx = Context()
