@@ -156,6 +156,9 @@ def test_a_missing_or_negative_lever_is_refused_with_the_fix():
     data['contact'] = {'rolling_resistance_mm': -1}
     with pytest.raises(InputError, match='rolling_resistance_mm.*>= 0'):
         Scene(data)
+    data['contact'] = {'rolling_resistance_mm': 500}
+    with pytest.raises(InputError, match='500 mm is not below .* radius of gyration'):
+        Scene(data).model
     data['effects'] = []
     with pytest.raises(InputError, match='effect rolling_resistance'):
         Scene(data)

@@ -75,7 +75,19 @@ def slots(params):
 
 
 def bundle(params, part, knobs):
-    """Return the lever."""
+    """
+    Return the lever; refuse one of the part's own size.
+
+    Below the radius of gyration rho the contact equations stay solvable at every pivot (their
+    denominator is at least rho^2 + l^2 - b l > 0); a foam's lever is a fraction of that.
+    """
+    rho = math.sqrt(part.rho2)
+    if params.lever >= rho:
+        raise InputError('contact.rolling_resistance_mm',
+                         f"{params.lever * 1000:g} mm is not below the part's radius of "
+                         f'gyration ({rho * 1000:.3g} mm): that is no rolling resistance',
+                         'give the lever of the normal force ahead of the rolling corner, a '
+                         'fraction of a millimetre to a few millimetres, e.g. 0.5')
     return RollingParams(float(params.lever))
 
 
