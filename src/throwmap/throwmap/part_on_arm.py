@@ -35,6 +35,8 @@ import numpy as np
 from .sensor import read_sensor
 
 LOST = 'lost'       # kind of a throw that lost the part off the arm, or found none to throw
+# Models at other release speeds kept per part (a speed policy uses a few dozen).
+MAX_SPEEDS_KEPT = 64
 
 
 @dataclass(frozen=True)
@@ -49,6 +51,7 @@ class Throw:
     kind: str               # 'jog', 'flip' or 'lost' (no part on the arm after it)
     detected: bool
     lost_reason: str = ''   # why this throw lost the part ('' if it did not, or had none)
+    release_speed: float = math.nan     # rad/s the arm released at (noise included); nan: none
 
     @property
     def on_arm(self):
@@ -106,7 +109,32 @@ class PartOnArm:
                 self.model.reseed(int(seed))
         if edge is None or R is None:
             edge, R = scene.default_start()
+        self._at_speed = {}     # release speed -> the model at it (one random stream)
         self.place(edge, R)
+
+    def model_at(self, release_speed=None):
+        """
+        Return this part's model at another release speed (rad/s; None: the scene's own).
+
+        The same part, offset, effects and knobs (``ThrowModel.at``), and the same random
+        stream: a throw at any speed draws the next of this part's seeded draws, so a run that
+        changes speed per throw is as reproducible as one that does not. Kept per speed.
+        """
+        base = self.model
+        if release_speed is None or float(release_speed) == base.w:
+            return base
+        w = float(release_speed)
+        model = self._at_speed.get(w)
+        if model is None:
+            model = base.at(base.h, w)
+            if not base.stochastic:
+                model = model.nominal()
+            if len(self._at_speed) >= MAX_SPEEDS_KEPT:
+                self._at_speed.pop(next(iter(self._at_speed)))
+            self._at_speed[w] = model
+        if model.stochastic:
+            model.rng = base.rng
+        return model
 
     def place(self, edge, R):
         """Put a part at (edge, R); raises throwmap.DomainError outside the domain of f."""
@@ -141,24 +169,33 @@ class PartOnArm:
         return bool(self.scene.model.read_sensor(int(edge), math.nan if R is None else float(R),
                                                  self.sensor_radius, self.footprint))
 
-    def throw(self):
-        """Advance one throw; raises throwmap.DomainError / NumericalError (state unchanged)."""
+    def throw(self, release_speed=None):
+        """
+        Advance one throw; raises throwmap.DomainError / NumericalError (state unchanged).
+
+        ``release_speed`` (rad/s): the arm's setpoint for this throw (None: the scene's own
+        speed); release_noise, when the scene has it, perturbs it as it does the scene's. A
+        speed at which the part cannot be held raises throwmap.DomainError.
+        """
         edge0, r0 = self.edge, self.R
         reason = ''
+        speed = math.nan
         if self.lost:
             edge, R, kind = -1, math.nan, LOST
         else:
             # The full result, not f: the same throw (and random draws), with the reason of a loss.
-            res = self.model.throw(edge0, r0)
+            res = self.model_at(release_speed).throw(edge0, r0)
             edge, R, kind = res.edge, res.R, res.kind
             reason = res.lost_reason
+            speed = res.release_speed
             if not res.in_domain:   # off the arm, or at rest outside f's domain: no next throw
                 edge, R, kind = -1, math.nan, LOST
         self.edge, self.R = int(edge), float(R)
         self.count += 1
         if kind == LOST and self.lost_at is None:
             self.lost_at = self.count
-        return Throw(self.count, edge0, r0, self.edge, self.R, kind, self.read(), reason)
+        return Throw(self.count, edge0, r0, self.edge, self.R, kind, self.read(), reason,
+                     float(speed))
 
     def pose(self):
         """(x, y, yaw) of the resting part's CM in frame feeder_base; None without a part."""
