@@ -252,6 +252,28 @@ def test_bounded_release_noise_stays_in_its_box(base, distribution):
     assert (noisy.nominal().f_batch(e, r)['R'] == base.f_batch(e, r)['R']).all()
 
 
+def test_relative_release_bound_scales_with_each_throws_speed(base):
+    """release_speed_bound_rel s: every throw at speed w within w +- s w (corner: on it)."""
+    from throwmap.part_on_arm import PartOnArm
+    s = 0.005
+    noisy = scene(noise={'distribution': 'corner', 'release_speed_bound_rel': s, 'seed': 3},
+                  effects=['release_noise'])
+    part = PartOnArm(noisy, 1, 0.12, seed=3)
+    for w in (0.5 * PAPER_W, PAPER_W, 1.8 * PAPER_W):
+        speeds = np.array([part.model_at(w).throw(1, 0.12).release_speed for _ in range(200)])
+        assert np.allclose(np.abs(speeds - w), s * w, rtol=1e-12, atol=0)
+        assert 0.35 < (speeds > w).mean() < 0.65
+    # One random stream per part, seeded: the same speeds and seed give the same throws.
+    plan = [PAPER_W, 0.9 * PAPER_W, 1.2 * PAPER_W] * 5
+    first = [t for part in [PartOnArm(noisy, 1, 0.12, seed=7)] for t in map(part.throw, plan)]
+    again = [t for part in [PartOnArm(noisy, 1, 0.12, seed=7)] for t in map(part.throw, plan)]
+    assert first == again and len({t.release_speed for t in first}) > 3
+    zero = scene(noise={'distribution': 'uniform', 'release_speed_bound_rel': 0.0,
+                        'offset_bound': 0.0}, effects=['release_noise']).model
+    e, r = states(base, 100, 4)
+    assert (zero.f_batch(e, r)['R'] == base.f_batch(e, r)['R']).all()
+
+
 def test_sensor_noise_rates(base):
     part = base.part
     e, r = states(base, 400, 9)
@@ -367,6 +389,10 @@ def test_scan_contact_finder_misses_what_advancement_finds(base):
     ({'noise': {'release_speed_bound': 0.1}}, 'noise.release_speed_bound',
      'add release_noise'),
     ({'noise': {'seed': -2}}, 'noise.seed', 'integer >= 0'),
+    ({'noise': {'distribution': 'uniform', 'release_speed_bound_rel': 1.5},
+      'effects': ['release_noise']}, 'noise.release_speed_bound_rel', 'below 1'),
+    ({'noise': {'release_speed_bound_rel': 0.01}, 'effects': ['release_noise']},
+     'noise.release_speed_bound_rel', 'distribution'),
     ({'sensor': {'false_positive': 2}, 'effects': ['sensor_noise']}, 'sensor.false_positive',
      '<= 1'),
     ({'accuracy': {'contact_method': 'newton'}}, 'accuracy.contact_method',

@@ -212,6 +212,59 @@ def test_the_policy_file_round_trips_and_its_tracker_chooses_the_same(planned, t
         F.Tracker(dict(policy, format='something else'))
 
 
+def test_the_tracker_follows_the_speed_used_and_forgets_what_it_cannot_follow(planned):
+    policy = json.loads(json.dumps(F.policy_dict(planned, TRIANGLE)))
+    tracker = F.Tracker(policy)
+    system = planned.system
+    # The speed the throw was made at, not the one chosen: the knowledge of that speed's map.
+    chosen = tracker.speed()
+    other = (tracker.speed_index(chosen) + 1) % system.speeds.size
+    know = tracker.know.copy()
+    verdict = tracker.observe(False, float(system.speeds[other]))
+    assert np.array_equal(tracker.know, system.update(know, other, False))
+    assert verdict == 'tracking'
+    # A speed the policy has no map for: every cell that can read the bit, never less.
+    tracker.speed()
+    assert tracker.observe(True, 1.2345) == 'unknown speed'
+    assert np.array_equal(tracker.know, system.can_see)
+    # A bit no cell of the knowledge can read: an anomaly, then every cell that can read it.
+    cells = [c for c in np.nonzero(system.goal & ~system.can_see)[0][:20]
+             if any(system.allowed(np.arange(system.n) == c, k)
+                    for k in range(system.speeds.size))]
+    tracker.know[:] = False
+    tracker.know[cells[0]] = True        # one cell near R_min, far below the sensor
+    k = tracker.speed_index(tracker.speed())
+    assert not (system.image(tracker.know, k) & system.can_see).any()
+    assert tracker.observe(True) == 'anomaly'
+    assert np.array_equal(tracker.know, system.can_see)
+    with pytest.raises(RuntimeError, match='before speed'):
+        tracker.observe(True)
+
+
+@pytest.mark.parametrize('fault, words', [
+    ('missing', 'cannot read'), ('huge', 'more than'), ('not json', 'not JSON'),
+    ('deep', 'not JSON'), ('list', 'format'), ('short', 'malformed'), ('bad cell', 'malformed'),
+    ('no speeds', 'malformed')])
+def test_a_bad_policy_file_is_refused_naming_the_fault(planned, tmp_path, monkeypatch,
+                                                       fault, words):
+    good = F.policy_dict(planned, TRIANGLE)
+    path = tmp_path / 'policy.json'
+    text = {'missing': None, 'huge': json.dumps(good), 'not json': '{"format": ',
+            'deep': '[' * 100000 + ']' * 100000, 'list': '[1, 2]',
+            'short': json.dumps(dict(good, successors=good['successors'][:2])),
+            'bad cell': json.dumps(dict(good, start_knowledge=[10 ** 6])),
+            'no speeds': json.dumps(dict(good, speeds_rad_s=[]))}[fault]
+    if text is not None:
+        path.write_text(text)
+    if fault == 'huge':
+        monkeypatch.setattr(F, 'MAX_POLICY_BYTES', 1000)
+    with pytest.raises(InputError, match=words):
+        F.read_policy(str(path))
+    monkeypatch.undo()
+    path.write_text(json.dumps(good))
+    assert F.read_policy(str(path))['format'] == F.POLICY_FORMAT
+
+
 # ------------------------------------------------------------------------- the CLI
 
 @pytest.mark.parametrize('speeds', ['600:120:20', '120:600:0', '120:600', 'a:b:c', '-5,100'])

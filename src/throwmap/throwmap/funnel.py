@@ -53,7 +53,9 @@ the nodes; :class:`Tracker` runs it on line (numpy only).
 
 import copy
 from dataclasses import dataclass, field
+import json
 import math
+import os
 
 import numpy as np
 
@@ -641,30 +643,91 @@ def policy_dict(result, scene_path=''):
             'can_miss': s.can_miss.astype(int).tolist()}
 
 
+# A policy file larger than this is refused before it is read (26 speeds x 600 cells: 0.6 MB).
+MAX_POLICY_BYTES = 64 * 2 ** 20
+
+
+def read_policy(path):
+    """
+    Read and check a policy file of :func:`policy_dict`; InputError naming the fault and fix.
+
+    Refused: a missing or unreadable file, one over MAX_POLICY_BYTES, JSON that does not parse
+    or nests too deep, another format, and any field of the wrong type or shape (checked by
+    building the cell system from it).
+    """
+    fix = 'write it again with throwmap funnel SCENE --speeds A:B:STEP --out DIR'
+    try:
+        size = os.path.getsize(path)
+        if size <= MAX_POLICY_BYTES:
+            with open(path, encoding='utf-8') as fh:
+                d = json.load(fh)
+    except OSError as exc:
+        raise InputError('policy file', f'{path}: cannot read it ({exc.strerror})',
+                         'give the path of a <scene>_funnel_policy.json') from None
+    except (ValueError, RecursionError) as exc:
+        raise InputError('policy file', f'{path}: not JSON ({str(exc)[:200]})', fix) from None
+    if size > MAX_POLICY_BYTES:
+        raise InputError('policy file', f'{path}: {size} bytes, more than the '
+                         f'{MAX_POLICY_BYTES} a policy can need', fix)
+    system_from_dict(d)
+    return d
+
+
 def system_from_dict(d):
     """Rebuild the CellSystem and the start knowledge from :func:`policy_dict`'s dict."""
-    if d.get('format') != POLICY_FORMAT:
-        raise InputError('policy file', f'format {d.get("format")!r} is not {POLICY_FORMAT}',
+    if not isinstance(d, dict) or d.get('format') != POLICY_FORMAT:
+        got = d.get('format') if isinstance(d, dict) else type(d).__name__
+        raise InputError('policy file', f'format {got!r} is not {POLICY_FORMAT}',
                          'write it again with throwmap funnel --out DIR')
+    try:
+        return _system_from_dict(d)
+    except (KeyError, TypeError, ValueError, IndexError) as exc:
+        raise InputError('policy file', f'malformed {POLICY_FORMAT} ({type(exc).__name__}: '
+                         f'{str(exc)[:200]})',
+                         'write it again with throwmap funnel --out DIR') from None
+
+
+def _system_from_dict(d):
     m = int(d['cells_per_edge'])
+    edges = [int(e) for e in d['edges']]
+    E = len(edges)
+    speeds = np.asarray(d['speeds_rad_s'], dtype=float)
+    K, N = speeds.size, E * m
+    if m < 1 or E < 1 or K < 1 or speeds.ndim != 1 or not np.all(np.isfinite(speeds)) or \
+            np.any(speeds <= 0):
+        raise ValueError('speeds, edges and cells_per_edge must be non-empty, speeds > 0')
     ranges = np.asarray(d['successors'], dtype=np.int64)
-    K, N = ranges.shape[:2]
+    if ranges.shape != (K, N, E, 2) or ranges.min() < -1 or ranges.max() >= m:
+        raise ValueError(f'successors has shape {ranges.shape}, not {(K, N, E, 2)}, or a '
+                         'cell index out of range')
     succ = np.zeros((K, N, N), dtype=np.bool_)
     for k, a, j in zip(*np.nonzero(ranges[..., 0] >= 0)):
         lo, hi = ranges[k, a, j]
         succ[k, a, j * m + lo:j * m + hi + 1] = True
     goal = np.zeros(N, dtype=np.bool_)
-    gi = d['edges'].index(d['goal_edge'])
+    gi = edges.index(int(d['goal_edge']))
     goal[gi * m:(gi + 1) * m] = True
-    speeds = np.asarray(d['speeds_rad_s'])
-    system = CellSystem(speeds, d['h'], math.nan, d['robust'] * speeds, d['robust'],
-                        list(d['edges']), m, np.asarray(d['lo']), np.asarray(d['hi']), succ,
-                        np.asarray(d['escape'], dtype=np.bool_),
-                        np.asarray(d['can_see'], dtype=np.bool_),
-                        np.asarray(d['can_miss'], dtype=np.bool_), goal, int(d['goal_edge']),
-                        d['sensor_radius'], d['footprint'], d['arm_length'], 0)
+    masks = {}
+    for name, shape in (('escape', (K, N)), ('can_see', (N,)), ('can_miss', (N,))):
+        masks[name] = np.asarray(d[name], dtype=np.int64).astype(np.bool_)
+        if masks[name].shape != shape:
+            raise ValueError(f'{name} has shape {masks[name].shape}, not {shape}')
+    lo, hi = np.asarray(d['lo'], dtype=float), np.asarray(d['hi'], dtype=float)
+    if lo.shape != (E,) or hi.shape != (E,) or not np.all(hi > lo):
+        raise ValueError('lo and hi must give one range per edge, hi > lo')
+    home = int(d['home'])
+    if not 0 <= home < K:
+        raise ValueError(f'home {home} is not a speed index (0..{K - 1})')
+    robust = float(d['robust'])
+    system = CellSystem(speeds, float(d['h']), math.nan, robust * speeds, robust, edges, m,
+                        lo, hi, succ, masks['escape'], masks['can_see'], masks['can_miss'],
+                        goal, int(d['goal_edge']), float(d['sensor_radius']),
+                        float(d['footprint']), float(d['arm_length']), 0)
     know = np.zeros(N, dtype=np.bool_)
-    know[d['start_knowledge']] = True
+    start = np.asarray(d['start_knowledge'], dtype=np.int64)
+    if start.ndim != 1 or start.size == 0 or start.min() < 0 or start.max() >= N:
+        raise ValueError('start_knowledge must list cell indices')
+    know[start] = True
     return system, know
 
 
@@ -672,32 +735,63 @@ class Tracker:
     """
     The policy on line, for a node: ``speed()`` for the next throw, ``observe(bit)`` after it.
 
-    ``observe`` returns 'ready' (proven), 'tracking' or 'anomaly' (the bit contradicts every
+    ``observe`` returns 'ready' (proven), 'tracking', 'anomaly' (the bit contradicts every
     cell the knowledge allows: the cell map missed the throw, or the part is not where the
-    model says; the knowledge starts again from the start set). ``new_part()`` starts again.
+    model says) or 'unknown speed' (the throw's speed is none of the policy's); after either
+    of the last two the knowledge is every cell that can read the bit (never a ready from it
+    unless every such cell is on the goal edge).
+    ``new_part()`` starts again.
     """
 
     def __init__(self, policy):
         self.system, self.start = system_from_dict(policy)
-        self.chooser = Chooser(self.system, policy['home'])
+        self.home = int(policy['home'])
+        self.chooser = Chooser(self.system, self.home)
         self.new_part()
 
     def new_part(self):
         self.know = self.start.copy()
         self.last = -1
 
+    def _lose_track(self, bit):
+        """Forget where the part is: every cell that can read ``bit``."""
+        s = self.system
+        self.know = s.can_see.copy() if bit else s.can_miss.copy()
+        self.last = -1
+
+    @property
+    def home_speed(self):
+        """Return the scene's own release speed, rad/s (the fixed design's)."""
+        return float(self.system.speeds[self.home])
+
     def speed(self):
         """Choose the next throw's release speed, rad/s; None when no speed is safe."""
         self.last = self.chooser(self.know)
         return None if self.last < 0 else float(self.system.speeds[self.last])
 
-    def observe(self, bit):
-        if self.last < 0:
-            raise RuntimeError('observe() before speed(): no throw was chosen')
-        know = self.system.update(self.know, self.last, bool(bit))
+    def speed_index(self, speed):
+        """Return the index of a policy speed within 1e-9 relative of ``speed`` (rad/s), or -1."""
+        speeds = self.system.speeds
+        k = int(np.argmin(np.abs(speeds - speed)))
+        return k if abs(speeds[k] - speed) <= 1e-9 * speeds[k] else -1
+
+    def observe(self, bit, speed=None):
+        """
+        Take the bit read after a throw; ``speed``: the setpoint it was thrown at (rad/s).
+
+        None: the speed :meth:`speed` chose. A speed not among the policy's cannot be followed:
+        the knowledge becomes every cell that can read ``bit`` ('unknown speed').
+        """
+        k = self.last if speed is None else self.speed_index(float(speed))
         self.last = -1
+        if speed is None and k < 0:
+            raise RuntimeError('observe() before speed(): no throw was chosen')
+        if k < 0:
+            self._lose_track(bit)
+            return 'unknown speed'
+        know = self.system.update(self.know, k, bool(bit))
         if not know.any():
-            self.new_part()
+            self._lose_track(bit)
             return 'anomaly'
         self.know = know
         return 'ready' if self.system.proven(know, bit) else 'tracking'

@@ -34,6 +34,9 @@ nothing: the deterministic map bit for bit (tested).
 
 Scene: noise: {seed: 1, release_speed_sd_deg: 5, offset_sd_cm: 0.02}, or noise: {distribution:
 uniform, release_speed_bound_deg: 1.2, offset_bound_cm: 0.05}; effects: [release_noise].
+``release_speed_sd_rel`` / ``release_speed_bound_rel`` (a fraction of the throw's own w, added
+to the absolute part) give the design search's error box w +- s w at every speed, for a
+policy that changes the speed per throw (docs/funnel.md).
 """
 
 from collections import namedtuple
@@ -45,19 +48,21 @@ from ..errors import InputError
 from ..jit import njit
 
 NAME = 'release_noise'
-SCHEMA = {'noise': ('distribution', 'release_speed_sd', 'release_speed_sd_deg', 'offset_sd',
-                    'offset_sd_cm', 'release_speed_bound', 'release_speed_bound_deg',
-                    'offset_bound', 'offset_bound_cm')}
+SCHEMA = {'noise': ('distribution', 'release_speed_sd', 'release_speed_sd_deg',
+                    'release_speed_sd_rel', 'offset_sd', 'offset_sd_cm', 'release_speed_bound',
+                    'release_speed_bound_deg', 'release_speed_bound_rel', 'offset_bound',
+                    'offset_bound_cm')}
 KNOBS = {}
 STOCHASTIC = True
 
 # distribution -> the code the compiled hook branches on
 DISTRIBUTIONS = {'normal': 0, 'uniform': 1, 'corner': 2}
-_SD_KEYS = ('release_speed_sd', 'release_speed_sd_deg', 'offset_sd', 'offset_sd_cm')
-_BOUND_KEYS = ('release_speed_bound', 'release_speed_bound_deg', 'offset_bound',
-               'offset_bound_cm')
+_SD_KEYS = ('release_speed_sd', 'release_speed_sd_deg', 'release_speed_sd_rel', 'offset_sd',
+            'offset_sd_cm')
+_BOUND_KEYS = ('release_speed_bound', 'release_speed_bound_deg', 'release_speed_bound_rel',
+               'offset_bound', 'offset_bound_cm')
 
-NoiseParams = namedtuple('NoiseParams', ['speed_sd', 'offset_sd', 'kind'])
+NoiseParams = namedtuple('NoiseParams', ['speed_sd', 'offset_sd', 'kind', 'speed_rel'])
 
 
 @dataclass(frozen=True)
@@ -66,12 +71,14 @@ class ReleaseNoise:
     Parameters: the distribution and the scale of the release speed's and offset's errors.
 
     speed_sd and offset_sd are standard deviations (normal) or the bounds dw, dh (uniform,
-    corner).
+    corner); speed_rel adds a part proportional to the throw's speed (dw = speed_sd +
+    speed_rel w): the design search's error box (w +- s w) at every speed a policy throws.
     """
 
     speed_sd: float     # rad/s
     offset_sd: float    # m
     distribution: str = 'normal'
+    speed_rel: float = 0.0  # per unit of w
 
 
 def parse(scene):
@@ -95,22 +102,29 @@ def parse(scene):
                              (f'release_speed_{scale}_deg', math.pi / 180.0)])
     d_h = number(noise, f'offset_{scale}', 'noise', what, lo=0.0,
                  scale_keys=[(f'offset_{scale}', 1.0), (f'offset_{scale}_cm', 0.01)])
-    if d_w is None and d_h is None:
-        raise InputError('noise', f'effect release_noise needs release_speed_{scale}(_deg) '
-                         f'and/or offset_{scale}(_cm)',
+    rel_key = f'release_speed_{scale}_rel'
+    d_rel = number(noise, rel_key, 'noise', f'{what} (a fraction of the release speed)',
+                   lo=0.0, scale_keys=[(rel_key, 1.0)])
+    if d_rel is not None and d_rel >= 1.0:
+        raise InputError(f'noise.{rel_key}', f'must be below 1 (a fraction of the release '
+                         f'speed), got {d_rel!r}', 'give e.g. 0.005 for +-0.5 %')
+    if d_w is None and d_h is None and d_rel is None:
+        raise InputError('noise', f'effect release_noise needs release_speed_{scale}(_deg or '
+                         f'_rel) and/or offset_{scale}(_cm)',
                          f'give e.g. noise: {{release_speed_{scale}_deg: 5}}')
-    return ReleaseNoise(d_w or 0.0, d_h or 0.0, dist)
+    return ReleaseNoise(d_w or 0.0, d_h or 0.0, dist, d_rel or 0.0)
 
 
 def slots(params):
-    """Fill perturb, unless both deviations (bounds) are 0."""
-    return ('perturb',) if (params.speed_sd > 0.0 or params.offset_sd > 0.0) else ()
+    """Fill perturb, unless every deviation (bound) is 0."""
+    return ('perturb',) if (params.speed_sd > 0.0 or params.offset_sd > 0.0
+                            or params.speed_rel > 0.0) else ()
 
 
 def bundle(params, part, knobs):
     """Return the compiled parameters."""
     return NoiseParams(float(params.speed_sd), float(params.offset_sd),
-                       DISTRIBUTIONS[params.distribution])
+                       DISTRIBUTIONS[params.distribution], float(params.speed_rel))
 
 
 @njit
@@ -122,4 +136,4 @@ def perturb(w, h, z0, z1, prm):
     elif prm.kind == 2:     # a corner of the box; a zero draw (model.nominal()) stays nominal
         z0 = 1.0 if z0 > 0.0 else (-1.0 if z0 < 0.0 else 0.0)
         z1 = 1.0 if z1 > 0.0 else (-1.0 if z1 < 0.0 else 0.0)
-    return w + prm.speed_sd * z0, h + prm.offset_sd * z1
+    return w + (prm.speed_sd + prm.speed_rel * w) * z0, h + prm.offset_sd * z1
