@@ -98,7 +98,7 @@ EDGES_ANY = st.one_of(st.integers(-3, 6), INT32)
 # What a hostile change may set, per field of CycleStatus.
 REPORT_FIELDS = {
     'seq': SEQS_ANY, 'stamp': TIMES, 'outcome': OUTCOMES, 'sensor': SENSORS, 'reason': TEXT,
-    'hardware_id': TEXT, 'session': SESSIONS, 'mac': MACS.map(list),
+    'hardware_id': TEXT, 'release_speed': FLOATS, 'session': SESSIONS, 'mac': MACS.map(list),
 }
 # ... and of PredictedState.
 STATE_FIELDS = {'seq': SEQS_ANY, 'stamp': TIMES, 'edge': EDGES_ANY, 'r': FLOATS,

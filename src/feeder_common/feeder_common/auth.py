@@ -34,9 +34,11 @@ import os
 import secrets
 import stat
 
-CYCLE_LABEL = 'feeder-cycle-v1'
+# v2: the cycle's release-speed setpoint is signed too (issue 25).
+CYCLE_LABEL = 'feeder-cycle-v2'
 FIRED_LABEL = 'feeder-fired-v1'
 VERDICT_LABEL = 'feeder-verdict-v1'
+SETPOINT_LABEL = 'feeder-setpoint-v1'
 KEY_BYTES = 32                  # a new key; a given key may be longer
 MAX_KEY_FILE_BYTES = 4096
 MAC_BYTES = 32
@@ -180,9 +182,24 @@ def _opt(value):
     return 'none' if value is None else value
 
 
-def cycle_fields(node, session, seq, stamp_ns, outcome, sensor, message):
-    """Fields of a cycle report: ``outcome`` 'completed' or 'failed', ``sensor`` '1'/'0'/'none'."""
-    return (node, session, int(seq), _opt(stamp_ns), outcome, sensor, message)
+def speed_text(speed):
+    """Write a speed (rad/s) as signed: Python's shortest round-trip repr; None or NaN 'none'."""
+    return 'none' if speed is None or speed != speed else repr(float(speed))
+
+
+def cycle_fields(node, session, seq, stamp_ns, outcome, sensor, message, release_speed):
+    """
+    Fields of a cycle report: ``outcome`` 'completed' or 'failed', ``sensor`` '1'/'0'/'none'.
+
+    ``release_speed``: the setpoint the cycle was fired at, rad/s (None: the controller's own).
+    """
+    return (node, session, int(seq), _opt(stamp_ns), outcome, sensor, message,
+            speed_text(release_speed))
+
+
+def setpoint_fields(sender, session, seq, driver_session, speed, sent_ns):
+    """Fields of a release-speed setpoint of ``sender`` for cycle ``seq`` of a driver run."""
+    return (sender, session, int(seq), driver_session, speed_text(speed), int(sent_ns))
 
 
 def fired_fields(node, session, seq, stamp_ns):

@@ -47,6 +47,7 @@ from feeder_interfaces.msg import BasinOutcome, EdgeBand, EdgeDesign, Escape
 from feeder_interfaces.msg import CycleStatus as CycleStatusMsg
 from feeder_interfaces.msg import LimitSet as LimitSetMsg
 from feeder_interfaces.msg import PredictedState as PredictedStateMsg
+from feeder_interfaces.msg import SpeedSetpoint
 from feeder_interfaces.msg import Verdict
 from sensor_msgs.msg import JointState, Range
 
@@ -137,20 +138,33 @@ class CycleStatus:
     hardware_id: str
     session: str = ''       # the reporting run (CycleSigner); '' unsigned
     mac: bytes = b''        # HMAC-SHA256 of the report (feeder_common.auth); b'' unsigned
+    release_speed: Optional[float] = None   # rad/s, the cycle's setpoint; None: none
 
 
-def cycle_status(seq, ok, reason, sensor, stamp_ns, hardware_id):
+def _speed(speed):
+    """Return a setpoint (rad/s) as sent: a float > 0, or NaN for none; ValueError else."""
+    if speed is None:
+        return math.nan
+    speed = float(speed)
+    if not (math.isfinite(speed) and speed > 0.0):
+        raise ValueError(f'release speed {speed!r} is not a finite speed > 0 rad/s')
+    return speed
+
+
+def cycle_status(seq, ok, reason, sensor, stamp_ns, hardware_id, release_speed=None):
     """
     Build an unsigned ``cycle_status``; ``sensor`` True/False, or None for a failed cycle.
 
     ``reason`` (why a cycle failed) is only sent for a failed cycle; it and ``hardware_id``
     are cut to MAX_TEXT characters (what a parser takes), a NUL sent as U+FFFD.
+    ``release_speed``: the setpoint the cycle was fired at (rad/s; None: the controller's own
+    fixed speed, sent as NaN).
     """
     return CycleStatusMsg(
         seq=int(seq), stamp=time_msg(stamp_ns),
         outcome=CycleStatusMsg.OUTCOME_COMPLETED if ok else CycleStatusMsg.OUTCOME_FAILED,
         sensor=_SENSOR_CODE[sensor], reason='' if ok else _wire_text(reason),
-        hardware_id=_wire_text(hardware_id))
+        hardware_id=_wire_text(hardware_id), release_speed=_speed(release_speed))
 
 
 def _report_fields(msg, what, outcomes):
@@ -192,8 +206,15 @@ def parse_cycle_status(msg):
     seq, sensor, stamp = _report_fields(
         msg, what, (CycleStatusMsg.OUTCOME_COMPLETED, CycleStatusMsg.OUTCOME_FAILED))
     session, tag = _signature(msg, what)
+    speed = msg.release_speed
+    if not math.isnan(speed):
+        try:
+            _speed(speed)
+        except ValueError as exc:
+            raise ValueError(f'{what}: {exc} (NaN: none)') from None
     return CycleStatus(seq, msg.outcome == CycleStatusMsg.OUTCOME_COMPLETED, sensor, stamp,
-                       msg.reason, msg.hardware_id, session, tag)
+                       msg.reason, msg.hardware_id, session, tag,
+                       None if math.isnan(speed) else float(speed))
 
 
 @dataclass(frozen=True)
@@ -403,6 +424,61 @@ def check_verdict(msg, key, monitor, now_ns, max_age_s=1.0):
     return VerdictCheck(not reason, authentic, int(msg.seq), stamp_ns, age, reason)
 
 
+@dataclass(frozen=True)
+class SetpointCheck:
+    """What a driver may conclude from one ``SpeedSetpoint`` (:func:`check_setpoint`)."""
+
+    usable: bool            # signed by the sender under the key, fresh, a valid speed
+    seq: int
+    driver_session: str
+    speed: float            # rad/s (NaN when not a valid speed)
+    reason: str             # why not usable ('' when usable)
+
+
+def signed_setpoint(key, sender, session, seq, driver_session, speed, sent_ns):
+    """
+    Build a signed ``SpeedSetpoint`` of ``sender`` (its fully qualified node name).
+
+    ``speed`` rad/s for cycle ``seq`` of the driver run ``driver_session`` ('' : the first
+    cycle of a run not seen yet).
+    """
+    msg = SpeedSetpoint(seq=int(seq), driver_session=_wire_text(driver_session),
+                        speed=_speed(speed), session=_wire_text(session))
+    msg.sent = time_msg(sent_ns)
+    msg.mac = list(auth.mac(key, auth.SETPOINT_LABEL, auth.setpoint_fields(
+        sender, session, seq, msg.driver_session, speed, sent_ns)))
+    return msg
+
+
+def check_setpoint(msg, key, sender, now_ns, max_age_s=1.0):
+    """
+    Check a ``release_speed_setpoint`` message in one call, for a driver.
+
+    ``usable`` only when the MAC verifies for ``sender`` under ``key``, the speed is finite
+    and > 0, and it was sent at most ``max_age_s`` ago. Whether it is for the driver's next
+    cycle (``seq``, ``driver_session``) is the driver's to check. Never raises.
+    """
+    seq, session = int(msg.seq), str(msg.driver_session)
+    try:
+        sent_ns = time_ns(msg.sent)
+        speed = _speed(msg.speed)
+        _signature(msg, 'release_speed_setpoint')
+    except ValueError as exc:
+        return SetpointCheck(False, seq, session, math.nan, f'malformed setpoint: {exc}')
+    fields = auth.setpoint_fields(sender, msg.session, seq, session, speed, sent_ns)
+    age = (int(now_ns) - sent_ns) * 1e-9
+    if not auth.mac_ok(key, auth.SETPOINT_LABEL, fields, bytes(msg.mac)):
+        reason = (f'not signed by {sender} under this key (key id {auth.key_id(key)})'
+                  if len(msg.mac) else 'unsigned setpoint')
+    elif abs(age) > max_age_s:
+        reason = (f'sent {age:.3f} s ago, more than {max_age_s:g} s: the sender stalled, '
+                  'died, or this is a replay' if age > 0 else
+                  f'sent {-age:.3f} s in the future: clocks apart')
+    else:
+        reason = ''
+    return SetpointCheck(not reason, seq, session, speed, reason)
+
+
 def _signature(msg, what):
     """
     Return the ``session`` and ``mac`` of a cycle report; ('', b'') unsigned.
@@ -449,19 +525,19 @@ class CycleSigner:
         self.node = node
         self.session = session or auth.new_session()
 
-    def cycle_status(self, seq, ok, reason, sensor, stamp_ns, hardware_id):
+    def cycle_status(self, seq, ok, reason, sensor, stamp_ns, hardware_id, release_speed=None):
         """Build a signed ``cycle_status`` (:func:`cycle_status` with ``session`` and ``mac``)."""
-        msg = cycle_status(seq, ok, reason, sensor, stamp_ns, hardware_id)
+        msg = cycle_status(seq, ok, reason, sensor, stamp_ns, hardware_id, release_speed)
         return self._signed(msg, auth.CYCLE_LABEL, auth.cycle_fields(
             self.node, self.session, seq, stamp_ns, msg.outcome, _SENSOR_TEXT[sensor],
-            msg.reason))
+            msg.reason, release_speed))
 
     def cycle_fired(self, seq, stamp_ns, hardware_id):
         """Build a signed ``cycle_fired``: cycle ``seq`` is being fired (before the arm moves)."""
         msg = CycleStatusMsg(seq=int(seq), stamp=time_msg(stamp_ns),
                              outcome=CycleStatusMsg.OUTCOME_FIRED,
                              sensor=CycleStatusMsg.SENSOR_NONE,
-                             hardware_id=_wire_text(hardware_id))
+                             hardware_id=_wire_text(hardware_id), release_speed=math.nan)
         return self._signed(msg, auth.FIRED_LABEL,
                             auth.fired_fields(self.node, self.session, seq, stamp_ns))
 

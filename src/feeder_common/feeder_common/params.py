@@ -192,6 +192,20 @@ LINK_SPECS = (
 )
 
 
+# The release speed per cycle (issue 25): the driver and its stand-in take the same three.
+SETPOINT_SPECS = (
+    ParamSpec('release_speed_mode', 'fixed', "'fixed': every cycle at the controller's own "
+              "speed; 'setpoint': every cycle at the signed setpoint for it on "
+              'release_speed_setpoint (from speed_source), none: no cycle (a controller that '
+              'cannot set its speed: fixed, said once)', choices=('fixed', 'setpoint')),
+    ParamSpec('speed_source', 'feeder_monitor', 'node whose signed setpoints are taken '
+              '(resolved like a topic name: relative to the namespace)', read_only=True,
+              constraints='not empty', max_length=256),
+    ParamSpec('max_setpoint_age', 1.0, 'a setpoint sent longer ago than this (s) is not used '
+              '(the sender republishes it four times a second)', 0.05, 60.0),
+)
+
+
 def check_link(new, current):
     """
     Reason why setting ``new`` on top of ``current`` breaks a rule of LINK_SPECS, or None.

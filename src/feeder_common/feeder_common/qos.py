@@ -57,6 +57,9 @@ PREDICTION = DEFAULT
 PREDICTED_STATE = CYCLE_STATUS
 PREDICTION_LATCHED = LATCHED
 MARKERS = LATCHED
+# The release speed of the next cycle (the speed policy's): the newest one reaches a driver
+# that starts or restarts later; the sender republishes it with a fresh ``sent``.
+RELEASE_SPEED_SETPOINT = LATCHED
 
 
 def edge1_ready(period):

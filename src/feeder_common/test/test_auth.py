@@ -16,6 +16,7 @@
 
 import hashlib
 import hmac
+import math
 import multiprocessing
 import os
 import stat
@@ -101,16 +102,25 @@ def test_the_default_key_lives_under_ros_home():
 
 def test_the_mac_is_hmac_sha256_of_length_prefixed_fields():
     key = bytes(range(32))
-    fields = ('/feeder/feeder_driver', 'ab12', 7, 'none', 'completed', '1', '')
-    data = (b'15:feeder-cycle-v1' b'21:/feeder/feeder_driver' b'4:ab12' b'1:7' b'4:none'
-            b'9:completed' b'1:1' b'0:')
+    fields = auth.cycle_fields('/feeder/feeder_driver', 'ab12', 7, None, 'completed', '1', '',
+                               5.5851)
+    data = (b'15:feeder-cycle-v2' b'21:/feeder/feeder_driver' b'4:ab12' b'1:7' b'4:none'
+            b'9:completed' b'1:1' b'0:' b'6:5.5851')
     assert auth.mac(key, auth.CYCLE_LABEL, fields) == \
+        hmac.new(key, data, hashlib.sha256).digest()
+    # No setpoint (the controller's own speed), NaN alike: 'none'.
+    for none in (None, math.nan):
+        assert auth.cycle_fields('n', 's', 1, 2, 'failed', 'none', 'x', none)[-1] == 'none'
+    setpoint = auth.setpoint_fields('/feeder/feeder_monitor', 'cd', 8, '', 6.0, 123)
+    data = (b'18:feeder-setpoint-v1' b'22:/feeder/feeder_monitor' b'2:cd' b'1:8' b'0:'
+            b'3:6.0' b'3:123')
+    assert auth.mac(key, auth.SETPOINT_LABEL, setpoint) == \
         hmac.new(key, data, hashlib.sha256).digest()
 
 
 def test_a_mac_does_not_verify_another_statement_key_or_field():
     key, other = bytes(32), bytes([1]) * 32
-    f = auth.cycle_fields('/feeder/feeder_driver', 's', 3, 10, 'completed', '1', '')
+    f = auth.cycle_fields('/feeder/feeder_driver', 's', 3, 10, 'completed', '1', '', 6.25)
     tag = auth.mac(key, auth.CYCLE_LABEL, f)
     assert auth.mac_ok(key, auth.CYCLE_LABEL, f, tag)
     assert not auth.mac_ok(other, auth.CYCLE_LABEL, f, tag)

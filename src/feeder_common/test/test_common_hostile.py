@@ -25,6 +25,7 @@ writes back to the same message, or raises ValueError; never another exception. 
 parser enforces has its own test, with the words of the refusal.
 """
 
+import copy
 import math
 import struct
 
@@ -64,8 +65,9 @@ def built_reports(draw):
         return SIGNER.cycle_fired(seq, stamp, hardware_id)
     ok = draw(st.booleans())
     build = messages.cycle_status if kind == 'unsigned' else SIGNER.cycle_status
+    speed = draw(st.one_of(st.none(), st.floats(1e-3, 1e3)))
     return build(seq, ok, draw(BUILT_TEXT), draw(st.booleans()) if ok else None, stamp,
-                 hardware_id)
+                 hardware_id, speed)
 
 
 @st.composite
@@ -116,6 +118,15 @@ def same_float(a, b):
     return (math.isnan(a) and math.isnan(b)) or struct.pack('<d', a) == struct.pack('<d', b)
 
 
+def same_report(a, b):
+    """Whether two CycleStatus messages are equal, a NaN release speed equal to a NaN."""
+    if not same_float(a.release_speed, b.release_speed):
+        return False
+    a, b = copy.copy(a), copy.copy(b)
+    a.release_speed = b.release_speed = 0.0
+    return a == b
+
+
 def signed_ok(rec, outcome):
     """Whether the MAC of a parsed report verifies (what the monitor's trust checks)."""
     if outcome == CycleStatusMsg.OUTCOME_FIRED:
@@ -124,7 +135,8 @@ def signed_ok(rec, outcome):
                            rec.mac)
     return auth.mac_ok(KEY, auth.CYCLE_LABEL, auth.cycle_fields(
         DRIVER, rec.session, rec.seq, rec.stamp_ns, outcome,
-        {True: '1', False: '0', None: 'none'}[rec.sensor], rec.reason), rec.mac)
+        {True: '1', False: '0', None: 'none'}[rec.sensor], rec.reason, rec.release_speed),
+        rec.mac)
 
 
 # ---- each rule of the parsers, broken alone ------------------------------------------------
@@ -135,7 +147,8 @@ def report(kind, **change):
         msg = SIGNER.cycle_fired(7, STAMP, 'emu 1.0')
     else:
         ok = kind == 'completed'
-        msg = SIGNER.cycle_status(7, ok, 'no ACK', True if ok else None, STAMP, 'emu 1.0')
+        msg = SIGNER.cycle_status(7, ok, 'no ACK', True if ok else None, STAMP, 'emu 1.0',
+                                  6.25)
     for name, value in change.items():
         setattr(msg, name, value)
     return wire(msg)
@@ -251,12 +264,22 @@ def test_the_boundaries_of_every_rule_are_still_taken(outcome):
     assert (unsigned.session, unsigned.mac) == ('', b'')
 
 
+@pytest.mark.parametrize('speed', [0.0, -1.0, math.inf, -math.inf, -0.0])
+def test_a_release_speed_no_builder_writes_is_refused(speed):
+    with pytest.raises(ValueError, match='release speed .* is not a finite speed > 0'):
+        messages.parse_cycle_status(report('completed', release_speed=speed))
+    with pytest.raises(ValueError, match='is not a finite speed > 0'):
+        SIGNER.cycle_status(7, True, '', True, STAMP, 'emu', speed)
+
+
 def test_a_changed_report_no_longer_verifies():
     # The parsers read the signature; whether it signs the fields is the monitor's check.
     for outcome, change in (('completed', {'sensor': 0}), ('completed', {'seq': 8}),
                             ('failed', {'reason': 'other'}), ('fired', {'seq': 8}),
                             ('fired', {'stamp': Time(sec=1795362335, nanosec=0)}),
-                            ('completed', {'session': 'ab12'})):
+                            ('completed', {'session': 'ab12'}),
+                            ('completed', {'release_speed': 6.5}),
+                            ('failed', {'release_speed': math.nan})):
         rec = parser_of(outcome)(report(outcome, **change))
         assert not signed_ok(rec, outcome), (outcome, change)
 
@@ -362,9 +385,9 @@ def test_any_cycle_status_parses_to_what_the_builder_writes_or_is_a_value_error(
     except ValueError:
         return
     again = messages.cycle_status(rec.seq, rec.ok, rec.reason, rec.sensor, rec.stamp_ns,
-                                  rec.hardware_id)
+                                  rec.hardware_id, rec.release_speed)
     again.session, again.mac = rec.session, list(rec.mac)
-    assert again == msg
+    assert same_report(again, msg)
     assert 0 <= rec.seq <= MAX_SEQ and 0 <= rec.stamp_ns <= messages.MAX_STAMP_NS
 
 
@@ -379,7 +402,7 @@ def test_any_cycle_fired_parses_to_what_the_builder_writes_or_is_a_value_error(m
         return
     again = SIGNER.cycle_fired(rec.seq, rec.stamp_ns, msg.hardware_id)
     again.session, again.mac = rec.session, list(rec.mac)
-    assert again == msg
+    assert same_report(again, msg)
     assert 0 <= rec.seq <= MAX_SEQ and 0 <= rec.stamp_ns <= messages.MAX_STAMP_NS
 
 
@@ -451,15 +474,17 @@ def test_a_builder_cuts_a_text_too_long_for_the_parser():
 @SETTINGS
 @given(seq=st.integers(0, MAX_SEQ), ok=st.booleans(), bit=st.booleans(),
        stamp=st.integers(0, messages.MAX_STAMP_NS), reason=BUILT_TEXT, hardware_id=BUILT_TEXT,
-       signed=st.booleans())
+       signed=st.booleans(),
+       speed=st.one_of(st.none(), st.floats(min_value=5e-324, allow_infinity=False)))
 def test_every_cycle_status_the_builder_writes_reads_back(seq, ok, bit, stamp, reason,
-                                                          hardware_id, signed):
+                                                          hardware_id, signed, speed):
     sensor = bit if ok else None
     build = SIGNER.cycle_status if signed else messages.cycle_status
-    rec = messages.parse_cycle_status(wire(build(seq, ok, reason, sensor, stamp, hardware_id)))
+    rec = messages.parse_cycle_status(wire(build(seq, ok, reason, sensor, stamp, hardware_id,
+                                                 speed)))
     assert rec == messages.CycleStatus(
         seq, ok, sensor, stamp, '' if ok else sent(reason), sent(hardware_id),
-        SESSION if signed else '', rec.mac if signed else b'')
+        SESSION if signed else '', rec.mac if signed else b'', speed)
     outcome = 'completed' if ok else 'failed'
     assert signed_ok(rec, outcome) == signed      # the MAC signs what the parser read
 

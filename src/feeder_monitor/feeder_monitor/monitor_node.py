@@ -29,11 +29,11 @@ import time
 from feeder_common import auth, qos
 from feeder_common.diagnostics import Updater
 from feeder_common.messages import (parse_cycle_fired, parse_cycle_status, proximity_detected,
-                                    signed_verdict, time_ns)
+                                    signed_setpoint, signed_verdict, time_ns)
 from feeder_common.node import FeederLifecycleNode, flush, run_node
 from feeder_common.parameters import ParameterGate
 from feeder_common.params import check_scene
-from feeder_interfaces.msg import CycleStatus, Verdict
+from feeder_interfaces.msg import CycleStatus, SpeedSetpoint, Verdict
 from lifecycle_msgs.msg import TransitionEvent
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.lifecycle import TransitionCallbackReturn
@@ -44,6 +44,7 @@ from throwmap import analyse, load_scene, scene_analysis, ThrowmapError
 from .params import MONITOR_PARAMS
 from .readiness import (ANOMALY, limit_set_orbit, ReadinessMonitor, rules_from_analysis,
                         WARMING_UP)
+from .speed_policy import load_tracker, PolicyReadiness
 from .trust import ReportGate
 
 RULE_PARAMS = ('sensor_radius', 'warmup_cycles', 'settle_cycles', 'silence_margin',
@@ -77,8 +78,9 @@ class MonitorNode(FeederLifecycleNode):
     def __init__(self, **kwargs):
         # Set before Node.__init__: a context shutdown may destroy a half-built node.
         self._active = False
-        self._ready_pub = self._verdict_pub = None
+        self._ready_pub = self._verdict_pub = self._setpoint_pub = None
         self._beat_timer = None
+        self._tracker = None        # the speed policy (speed_policy set), configured
         super().__init__('feeder_monitor', **kwargs)
         # Scenes by path, loaded once (the parameter checks load them too).
         self._load_scene = functools.lru_cache(maxsize=None)(load_scene)
@@ -146,6 +148,11 @@ class MonitorNode(FeederLifecycleNode):
             return self._configure_failed(f'scene {scene.source}: {exc}')
         except ValueError as exc:       # a rule parameter the analysis rejects
             return self._configure_failed(str(exc))
+        if self._param('speed_policy'):
+            try:
+                self._tracker = load_tracker(self._param('speed_policy'), rules, scene)
+            except ValueError as exc:   # throwmap.InputError included
+                return self._configure_failed(str(exc))
         self._key = key
         self._rules_now = rules
         self._rules_pending = False
@@ -156,6 +163,9 @@ class MonitorNode(FeederLifecycleNode):
         self._ready_pub = pub(Verdict, 'edge1_ready',
                               qos.edge1_ready(self._param('ready_deadline')))
         self._verdict_pub = pub(Verdict, 'edge1_verdict', qos.EDGE1_VERDICT)
+        if self._tracker is not None:
+            self._setpoint_pub = pub(SpeedSetpoint, 'release_speed_setpoint',
+                                     qos.RELEASE_SPEED_SETPOINT)
         sub = self.create_subscription
         self._subs = [
             sub(TransitionEvent, f'{self._driver}/transition_event',
@@ -167,6 +177,13 @@ class MonitorNode(FeederLifecycleNode):
             sub(CycleStatus, 'cycle_fired', self._on_cycle_fired, qos.CYCLE_FIRED),
         ]
         self._log_rules(rules)
+        if self._tracker is not None:
+            t = self._tracker.system
+            self.get_logger().info(
+                f'speed policy {self._param("speed_policy")}: {t.speeds.size} speeds '
+                f'{t.speeds.min():.3f}..{t.speeds.max():.3f} rad/s, {t.n} cells, error bound '
+                f's = {t.robust:g}; readies by its knowledge, setpoints on '
+                f'{self.resolve_topic_name("release_speed_setpoint")}')
         self.get_logger().info(f'judging reports of {self._driver} signed with key id '
                                f'{auth.key_id(self._key)}; verdicts signed as {self._fqn}')
         return super().on_configure(state)
@@ -180,11 +197,13 @@ class MonitorNode(FeederLifecycleNode):
     def on_activate(self, state):
         self._flush_rules()
         # Judging starts afresh: cycles may have fired while inactive.
-        self._monitor = ReadinessMonitor(self._rules_now)
+        self._monitor = (ReadinessMonitor(self._rules_now) if self._tracker is None else
+                         PolicyReadiness(self._rules_now, self._tracker))
         result = super().on_activate(state)     # the publishers send from here on
         self._active = True
         self._statement = (0, None, False, WARMING_UP, '')
         self._publish_statement()
+        self._publish_setpoint()
         self._last_beat = time.monotonic()
         self._beat_timer = self.create_timer(self._beat_period, self._on_heartbeat)
         return result
@@ -229,10 +248,11 @@ class MonitorNode(FeederLifecycleNode):
         for s in self._subs:
             self.destroy_subscription(s)
         self._subs = []
-        for pub in (self._ready_pub, self._verdict_pub):
+        for pub in (self._ready_pub, self._verdict_pub, self._setpoint_pub):
             if pub is not None:
                 self.destroy_lifecycle_publisher(pub)
-        self._ready_pub = self._verdict_pub = None
+        self._ready_pub = self._verdict_pub = self._setpoint_pub = None
+        self._tracker = None
         self._monitor = self._gate = self._key = None
         self._recent_bits.clear()
         self._recent_proximity.clear()
@@ -283,6 +303,10 @@ class MonitorNode(FeederLifecycleNode):
             reason = check_scene(changes['scene'], self._load_scene)
             if reason:
                 return reason
+        if self._tracker is not None and 'sensor_radius' in changes:
+            return (f'sensor_radius cannot change while speed_policy is set: the policy was made '
+                    f'for the sensor at {self._tracker.system.sensor_radius:.6f} m (clean up '
+                    'the monitor, then configure it with a policy made for the new sensor)')
         # Unconfigured (no analysis yet) the rules are checked at configure.
         if self._base is not None and any(n in changes for n in RULE_PARAMS):
             try:
@@ -379,10 +403,15 @@ class MonitorNode(FeederLifecycleNode):
             self._note_interrupt(reason)
         if status.ok and status.sensor is not None:
             self._remember(self._recent_bits, status.stamp_ns, (status.seq, status.sensor))
-            v = self._monitor.completed(status.seq, status.sensor)
+            if self._tracker is not None:
+                v = self._monitor.completed(status.seq, status.sensor,
+                                            speed=status.release_speed)
+            else:
+                v = self._monitor.completed(status.seq, status.sensor)
         else:
             v = self._monitor.failed(status.seq, status.reason)
         self._judge(v, status.stamp_ns)
+        self._publish_setpoint()
         self._cross_check(status.stamp_ns)
 
     def _on_cycle_fired(self, msg):
@@ -482,6 +511,7 @@ class MonitorNode(FeederLifecycleNode):
                 self._publish_statement()
         elif now - self._last_sent >= self._beat_period * 0.9:
             self._publish_statement()
+        self._publish_setpoint()
 
     def _on_driver_liveliness(self, info):
         if not self._active:
@@ -511,9 +541,14 @@ class MonitorNode(FeederLifecycleNode):
         self._monitor.new_part()
         seq, stamp_ns = self._statement[:2]
         self._set_statement(seq, stamp_ns, False, self._monitor.state)
+        self._publish_setpoint()
         response.success = True
-        response.message = (f'new part: edge1_ready false; warm-up and settling start again '
-                            f'({self._monitor.throws_to_go} throws before a ready can come)')
+        if self._tracker is not None:
+            response.message = ('new part: edge1_ready false; the speed policy starts from its '
+                                f'start set, next speed {self._monitor.next_speed:.4f} rad/s')
+        else:
+            response.message = (f'new part: edge1_ready false; warm-up and settling start again '
+                                f'({self._monitor.throws_to_go} throws before a ready can come)')
         self.get_logger().info(response.message)
         return response
 
@@ -521,6 +556,25 @@ class MonitorNode(FeederLifecycleNode):
         """No cycle can be judged (the driver left, stopped or is unproven): false, warm up."""
         self._monitor.interrupt(reason)
         self._note_interrupt(reason)
+        self._publish_setpoint()
+
+    def _publish_setpoint(self):
+        """
+        Sign and publish the next cycle's release speed (speed policy only; while active).
+
+        Addressed to the driver run and cycle after the last judged one; before the monitor has
+        judged a cycle of the current run, to that run's next cycle whatever it is
+        (driver_session ''): the cycle's signed report says the speed it was fired at, and the
+        knowledge follows that speed.
+        """
+        if self._setpoint_pub is None or not self._active or \
+                not isinstance(self._monitor, PolicyReadiness):
+            return
+        m = self._monitor
+        known = self._gate.session is not None and m.last_seq is not None
+        seq, session = (m.last_seq + 1, self._gate.session) if known else (0, '')
+        self._setpoint_pub.publish(signed_setpoint(
+            self._key, self._fqn, self._session, seq, session, m.next_speed, self._now_ns()))
 
     def _note_interrupt(self, reason):
         self._anomaly_in_period = (self._monitor.last_seq, reason)
@@ -564,7 +618,14 @@ class MonitorNode(FeederLifecycleNode):
                      'driver_session': self._gate.session or 'none',
                      'since_restart': m.since_restart, 'cycles_since_detection': m.gap,
                      'last_anomaly': m.last_anomaly, **r.as_dict(),
-                     'namespace': self.get_namespace()})
+                     'namespace': self.get_namespace(), **self._policy_diag(m)})
+
+    def _policy_diag(self, m):
+        if not isinstance(m, PolicyReadiness):
+            return {'speed_policy': 'none (the fixed design)'}
+        return {'speed_policy': self._param('speed_policy'),
+                'next_release_speed': f'{m.next_speed:.4f}',
+                'knowledge_cells': m.knowledge_cells, 'last_policy_word': m.result or 'none'}
 
     def _diag_inputs(self, stat):
         gate_counts = self._gate.counts if self._gate is not None else {}

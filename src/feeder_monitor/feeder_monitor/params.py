@@ -52,6 +52,12 @@ MONITOR_PARAMS = (
               'time): its offered deadline and liveliness lease; a reader that sees either '
               'lapse, or a sent time older than this, must take the statement as false',
               minimum=0.02, maximum=60.0, read_only=True),
+    ParamSpec('speed_policy', '', 'policy file of throwmap funnel (<scene>_funnel_policy.json; '
+              "docs/funnel.md); '': the fixed design (the warm-up and the limit set's rules). "
+              "Set: each cycle is judged by the policy's knowledge and the next release speed "
+              'is published, signed, on release_speed_setpoint (for a driver in '
+              'release_speed_mode setpoint)', read_only=True, max_length=4096,
+              constraints='made for the scene, its goal edge, h, speed and the sensor_radius'),
     DIAGNOSTIC_PERIOD,
 )
 

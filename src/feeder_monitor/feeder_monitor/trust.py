@@ -92,7 +92,8 @@ class ReportGate:
         outcome = 'completed' if report.ok else 'failed'
         sensor = {True: '1', False: '0', None: 'none'}[report.sensor]
         fields = auth.cycle_fields(self.driver_node, report.session, report.seq,
-                                   report.stamp_ns, outcome, sensor, report.reason)
+                                   report.stamp_ns, outcome, sensor, report.reason,
+                                   report.release_speed)
         bad = self._authentic(auth.CYCLE_LABEL, fields, report.mac)
         if bad:
             return self._refuse(*bad)

@@ -26,7 +26,7 @@ import math
 
 from feeder_common.params import (check_link, check_scene, CYCLE_PERIOD, DIAGNOSTIC_PERIOD,
                                   FRAME_ID, JOINT_STATES_RATE, KEY_FILE, LINK_SPECS,
-                                  ParamSpec, REALTIME_PRIORITY, SENSOR_RANGE)
+                                  ParamSpec, REALTIME_PRIORITY, SENSOR_RANGE, SETPOINT_SPECS)
 
 
 # What both nodes take: the lifecycle, the scene, the part's start state and the sensor.
@@ -66,6 +66,7 @@ STANDIN_PARAMS = SHARED_PARAMS + (
     *LINK_SPECS,
     KEY_FILE,               # signs the cycle reports as the driver does
     JOINT_STATES_RATE,      # the arm's swing after each (instantaneous) cycle
+    *SETPOINT_SPECS,        # the release speed per cycle, as the driver takes it
 )
 
 # predictor_node: follows the driver's cycle_status; publishes predicted/* and markers.

@@ -34,7 +34,8 @@ from feeder_common import auth, qos
 from feeder_common.arm import ArmMotion, stand_in_follow
 from feeder_common.messages import CycleSigner, joint_state, proximity
 from feeder_common.node import clock_note, RateTimer, run_node, StartupError
-from feeder_interfaces.msg import CycleStatus
+from feeder_common.setpoints import SetpointInbox
+from feeder_interfaces.msg import CycleStatus, SpeedSetpoint
 from sensor_msgs.msg import JointState, Range
 from std_srvs.srv import SetBool, Trigger
 from throwmap import ThrowmapError
@@ -58,10 +59,14 @@ class StandInNode(PartNode):
         self._joint_timer = RateTimer(self, self._joint_tick)
         self._motion = ArmMotion(wind=0.0)
         try:
-            self._signer = CycleSigner(auth.node_key(self._param('key_file')),
-                                       self.get_fully_qualified_name())
+            key = auth.node_key(self._param('key_file'))
         except auth.KeyFileError as exc:
             raise StartupError(f'key_file: {exc}') from None
+        self._signer = CycleSigner(key, self.get_fully_qualified_name())
+        self._inbox = SetpointInbox(key, self.resolve_topic_name(self._param('speed_source')),
+                                    self._param('max_setpoint_age'))
+        self._setpoint_sub = None
+        self._waiting = ''      # why the last cycle could not fire ('' : it could)
         self._diagnostics.add('actuator', self._diag_actuator)
         # Services exist in every lifecycle state so that a refusal can say why.
         self.create_service(Trigger, '~/trigger_cycle', self._on_trigger)
@@ -92,8 +97,19 @@ class StandInNode(PartNode):
             'joint_states': pub(JointState, 'joint_states', qos.JOINT_STATES),
         }
         self._joint_timer.start(self._param('joint_states_rate'))
+        self._setpoint_sub = self.create_subscription(
+            SpeedSetpoint, 'release_speed_setpoint', self._on_setpoint,
+            qos.RELEASE_SPEED_SETPOINT)
+
+    def _on_setpoint(self, msg):
+        why = self._inbox.offer(msg, self.get_clock().now().nanoseconds)
+        if why:
+            self.get_logger().warning(f'release_speed_setpoint not taken: {why}',
+                                      throttle_duration_sec=5.0)
 
     def _apply_own(self, changes):
+        if 'max_setpoint_age' in changes:
+            self._inbox.max_age_s = changes['max_setpoint_age']
         if 'joint_states_rate' in changes and 'joint_states' in self._pubs:
             self._joint_timer.start(self._param('joint_states_rate'))
         if 'cycle_period' in changes and self._cycle_timer is not None:
@@ -101,6 +117,9 @@ class StandInNode(PartNode):
             self._start_cycling()
 
     def _release_own(self):
+        if self._setpoint_sub is not None:
+            self.destroy_subscription(self._setpoint_sub)
+            self._setpoint_sub = None
         self._stop_cycling()
         self._joint_timer.stop()
         if self._truth is not None:
@@ -135,8 +154,9 @@ class StandInNode(PartNode):
             response.message = 'refused: enabled (cycling continuously); call ~/enable false first'
         else:
             seq, error = self._fire()
-            response.success = True
-            response.message = f'fired cycle seq {seq}' + (f' (failed: {error})' if error else '')
+            response.success = seq is not None
+            response.message = (f'refused: {error}' if seq is None else f'fired cycle seq {seq}'
+                                + (f' (failed: {error})' if error else ''))
         return response
 
     def _on_enable(self, request, response):
@@ -165,38 +185,66 @@ class StandInNode(PartNode):
             self._cycle_timer = None
 
     # ------------------------------------------------------------------ cycles
+    def _setpoint(self):
+        """Return (speed rad/s or None, why no cycle): None, '' is the scene's own speed."""
+        if self._param('release_speed_mode') != 'setpoint':
+            return None, ''
+        speed, why = self._inbox.for_cycle(self._seq + 1, self._signer.session,
+                                           self.get_clock().now().nanoseconds)
+        if speed is None:
+            if why != self._waiting:
+                self._inbox.counts['waited'] += 1
+                self.get_logger().info(f'cycle {self._seq + 1} waits: {why}',
+                                       throttle_duration_sec=5.0)
+            self._waiting = why
+            return None, why
+        self._waiting = ''
+        return speed, ''
+
     def _fire(self):
-        """One cycle: release, throw, catch, sensor sample. Returns (seq, error)."""
+        """
+        One cycle: release, throw, catch, sensor sample. Returns (seq, error).
+
+        (None, why) when no cycle was fired: release_speed_mode setpoint and no setpoint for it.
+        """
+        speed, why = self._setpoint()
+        if why:
+            return None, why
+        if speed is not None:
+            self._inbox.used()
         self._seq += 1
         stamp = self.get_clock().now().nanoseconds
         pubs = self._pubs
         pubs['cycle_fired'].publish(self._signer.cycle_fired(self._seq, stamp, HARDWARE_ID))
-        pubs['joint_states'].publish(joint_state(stamp, 0.0, self._scene.release_speed))
-        self._motion.released(stamp, self._scene.release_speed,
-                              follow=stand_in_follow(self._param('cycle_period')))
         try:
-            throw = self._predictor.throw()
+            throw = self._predictor.throw(release_speed=speed)
         except ThrowmapError as exc:
             self._counts['failed'] += 1
             pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
             pubs['cycle_status'].publish(self._signer.cycle_status(
-                self._seq, False, str(exc), None, stamp, HARDWARE_ID))
+                self._seq, False, str(exc), None, stamp, HARDWARE_ID, speed))
             if self._truth is not None:
-                self._truth.cycle(self._seq, stamp, error=exc)
+                self._truth.cycle(self._seq, stamp, error=exc, setpoint=speed)
             self.get_logger().error(f'cycle {self._seq} failed: {exc}',
                                     throttle_duration_sec=5.0)
             return self._seq, str(exc)
+        released = throw.release_speed
+        if released != released:       # no part to throw: the arm swings at its setpoint
+            released = self._scene.release_speed if speed is None else speed
+        pubs['joint_states'].publish(joint_state(stamp, 0.0, released))
+        self._motion.released(stamp, released,
+                              follow=stand_in_follow(self._param('cycle_period')))
         self._throw_lost(self._seq, throw)
         self._counts['completed'] += 1
         self._last_throw = throw
         if self._truth is not None:
-            self._truth.cycle(self._seq, stamp, throw, self._predictor.sees())
+            self._truth.cycle(self._seq, stamp, throw, self._predictor.sees(), setpoint=speed)
         # proximity and cycle_status back to back: the monitor decides on both.
         pubs['proximity'].publish(proximity(stamp, throw.detected,
                                             self._param('sensor_range_m'),
                                             self._param('frame_id')))
         pubs['cycle_status'].publish(self._signer.cycle_status(
-            self._seq, True, '', throw.detected, stamp, HARDWARE_ID))
+            self._seq, True, '', throw.detected, stamp, HARDWARE_ID, speed))
         pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
         return self._seq, None
 
@@ -213,7 +261,11 @@ class StandInNode(PartNode):
                      'enabled' if self._cycle_timer is not None else 'idle')
         stat.update({'seq': self._seq, 'completed': c['completed'], 'failed': c['failed'],
                      'cycle_period': self._param('cycle_period'),
-                     'cycles_per_s': f'{self._rate():.2f}'})
+                     'cycles_per_s': f'{self._rate():.2f}',
+                     'release_speed_mode': self._param('release_speed_mode'),
+                     'waiting_for_setpoint': self._waiting or 'no',
+                     **{f'setpoints_{k}': v for k, v in self._inbox.counts.items()},
+                     'last_setpoint_refusal': self._inbox.last_refusal or 'none'})
 
 
 def main(args=None):

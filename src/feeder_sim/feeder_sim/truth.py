@@ -18,12 +18,12 @@ The hardware stand-in's truth log (ROS-free): one JSON line per fired cycle.
 The real feeder cannot say where the part lies; the hardware stand-in (standin_node) can.
 Its ROS interface stays exactly the driver's, so the true state goes to a file (parameter
 ``truth_log``, off by default) for a run to count false readies against: a header line, then
-per cycle its ``seq``,
-the state before and after the throw (``edge0``, ``R0``, ``edge``, ``R``; edge -1 and R null:
-no part on the arm), the throw's ``kind``, the reported sensor bit ``detected`` and the
-geometric ``seen`` (differs from ``detected`` only with sensor_noise), or ``error`` for a
-throw that failed. The same fields as the controller emulator's ``--truth-log`` where both
-have them.
+per cycle its ``seq``, the state before and after the throw (``edge0``, ``R0``, ``edge``,
+``R``; edge -1 and R null: no part on the arm), the release-speed ``setpoint`` (null: the
+scene's own) and the throw's ``release_speed`` (noise included), the throw's ``kind``, the
+reported sensor bit ``detected`` and the geometric ``seen`` (differs from ``detected`` only
+with sensor_noise), or ``error`` for a throw that failed. The same fields as the controller
+emulator's ``--truth-log`` where both have them.
 """
 
 import json
@@ -51,13 +51,19 @@ class TruthLog:
         self.path = path
         self._write(dict({'type': 'header'}, **header))
 
-    def cycle(self, seq, stamp_ns, throw=None, seen=None, error=None):
-        """Record one fired cycle: its throw (throwmap.part_on_arm.Throw) or its error text."""
-        rec = {'type': 'cycle', 'seq': int(seq), 'stamp_ns': int(stamp_ns)}
+    def cycle(self, seq, stamp_ns, throw=None, seen=None, error=None, setpoint=None):
+        """
+        Record one fired cycle: its throw (throwmap.part_on_arm.Throw) or its error text.
+
+        ``setpoint``: the release speed it was fired at (rad/s; None: the scene's own);
+        ``release_speed`` the speed the throw had (release noise included).
+        """
+        rec = {'type': 'cycle', 'seq': int(seq), 'stamp_ns': int(stamp_ns),
+               'setpoint': _number(setpoint)}
         if throw is not None:
             rec.update(edge0=throw.edge0, R0=_number(throw.R0), edge=throw.edge,
                        R=_number(throw.R), kind=throw.kind, detected=bool(throw.detected),
-                       seen=bool(seen))
+                       seen=bool(seen), release_speed=_number(throw.release_speed))
         if error is not None:
             rec['error'] = str(error)
         self._write(rec)

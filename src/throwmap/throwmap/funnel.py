@@ -753,6 +753,11 @@ class Tracker:
         self.know = self.start.copy()
         self.last = -1
 
+    def forget(self):
+        """Forget where the part is (a failed or unseen throw, an interruption): every cell."""
+        self.know = np.ones_like(self.start)
+        self.last = -1
+
     def _lose_track(self, bit):
         """Forget where the part is: every cell that can read ``bit``."""
         s = self.system
