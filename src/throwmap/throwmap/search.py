@@ -381,24 +381,29 @@ def design_scene(scene, cand, name=None):
     return data
 
 
-def noisy_design_scene(scene, s, distribution='uniform', seed=0):
+def noisy_design_scene(scene, s, distribution='uniform', seed=0, relative=False):
     """
     Return the scene data of ``scene`` (a design) with its release errors bounded at joint s.
 
     Every throw's release speed and offset within +-s w and +-s d_min (docs/design.md section
     3, the robustness floor's box) by effect release_noise with a bounded ``distribution``
-    (uniform or corner), seeded: the design run as a real feeder would throw it.
+    (uniform or corner), seeded: the design run as a real feeder would throw it. ``relative``:
+    the speed's bound is s times each throw's own speed (``release_speed_bound_rel``), for a
+    speed policy that changes the speed per throw; else s times the scene's. Effects the scene
+    has (its arm's end) stay; one that already draws release errors is refused.
     """
     if not (isinstance(s, (int, float)) and math.isfinite(s) and s >= 0):
         raise InputError('robustness floor', f'must be a number >= 0, got {s!r}',
                          'give the joint s of --robust, e.g. 0.005')
-    if scene.effects:
-        raise InputError('effects', f'the design scene already has effects '
-                         f'{", ".join(scene.effects.names)}', 'give a base-model design scene')
+    names = list(scene.effects.names) if scene.effects else []
+    if 'release_noise' in names:
+        raise InputError('effects', 'the design scene already has effect release_noise',
+                         'give the design without it')
     data = copy.deepcopy(scene.data)
-    data['effects'] = ['release_noise']
-    data['noise'] = {'seed': int(seed), 'distribution': distribution,
-                     'release_speed_bound': float(s * scene.release_speed),
+    data['effects'] = names + ['release_noise']
+    speed = ({'release_speed_bound_rel': float(s)} if relative else
+             {'release_speed_bound': float(s * scene.release_speed)})
+    data['noise'] = {'seed': int(seed), 'distribution': distribution, **speed,
                      'offset_bound': float(s * scene.part.d_min)}
     return data
 
