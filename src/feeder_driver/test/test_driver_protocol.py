@@ -74,8 +74,10 @@ def test_doc_example_frames_are_exact():
         # FIRE with a setpoint and its refusal.
         p.Caps(): b'$CAPS*3F34', p.Cap('SPEED', 1047, 12566): b'$CAP,SPEED,1047,12566*57BD',
         p.Err(None, 'BADCMD', 'unknown'): b'$ERR,-,BADCMD,unknown*5036',
-        p.Fire(17, 6283): b'$FIRE,17,6283*B95E',
-        p.Err(17, 'BADARG', 'speed out of range'): b'$ERR,17,BADARG,speed out of range*0316',
+        p.Fire(17, 6283): b'$FIRE,17,6283*B95E', p.Rel(17, 6283): b'$REL,17,6283*FA2F',
+        p.Fire(18, 20000): b'$FIRE,18,20000*4CD4',
+        p.Err(18, 'BADARG', 'speed out of range'): b'$ERR,18,BADARG,speed out of range*C214',
+        p.Err(None, 'BADARG', 'fields'): b'$ERR,-,BADARG,fields*A98F',
     }
     for msg, line in examples.items():
         assert p.encode(msg) == line + b'\r\n'
