@@ -26,11 +26,19 @@ ROS time in nanoseconds), and returns a list of effects for the caller to carry 
 * :class:`Released` -- the arm released the part (joint state at release).
 
 Link states: ``disconnected`` (port closed; reopened after a capped exponential back-off),
-``handshake`` (port open, PING sent, waiting for the matching PONG) and ``connected``.
+``handshake`` (port open, ID, CAPS and PING sent, waiting for the matching PONG) and
+``connected``.
+
+Release speed (``CoreConfig.release_speed_mode``): ``fixed`` fires every cycle at the
+controller's own speed (``FIRE,<seq>``); ``setpoint`` fires each cycle at the setpoint given
+for it (:meth:`DriverCore.set_setpoint`; ``FIRE,<seq>,<speed mrad/s>``) when the controller
+announced the capability in the handshake (``CAP,SPEED,<min>,<max>``: :attr:`speed_range`),
+and waits for that setpoint rather than fire at a speed nobody chose.
 """
 
 from dataclasses import dataclass, field
 import itertools
+import math
 from typing import Any, Optional
 
 from . import protocol as p
@@ -43,11 +51,21 @@ STALL_S = 0.25
 READ_GRACE_S = 0.5
 HANDSHAKE = 'handshake'
 CONNECTED = 'connected'
+# Release-speed modes: the controller's own speed, or a setpoint per cycle.
+FIXED = 'fixed'
+SETPOINT = 'setpoint'
+RELEASE_SPEED_MODES = (FIXED, SETPOINT)
 
 
 @dataclass
 class CoreConfig:
-    """Timing of the link and the cycle (all seconds); see config/driver.yaml."""
+    """
+    Timing of the link and the cycle (all seconds; see config/driver.yaml) and speed mode.
+
+    ``release_speed_mode``: ``'fixed'`` (never send a speed: the controller's own) or
+    ``'setpoint'`` (each cycle fires at the setpoint given for it, when the controller can
+    set the release speed).
+    """
 
     ack_timeout_s: float = 0.5
     cycle_timeout_s: float = 5.0
@@ -55,6 +73,12 @@ class CoreConfig:
     reconnect_initial_s: float = 0.5
     reconnect_max_s: float = 10.0
     cycle_period: float = 1.0
+    release_speed_mode: str = FIXED
+
+    def __post_init__(self):
+        if self.release_speed_mode not in RELEASE_SPEED_MODES:
+            raise ValueError(f'release_speed_mode: {self.release_speed_mode!r} must be one of '
+                             f'{", ".join(RELEASE_SPEED_MODES)}')
 
 
 @dataclass(frozen=True)
@@ -74,7 +98,13 @@ class CloseLink:
 
 @dataclass(frozen=True)
 class CycleResult:
-    """Outcome of one fired cycle. ``sensor`` is None when the cycle failed."""
+    """
+    Outcome of one fired cycle. ``sensor`` is None when the cycle failed.
+
+    ``release_speed``: rad/s from the controller's REL (None: no REL came);
+    ``speed_setpoint``: rad/s, the setpoint the cycle was fired with, as sent (None: the
+    controller's fixed speed).
+    """
 
     seq: int
     wire_seq: int
@@ -85,6 +115,7 @@ class CycleResult:
     fired_at: float
     duration_s: float
     release_speed: Optional[float]
+    speed_setpoint: Optional[float] = None
 
 
 @dataclass(frozen=True)
@@ -94,9 +125,14 @@ class CycleFinished:
 
 @dataclass(frozen=True)
 class Firing:
-    """Cycle ``seq`` is about to be fired: announced before the FIRE goes out."""
+    """
+    Cycle ``seq`` is about to be fired: announced before the FIRE goes out.
+
+    ``speed_setpoint``: rad/s the FIRE asks for (None: the controller's fixed speed).
+    """
 
     seq: int
+    speed_setpoint: Optional[float] = None
 
 
 @dataclass(frozen=True)
@@ -131,6 +167,7 @@ class _Pending:
     acked_at: Optional[float] = None
     released_at: Optional[float] = None
     release_speed: Optional[float] = None
+    speed_setpoint: Optional[float] = None
     notes: list = field(default_factory=list)
 
 
@@ -138,17 +175,26 @@ def _fmt(x):
     return f'{x:.3g}'
 
 
+def _mrad(speed_rad_s):
+    """Return the wire value of a speed in rad/s: mrad/s, rounded to an integer."""
+    return int(round(speed_rad_s * 1000.0))
+
+
 class DriverCore:
     """
     State machine of the serial link and of the throw-catch cycles.
 
     ``log(level, text)`` receives messages with level ``debug``/``info``/``warning``/
-    ``error``. Counters for diagnostics are in :attr:`counters`.
+    ``error``. Counters for diagnostics are in :attr:`counters`. :attr:`speed_range` is the
+    release-speed range (min, max) in rad/s the controller announced in the handshake (None:
+    it cannot set the release speed, or the handshake has not ended); :attr:`setpoint` is the
+    setpoint held for cycle :attr:`next_seq` ((seq, rad/s) or None).
     """
 
     COUNTERS = ('fired', 'completed', 'failed', 'acks_missing', 'stale_replies',
                 'controller_errors', 'controller_resets', 'link_losses', 'open_failures',
-                'handshake_timeouts', 'watchdog_timeouts')
+                'handshake_timeouts', 'watchdog_timeouts', 'waiting_for_setpoint',
+                'setpoints_refused', 'late_caps')
 
     def __init__(self, config=None, log=None, first_seq=1):
         self.config = config or CoreConfig()
@@ -182,6 +228,14 @@ class DriverCore:
         self._legacy = None           # detail of a protocol-1 frame seen since the port opened
         self._last_tick = None
         self._awake_since = None      # first tick after the last stall
+        self.speed_range = None       # (min, max) rad/s from CAP,SPEED; None: fixed speed
+        self._speed_range_mrad = None
+        self.setpoint = None          # (seq, rad/s as sent) for cycle next_seq
+        self._caps_outstanding = 0    # CAPS requests whose answer has not arrived
+        self._cap = None              # the CAP,SPEED seen since the port opened
+        self._caps_refused = False    # ERR,-,BADCMD answered CAPS since the port opened
+        self._waiting_seq = None      # the cycle counted in waiting_for_setpoint
+        self._ignored_logged = False  # 'setpoints are ignored' logged on this link
 
     # ---- configuration -------------------------------------------------------------------
 
@@ -251,10 +305,12 @@ class DriverCore:
             return (False, 'refused: continuous cycling is enabled; call ~/enable false first',
                     [])
         why = self.refusal(now)
+        if why is None:
+            why = self._setpoint_refusal()
         if why is not None:
             return False, why, []
         effects = self._fire(now)
-        return True, f'fired cycle seq {self.pending.seq}', effects
+        return True, f'fired cycle seq {self.pending.seq}' + self._speed_note(), effects
 
     def enable(self, on, now):
         """Service ~/enable: returns (success, message, effects)."""
@@ -274,6 +330,84 @@ class DriverCore:
         effects = self._maybe_fire_enabled(now)
         return True, f'enabled: one cycle every {_fmt(self.config.cycle_period)} s', effects
 
+    def set_setpoint(self, now, seq, speed_rad_s):
+        """
+        Set the release-speed setpoint (rad/s) of cycle ``seq``: (accepted, reason, effects).
+
+        ``seq`` must be :attr:`next_seq` (the cycle the setpoint is for; the newest setpoint
+        for it wins). Refused when ``release_speed_mode`` is ``fixed``, when the speed is not
+        a finite number > 0, when it lies outside the range the controller announced, and when
+        the controller cannot set the release speed. While the link is not connected the range
+        is not known: the setpoint is held and checked when the handshake ends. When
+        continuous cycling was only waiting for this setpoint, the cycle fires now (effects).
+        """
+        accepted, reason = self._check_setpoint(seq, speed_rad_s)
+        if not accepted:
+            self.counters['setpoints_refused'] += 1
+            return False, f'refused: {reason}', []
+        self.setpoint = (seq, _mrad(speed_rad_s) / 1000.0)
+        effects = self._maybe_fire_enabled(now)
+        if effects:
+            reason += f'; fired cycle seq {self.pending.seq}'
+        return True, reason, effects
+
+    def _check_setpoint(self, seq, speed):
+        """Return (accepted, reason) for a setpoint of ``speed`` rad/s for cycle ``seq``."""
+        if self.config.release_speed_mode != SETPOINT:
+            return False, (f'release_speed_mode is {self.config.release_speed_mode!r}: cycles '
+                           "fire at the controller's own speed; use 'setpoint' to set it")
+        if isinstance(seq, bool) or not isinstance(seq, int) or seq != self.next_seq:
+            pending = (f' (cycle {self.pending.seq} is in flight)'
+                       if self.pending is not None else '')
+            return False, (f'setpoint for cycle {seq!r}, but the next cycle is '
+                           f'{self.next_seq}{pending}')
+        if isinstance(speed, bool) or not isinstance(speed, (int, float)) or \
+                not math.isfinite(speed) or speed <= 0.0:
+            return False, (f'release-speed setpoint {speed!r} for cycle {seq}: must be a '
+                           'finite number > 0 (rad/s)')
+        if _mrad(speed) > p.MAX_SPEED_MRAD_S:
+            return False, (f'release-speed setpoint {speed!r} rad/s for cycle {seq}: beyond '
+                           f'the protocol limit of {p.MAX_SPEED_MRAD_S / 1000.0:g} rad/s')
+        if self.link != CONNECTED:
+            return True, (f'setpoint {speed:.4g} rad/s for cycle {seq} held; the link is '
+                          f'{self.link}: checked against the range of the controller once it '
+                          'answers')
+        if self.speed_range is None:
+            return False, (f'setpoint for cycle {seq} ignored: the controller cannot set the '
+                           'release speed (it announced no CAP,SPEED); cycles fire at its '
+                           'fixed speed')
+        why = self._out_of_range(speed)
+        if why:
+            return False, f'release-speed setpoint for cycle {seq}: {why}'
+        return True, f'setpoint {speed:.4g} rad/s for cycle {seq}'
+
+    def _out_of_range(self, speed):
+        low, high = self._speed_range_mrad
+        if low <= _mrad(speed) <= high:
+            return ''
+        return (f'{speed:.4g} rad/s is outside the range of the controller, {low / 1000.0:g} .. '
+                f'{high / 1000.0:g} rad/s')
+
+    def _setpoint_needed(self):
+        """Whether each cycle fires at a setpoint: mode 'setpoint' and a capable controller."""
+        return self.config.release_speed_mode == SETPOINT and self.speed_range is not None
+
+    def _has_setpoint(self):
+        return self.setpoint is not None and self.setpoint[0] == self.next_seq
+
+    def _setpoint_refusal(self):
+        """Why the next cycle cannot fire for want of its setpoint (None if it can)."""
+        if not self._setpoint_needed() or self._has_setpoint():
+            return None
+        low, high = self.speed_range
+        return (f'refused: no release-speed setpoint for cycle {self.next_seq} yet; '
+                "release_speed_mode is 'setpoint': give one (the controller's range is "
+                f'{low:g} .. {high:g} rad/s) before firing')
+
+    def _speed_note(self):
+        speed = self.pending.speed_setpoint
+        return '' if speed is None else f' at {speed:.4g} rad/s'
+
     # ---- link events -------------------------------------------------------------------------
 
     def link_opened(self, now):
@@ -284,7 +418,13 @@ class DriverCore:
         self._ids_outstanding = 0
         self._last_open_error = None
         self._legacy = None
-        self._log('info', 'serial port open; handshake (PING) started')
+        self.speed_range = None
+        self._speed_range_mrad = None
+        self._caps_outstanding = 0
+        self._cap = None
+        self._caps_refused = False
+        self._ignored_logged = False
+        self._log('info', 'serial port open; handshake (ID, CAPS, PING) started')
         return self._send_ping(now)
 
     def link_open_failed(self, now, error):
@@ -401,22 +541,58 @@ class DriverCore:
     # ---- internals ---------------------------------------------------------------------------
 
     def _send_ping(self, now):
-        # ID first: its HELLO answer arrives before the PONG (the link is ordered), so the
-        # firmware and boot id are known once connected, even if the banner was missed.
+        # ID and CAPS first: their answers (HELLO; CAP or ERR BADCMD) arrive before the PONG
+        # (the link is ordered), so the firmware, the boot id and whether the controller sets
+        # the release speed are known once connected, even if the banner was missed.
         self._ping_token = f'h{next(self._tokens)}'
         self._ping_sent_at = now
         self._ids_outstanding += 1
-        return [Send(p.Ident()), Send(p.Ping(self._ping_token))]
+        self._caps_outstanding += 1
+        return [Send(p.Ident()), Send(p.Caps()), Send(p.Ping(self._ping_token))]
+
+    def _handshake_done(self):
+        """At the PONG: set :attr:`speed_range` from the CAPS answer seen since opening."""
+        if self._cap is not None:
+            cap = self._cap
+            self._speed_range_mrad = (cap.min_mrad_s, cap.max_mrad_s)
+            self.speed_range = (cap.min_rad_s, cap.max_rad_s)
+            self._log('info', f'controller sets the release speed: {cap.min_rad_s:g} .. '
+                      f'{cap.max_rad_s:g} rad/s (CAP,SPEED)')
+        elif self._caps_refused:
+            self._log('info', 'controller cannot set the release speed (answered CAPS with '
+                      'BADCMD): fixed speed')
+        else:
+            # Lost on the line, or a firmware that ignores unknown commands: fixed speed.
+            self._log('warning' if self.config.release_speed_mode == SETPOINT else 'info',
+                      'controller did not answer CAPS before its PONG (neither CAP nor ERR '
+                      'BADCMD: lost on the line, or the firmware ignores unknown commands): '
+                      'fixed speed on this link')
+        held = self.setpoint
+        if held is not None and self._setpoint_needed() and self._out_of_range(held[1]):
+            self.setpoint = None
+            self.counters['setpoints_refused'] += 1
+            self._log('warning', f'setpoint for cycle {held[0]} dropped: '
+                      f'{self._out_of_range(held[1])}')
 
     def _fire(self, now):
         seq = self.next_seq
+        speed = None
+        if self._setpoint_needed():
+            speed = self.setpoint[1]        # callers checked it is for this seq
+        elif self.config.release_speed_mode == SETPOINT and not self._ignored_logged:
+            self._ignored_logged = True
+            self._log('warning', "release_speed_mode is 'setpoint', but the controller cannot "
+                      'set the release speed: setpoints are ignored, cycles fire at its fixed '
+                      'speed')
+        self.setpoint = None
         self.next_seq += 1
-        self.pending = _Pending(seq, seq % p.SEQ_MODULO, now)
+        self.pending = _Pending(seq, seq % p.SEQ_MODULO, now, speed_setpoint=speed)
         self.counters['fired'] += 1
         self._last_fire_at = now
         self.last_controller_error = None
+        fire = p.Fire(self.pending.wire_seq, None if speed is None else _mrad(speed))
         # The notice first: whoever holds a ready must drop it before the arm can move.
-        return [Firing(seq), Send(p.Fire(self.pending.wire_seq))]
+        return [Firing(seq, speed), Send(fire)]
 
     def _maybe_fire_enabled(self, now):
         if not (self.enabled and self.active and self.pending is None):
@@ -428,6 +604,14 @@ class DriverCore:
             return []
         if self.link != CONNECTED:
             return []       # paused until the link is back
+        if self._setpoint_refusal() is not None:
+            # Never a cycle at a speed nobody chose: wait for this cycle's setpoint.
+            if self._waiting_seq != self.next_seq:
+                self._waiting_seq = self.next_seq
+                self.counters['waiting_for_setpoint'] += 1
+                self._log('debug', f'cycle {self.next_seq} waits for its release-speed '
+                          'setpoint')
+            return []
         return self._fire(now)
 
     def _progress(self, pend):
@@ -464,7 +648,7 @@ class DriverCore:
         pend = self.pending
         return self._finish(CycleResult(pend.seq, pend.wire_seq, False, reason, None, stamp,
                                         pend.fired_at, now - pend.fired_at,
-                                        pend.release_speed))
+                                        pend.release_speed, pend.speed_setpoint))
 
     def _handle(self, now, stamp, msg):
         pend = self.pending
@@ -477,6 +661,17 @@ class DriverCore:
                 self._log('info', 'controller answered PING: link connected'
                           + (f' (firmware {self.firmware}, boot {self.boot_id})'
                              if self.firmware else ''))
+                self._handshake_done()
+            return []
+        if isinstance(msg, p.Cap):
+            self._caps_outstanding = max(0, self._caps_outstanding - 1)
+            if self.link == HANDSHAKE:
+                self._cap = msg
+            else:
+                # The capability is settled by the handshake; a CAP after it (the answer to a
+                # repeated CAPS, or unasked) changes nothing.
+                self.counters['late_caps'] += 1
+                self._log('debug', f'CAP after the handshake ignored: {msg}')
             return []
         if isinstance(msg, p.Hello):
             effects = []
@@ -502,6 +697,14 @@ class DriverCore:
                 return self._fail(now, stamp, 'controller reports IDLE but sent no SENS '
                                   f'(reply lost; {self._progress(pend)})') + \
                     self._maybe_fire_enabled(now)
+            return []
+        if isinstance(msg, p.Err) and msg.seq is None and msg.code == 'BADCMD' and \
+                self._caps_outstanding > 0:
+            # The answer of a controller without the capability to CAPS: expected, no fault.
+            self._caps_outstanding -= 1
+            if self.link == HANDSHAKE:
+                self._caps_refused = True
+            self._log('debug', f'CAPS answered with ERR BADCMD ({msg.text})')
             return []
         if isinstance(msg, p.Err):
             self.counters['controller_errors'] += 1
@@ -532,6 +735,7 @@ class DriverCore:
             return [Released(pend.seq, msg.speed_rad_s, stamp)]
         if isinstance(msg, p.Sens):
             result = CycleResult(pend.seq, pend.wire_seq, True, 'completed', msg.bit, stamp,
-                                 pend.fired_at, now - pend.fired_at, pend.release_speed)
+                                 pend.fired_at, now - pend.fired_at, pend.release_speed,
+                                 pend.speed_setpoint)
             return self._finish(result) + self._maybe_fire_enabled(now)
         return []

@@ -28,7 +28,10 @@ the controller or unplug the port. Two faults are random and seeded: a flaky sen
 (``--spurious-rate``: a 1 when the part is not seen; ``--miss-rate``: a 0 when it is) and bit
 errors on the line (``--bit-error-rate``: each byte sent has that probability of one flipped
 bit; ``--host-bit-error-rate`` the same for each byte read from the host). ``--truth-log``
-writes one JSON line per FIRE received so tests can account for every cycle. CLI table:
+writes one JSON line per FIRE received so tests can account for every cycle. The controller
+sets the release speed a FIRE asks for (``FIRE,<seq>,<speed>``) within ``--speed-range``, and
+says so when asked (``CAPS`` -> ``CAP,SPEED,<min>,<max>``); ``--no-speed-setpoint`` makes it a
+controller without that capability, answering as the firmware before it did. CLI table:
 docs/driver.md.
 """
 
@@ -38,6 +41,7 @@ import fcntl
 import heapq
 import itertools
 import json
+import math
 import os
 import random
 import select
@@ -52,6 +56,9 @@ from . import protocol as p
 FIRMWARE = 'feeder-emu-1.0'
 # Truth records kept in memory by default (the newest); the command line keeps none.
 KEEP_RECORDS = 10_000
+# Release speeds the emulated arm can be set to, deg/s (--speed-range).
+SPEED_RANGE_DEG_S = (60.0, 720.0)
+DEFAULT_SPEED_RANGE = tuple(math.radians(v) for v in SPEED_RANGE_DEG_S)     # rad/s
 
 
 class EmulatorError(Exception):
@@ -79,6 +86,43 @@ def _rate(name, value):
             not 0.0 <= value <= 1.0:
         raise EmulatorError(f'{name}: must be a probability 0..1, got {value!r}')
     return float(value)
+
+
+def _speed_range_mrad(value):
+    """Return (min, max) mrad/s of a speed range in rad/s (None: no capability)."""
+    if value is None:
+        return None
+    try:
+        low, high = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise EmulatorError(f'--speed-range: must be two numbers MIN:MAX, got {value!r}') \
+            from None
+    finite = math.isfinite(low) and math.isfinite(high)
+    mrad = (int(round(low * 1000.0)), int(round(high * 1000.0))) if finite else (0, 0)
+    if not 0 < mrad[0] <= mrad[1] <= p.MAX_SPEED_MRAD_S:
+        raise EmulatorError(f'--speed-range: needs 0 < MIN <= MAX <= '
+                            f'{math.degrees(p.MAX_SPEED_MRAD_S / 1000.0):.0f} deg/s (at least '
+                            f'1 mrad/s), got {math.degrees(low):g}:{math.degrees(high):g} '
+                            'deg/s')
+    return mrad
+
+
+def parse_speed_range(text):
+    """Parse ``MIN:MAX`` in deg/s (the CLI's ``--speed-range``) into (min, max) rad/s."""
+    parts = str(text).split(':')
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        low, high = (math.radians(float(v)) for v in parts)
+    except ValueError:
+        raise EmulatorError(f'--speed-range: {text!r} must be MIN:MAX in deg/s, e.g. '
+                            '60:720') from None
+    _speed_range_mrad((low, high))
+    return low, high
+
+
+def _finite_or_none(value):
+    return None if value is None or not math.isfinite(value) else float(value)
 
 
 def _nonneg(name, value):
@@ -296,6 +340,8 @@ class _Cycle:
         self.seq = seq
         self.faults = faults
         self.fired_at = now
+        self.setpoint = None        # rad/s the FIRE asked for (None: the scene's own speed)
+        self.release_speed = None   # rad/s the arm released at (None: no throw)
         self.thrown = False
         self.sent = {'ack': False, 'rel': False, 'sens': False}
         self.edge = self.R = self.kind = self.bit = self.seen = self.edge0 = None
@@ -309,7 +355,12 @@ class Controller:
     The emulated controller: protocol, cycle timing, part state and faults.
 
     ``throw()`` returns ``(edge, R, kind)`` of the next resting state (edge -1 and R None: no
-    part on the arm) or raises :class:`ThrowFailed`; ``sense(edge, R)`` gives its sensor bit,
+    part on the arm), or ``(edge, R, kind, release_speed)`` with the speed the arm released at
+    (rad/s; nan or None: no part was thrown), or raises :class:`ThrowFailed`;
+    ``throw(release_speed)`` (rad/s) throws at a FIRE's setpoint. ``speed_range``: (min, max)
+    rad/s of the setpoints the controller takes and announces (``CAP,SPEED``); None: a
+    controller without that capability (CAPS is an unknown command, a FIRE with a speed field
+    has the wrong number of fields). ``sense(edge, R)`` gives its sensor bit,
     ``sees(edge, R)`` (optional, for the truth log) whether the part is in the sensor's view,
     ``place()`` (optional) puts a part back at the start; all come from the throw-map library
     in :func:`from_scene`.
@@ -318,13 +369,15 @@ class Controller:
     def __init__(self, link, throw, sense, release_speed, state=None, cycle_time=0.1,
                  heartbeat=1.0, faults=None, truth_log=None, firmware=FIRMWARE, header=None,
                  log=None, clock=time.monotonic, sees=None, place=None,
-                 keep_records=KEEP_RECORDS):
+                 keep_records=KEEP_RECORDS, speed_range=DEFAULT_SPEED_RANGE):
         self._throw = throw
         self._sense = sense
         self._sees = sees
         self._place = place
         self._place_requested = threading.Event()
+        self.release_speed = float(release_speed)
         self.release_speed_mrad_s = int(round(release_speed * 1000.0))
+        self.speed_range_mrad = _speed_range_mrad(speed_range)
         self.state = state
         self.cycle_time = _nonneg('--cycle-time', cycle_time)
         self.heartbeat = _nonneg('--heartbeat', heartbeat)
@@ -341,7 +394,9 @@ class Controller:
         self._clock = clock
         self._truth = open(truth_log, 'w', encoding='utf-8') if truth_log else None
         self.pty = Pty(link)        # last of the checks: it takes the link's lock
-        self.parser = p.Parser(p.HOST_MESSAGES)
+        # A controller without the speed capability does not know CAPS (BADCMD).
+        self.parser = p.Parser(p.HOST_MESSAGES if self.speed_range_mrad is not None else
+                               {k: v for k, v in p.HOST_MESSAGES.items() if v is not p.Caps})
         self.cycle = None
         self.cycles = 0
         self.unplugs = 0
@@ -359,7 +414,9 @@ class Controller:
         f = self.faults
         self.header.update(spurious_rate=f.spurious_rate, miss_rate=f.miss_rate,
                            bit_error_rate=f.bit_error_rate,
-                           host_bit_error_rate=f.host_bit_error_rate)
+                           host_bit_error_rate=f.host_bit_error_rate,
+                           speed_range=None if self.speed_range_mrad is None else
+                           [v / 1000.0 for v in self.speed_range_mrad])
         if self._truth:
             self._write_truth(dict({'type': 'header', 'firmware': firmware}, **self.header))
 
@@ -473,6 +530,14 @@ class Controller:
     # ---- host commands -----------------------------------------------------------------------
 
     def _on_host(self, event):
+        if isinstance(event, p.Fire) and event.speed_mrad_s is not None and \
+                self.speed_range_mrad is None:
+            # The parser of a controller without the capability knows FIRE with one field:
+            # it drops this frame as it would any with a wrong field count.
+            self.parser.stats['lines'] -= 1
+            self.parser.stats['fields'] += 1
+            event = p.Rejected('fields', 'FIRE: expected 1 field(s) (FIRE,<seq>), got 2',
+                               command='FIRE')
         if isinstance(event, p.Rejected):
             self._log(f'rejected host frame ({event.kind}): {event.detail}')
             self._send(p.Err(None, p.REJECT_CODES[event.kind], event.kind))
@@ -480,20 +545,34 @@ class Controller:
             self._send(p.Pong(event.token))
         elif isinstance(event, p.Ident):
             self._send(p.Hello(self.firmware, self.boot_id))
+        elif isinstance(event, p.Caps):
+            self._send(p.Cap('SPEED', *self.speed_range_mrad))
         elif isinstance(event, p.Stop):
             self._stop_cycle()
         elif isinstance(event, p.Fire):
-            self._fire(event.seq)
+            self._fire(event.seq, event.speed_mrad_s)
 
-    def _fire(self, seq):
+    def _fire(self, seq, speed_mrad_s=None):
         now = self._clock()
+        if speed_mrad_s is not None:
+            low, high = self.speed_range_mrad
+            if not low <= speed_mrad_s <= high:
+                self._write_truth({'type': 'fire', 'seq': seq, 'cycle': None,
+                                   'outcome': 'bad_speed', 'faults': [], 'throw': False,
+                                   'setpoint': speed_mrad_s / 1000.0, 't': now})
+                self._send(p.Err(seq, 'BADARG', 'speed out of range'))
+                return
         if self.cycle is not None:
             self._write_truth({'type': 'fire', 'seq': seq, 'cycle': None, 'outcome': 'busy',
-                               'faults': [], 'throw': False, 't': now})
+                               'faults': [], 'throw': False, 't': now,
+                               'setpoint': None if speed_mrad_s is None else
+                               speed_mrad_s / 1000.0})
             self._send(p.Err(seq, 'BUSY', f'cycle {self.cycle.seq} in progress'))
             return
         self.cycles += 1
         cyc = _Cycle(self.cycles, seq, self.faults.for_cycle(self.cycles), now)
+        if speed_mrad_s is not None:
+            cyc.setpoint = speed_mrad_s / 1000.0
         self.cycle = cyc
         delay = self.faults.delay if 'delay' in cyc.faults else 0.0
         ep = self._epoch
@@ -524,18 +603,25 @@ class Controller:
         if self.state is not None:
             cyc.edge0 = self.state()[0]
         try:
-            cyc.edge, cyc.R, cyc.kind = self._throw()
+            thrown = self._throw() if cyc.setpoint is None else self._throw(cyc.setpoint)
         except ThrowFailed as exc:
-            # The arm moved, the throw map has no answer: the cycle ends with ERR FAULT.
+            # The arm moved, the throw map has no answer (or the part cannot be held at the
+            # setpoint): the cycle ends with ERR FAULT.
             cyc.error = exc
             self._log(f'cycle {cyc.k}: {exc}')
         else:
+            cyc.edge, cyc.R, cyc.kind = thrown[:3]
+            cyc.release_speed = _finite_or_none(thrown[3]) if len(thrown) > 3 else None
             cyc.thrown = True
             cyc.bit = int(bool(self._sense(cyc.edge, cyc.R)))
             if self._sees is not None:
                 cyc.seen = bool(self._sees(cyc.edge, cyc.R))
             cyc.bit, cyc.flaky = self.faults.flaky_bit(cyc.bit)
-        self._send(p.Rel(cyc.seq, self.release_speed_mrad_s), cyc)
+        # REL: the speed the arm released at; without a part thrown, the speed it was set to.
+        speed = cyc.release_speed
+        if speed is None:
+            speed = self.release_speed if cyc.setpoint is None else cyc.setpoint
+        self._send(p.Rel(cyc.seq, int(round(speed * 1000.0))), cyc)
         cyc.sent['rel'] = True
         if 'unplug' in cyc.faults:
             # Unplugged while the part is in flight: the throw happens, SENS never leaves.
@@ -586,7 +672,8 @@ class Controller:
                'faults': cyc.faults, 'throw': cyc.thrown, 'edge': cyc.edge, 'R': cyc.R,
                'kind': cyc.kind, 'bit': cyc.bit, 'seen': cyc.seen, 'edge0': cyc.edge0,
                'sent': dict(cyc.sent), 't': cyc.fired_at, 'flaky': cyc.flaky,
-               'bit_errors': dict(cyc.flips)}
+               'bit_errors': dict(cyc.flips), 'setpoint': cyc.setpoint,
+               'release_speed': cyc.release_speed}
         if cyc.error is not None:
             rec['error'] = str(cyc.error)
         if not cyc.thrown and self.state is not None:
@@ -661,13 +748,15 @@ def from_scene(scene_path, sensor_radius=None, seed=None, **kwargs):
     def state():
         return part.edge, (None if part.lost else part.R)
 
-    def throw():
+    def throw(release_speed=None):
         try:
-            t = part.throw()            # no part on the arm: an empty throw, kind 'lost'
+            # No part on the arm: an empty throw, kind 'lost'. A speed at which the part
+            # cannot be held raises throwmap.DomainError: the cycle's ERR FAULT.
+            t = part.throw(release_speed=release_speed)
         except ThrowmapError as exc:
             raise ThrowFailed(_err_text(exc), str(exc)) from None
         last['state'], last['bit'] = state(), t.detected
-        return state() + (t.kind,)
+        return state() + (t.kind, t.release_speed)
 
     def seen(edge, R):
         return part.sees(edge, R)
@@ -738,6 +827,13 @@ def build_arg_parser():
     ap.add_argument('--truth-log', metavar='FILE',
                     help='one JSON line per FIRE received (and a header line)')
     ap.add_argument('--firmware', default=FIRMWARE, help='firmware name in HELLO')
+    ap.add_argument('--speed-range', default='%g:%g' % SPEED_RANGE_DEG_S, metavar='MIN:MAX',
+                    help='release speeds a FIRE may set, deg/s, announced as CAP,SPEED in '
+                         'mrad/s (default %(default)s)')
+    ap.add_argument('--no-speed-setpoint', action='store_true',
+                    help='a controller without the release-speed setpoint: CAPS gets ERR '
+                         'BADCMD, a FIRE with a speed field ERR BADARG (the fixed speed of the '
+                         'scene only)')
     ap.add_argument('--max-time', type=float, default=None,
                     help='exit after this many seconds (default: run until SIGINT/SIGTERM)')
     ap.add_argument('-q', '--quiet', action='store_true', help='log nothing to stderr')
@@ -757,10 +853,11 @@ def main(argv=None):
                         args.unplug_for, 0 if args.seed is None else args.seed,
                         args.spurious_rate, args.miss_rate, args.bit_error_rate,
                         args.host_bit_error_rate)
+        speed_range = None if args.no_speed_setpoint else parse_speed_range(args.speed_range)
         ctl = from_scene(args.scene, args.sensor_radius, args.seed, link=args.link,
                          cycle_time=args.cycle_time, heartbeat=args.heartbeat, faults=faults,
                          truth_log=args.truth_log, firmware=args.firmware, log=log,
-                         keep_records=0)
+                         keep_records=0, speed_range=speed_range)
     except (EmulatorError, OSError) as exc:
         print(f'controller_emulator: error: {exc}', file=sys.stderr)
         return 2
@@ -774,9 +871,11 @@ def main(argv=None):
     try:
         ctl.start()
         h = ctl.header
+        speeds = ('fixed release speed' if speed_range is None else
+                  f'release speed setpoints {args.speed_range} deg/s')
         print(f'controller_emulator: ready on {ctl.pty.link} -> {ctl.pty.slave_name} '
-              f'(sensor radius {h["sensor_radius"]:.4f} m, goal edge {h["goal_edge"]})',
-              flush=True)
+              f'(sensor radius {h["sensor_radius"]:.4f} m, goal edge {h["goal_edge"]}, '
+              f'{speeds})', flush=True)
         ctl.run(args.max_time)
     finally:
         ctl.close()

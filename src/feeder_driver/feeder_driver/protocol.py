@@ -186,14 +186,31 @@ _SEQ = _Field('<seq>', lambda v: str(_check_seq('seq', v)), _parse_seq)
 _SEQ_OR_NONE = _Field('<seq|->', lambda v: '-' if v is None else str(_check_seq('seq', v)),
                       lambda t: None if t == '-' else _parse_seq(t))
 _BIT = _Field('<0|1>', lambda v: str(_check_int('bit', v, 0, 1, '0 or 1')), _parse_bit)
-_SPEED = _Field('<speed mrad/s>',
-                lambda v: str(_check_int('speed', v, -MAX_SPEED_MRAD_S, MAX_SPEED_MRAD_S,
-                                         f'within +-{MAX_SPEED_MRAD_S} mrad/s')),
-                _parse_speed)
+
+
+def _speed(usage):
+    return _Field(usage, lambda v: str(_check_int('speed', v, -MAX_SPEED_MRAD_S,
+                                                  MAX_SPEED_MRAD_S,
+                                                  f'within +-{MAX_SPEED_MRAD_S} mrad/s')),
+                  _parse_speed)
+
+
+_SPEED = _speed('<speed mrad/s>')
 _UPTIME = _Field('<uptime_ms>', lambda v: str(_check_int('uptime_ms', v, 0, UINT32_MAX,
                                                          f'0..{UINT32_MAX}')),
                  lambda t: _parse_uint('uptime_ms', t, UINT32_MAX))
 _TOKEN = _matching('token', _TOKEN_RE, '<token>')
+# The capability a CAP announces; protocol 2 knows one, SPEED (the release-speed setpoint).
+CAPABILITIES = ('SPEED',)
+
+
+def _check_capability(value):
+    if value not in CAPABILITIES:
+        raise ProtocolError(f'capability: {value!r} must be one of {", ".join(CAPABILITIES)}')
+    return value
+
+
+_CAPABILITY = _Field('SPEED', _check_capability, _check_capability)
 _BOOT_ID = _matching('boot_id', _BOOT_RE, '<boot_id>')
 _CODE = _matching('code', _WORD_RE, '<CODE>')
 _STATE = _matching('state', _WORD_RE, '<STATE>')
@@ -212,39 +229,89 @@ class _Message:
 
     NAME = ''
     FIELDS = ()
+    # How many of the last FIELDS may be left off the wire (trailing; absent, they are None).
+    OPTIONAL = 0
+
+    @classmethod
+    def usage(cls):
+        """Return the usage line, e.g. ``FIRE,<seq>[,<speed mrad/s>]``."""
+        required = len(cls.FIELDS) - cls.OPTIONAL
+        head = ','.join([cls.NAME] + [field.usage for _, field in cls.FIELDS[:required]])
+        tail = ''.join(f'[,{field.usage}' for _, field in cls.FIELDS[required:])
+        return head + tail + ']' * cls.OPTIONAL
 
     def fields(self):
         """Return the wire fields, command name first (raises ProtocolError)."""
-        return [self.NAME] + [field.encode(getattr(self, attr)) for attr, field in self.FIELDS]
+        values = [getattr(self, attr) for attr, _ in self.FIELDS]
+        least = len(values) - self.OPTIONAL
+        n = len(values)
+        # Trailing optional fields that are None are not sent; none may be left out before
+        # one that is sent (the wire has no placeholder for a missing field).
+        while n > least and values[n - 1] is None:
+            n -= 1
+        for attr, _ in self.FIELDS[least:n]:
+            if getattr(self, attr) is None:
+                raise ProtocolError(f'{attr}: None, but a later optional field is given '
+                                    f'({self.usage()})')
+        return [self.NAME] + [field.encode(value)
+                              for (_, field), value in zip(self.FIELDS[:n], values[:n])]
 
     @classmethod
     def from_fields(cls, fields):
         """Decode the received fields that follow the command name."""
-        if len(fields) != len(cls.FIELDS):
-            usage = ','.join([cls.NAME] + [field.usage for _, field in cls.FIELDS])
-            raise ProtocolError(f'expected {len(cls.FIELDS)} field(s) ({usage}), '
+        most = len(cls.FIELDS)
+        least = most - cls.OPTIONAL
+        if not least <= len(fields) <= most:
+            count = (str(most) if least == most else
+                     f'{least} or {most}' if least + 1 == most else f'{least} to {most}')
+            raise ProtocolError(f'expected {count} field(s) ({cls.usage()}), '
                                 f'got {len(fields)}')
         return cls(*[field.decode(text) for (_, field), text in zip(cls.FIELDS, fields)])
 
 
-def _message(cls_name, name, doc, *fields, **namespace):
+def _message(cls_name, name, doc, *fields, optional=0, **namespace):
     """
     One message class: a frozen dataclass of ``fields`` with the table codec.
 
     Each of ``fields`` is ``(attribute, type, _Field)`` or ``(attribute, type, _Field,
-    default)``; ``namespace`` adds properties.
+    default)``; the last ``optional`` of them may be left off the wire (each must default to
+    None, its value when absent); ``namespace`` adds properties (and may add a
+    ``__post_init__`` that checks the fields together, raising ProtocolError).
     """
+    if not 0 <= optional <= len(fields) or \
+            any(len(f) < 4 or f[3] is not None for f in fields[len(fields) - optional:]):
+        raise ValueError(f'{name}: the {optional} optional field(s) must be the last ones and '
+                         'default to None')
     spec = [(f[0], f[1]) if len(f) == 3 else (f[0], f[1], dataclasses.field(default=f[3]))
             for f in fields]
-    namespace.update(NAME=name, FIELDS=tuple((f[0], f[2]) for f in fields), __doc__=doc,
-                     __module__=__name__)
+    namespace.update(NAME=name, FIELDS=tuple((f[0], f[2]) for f in fields), OPTIONAL=optional,
+                     __doc__=doc, __module__=__name__)
     return dataclasses.make_dataclass(cls_name, spec, bases=(_Message,), namespace=namespace,
                                       frozen=True)
 
 
+def _speed_rad_s(mrad_s):
+    return None if mrad_s is None else mrad_s / 1000.0
+
+
+def _check_cap(self):
+    """Check a CAP's range: 0 < min <= max (raises ProtocolError; types are checked later)."""
+    low, high = self.min_mrad_s, self.max_mrad_s
+    if all(isinstance(v, int) and not isinstance(v, bool) for v in (low, high)) and \
+            not 0 < low <= high:
+        raise ProtocolError(f'CAP,SPEED: the range must be 0 < min <= max mrad/s, got '
+                            f'{low}..{high}')
+
+
 # The message table (docs/serial-protocol.md). Host -> controller:
-Fire = _message('Fire', 'FIRE', '``FIRE,<seq>``: run one throw-catch cycle tagged ``seq``.',
-                ('seq', int, _SEQ))
+Fire = _message('Fire', 'FIRE', '``FIRE,<seq>[,<speed>]``: run one throw-catch cycle tagged '
+                '``seq``, at the release-speed setpoint ``speed`` mrad/s if given (only to a '
+                'controller that announced ``CAP,SPEED``).',
+                ('seq', int, _SEQ), ('speed_mrad_s', Optional[int], _SPEED, None), optional=1,
+                speed_rad_s=property(lambda self: _speed_rad_s(self.speed_mrad_s)))
+Caps = _message('Caps', 'CAPS', '``CAPS``: which optional capabilities the controller has; a '
+                'controller that can set the release speed answers ``CAP,SPEED,<min>,<max>``, '
+                'one without answers ``ERR,-,BADCMD``.')
 Stop = _message('Stop', 'STOP',
                 '``STOP``: abort the cycle in progress (if any); the arm returns to rest.')
 Ping = _message('Ping', 'PING', '``PING,<token>``: the controller answers ``PONG,<token>``.',
@@ -268,9 +335,15 @@ Err = _message('Err', 'ERR', '``ERR,<seq|->,<CODE>,<text>``: a refused or failed
 Pong = _message('Pong', 'PONG', '``PONG,<token>``: answer to PING.', ('token', str, _TOKEN))
 Hb = _message('Hb', 'HB', '``HB,<uptime_ms>,<STATE>``: heartbeat, once a second.',
               ('uptime_ms', int, _UPTIME), ('state', str, _STATE))
+Cap = _message('Cap', 'CAP', '``CAP,SPEED,<min>,<max>``: answer to CAPS: the controller sets '
+               'the release speed FIRE asks for, from ``min`` to ``max`` mrad/s.',
+               ('capability', str, _CAPABILITY), ('min_mrad_s', int, _speed('<min mrad/s>')),
+               ('max_mrad_s', int, _speed('<max mrad/s>')), __post_init__=_check_cap,
+               min_rad_s=property(lambda self: _speed_rad_s(self.min_mrad_s)),
+               max_rad_s=property(lambda self: _speed_rad_s(self.max_mrad_s)))
 
-HOST_MESSAGES = {cls.NAME: cls for cls in (Fire, Stop, Ping, Ident)}
-CONTROLLER_MESSAGES = {cls.NAME: cls for cls in (Hello, Ack, Rel, Sens, Err, Pong, Hb)}
+HOST_MESSAGES = {cls.NAME: cls for cls in (Fire, Stop, Ping, Ident, Caps)}
+CONTROLLER_MESSAGES = {cls.NAME: cls for cls in (Hello, Ack, Rel, Sens, Err, Pong, Hb, Cap)}
 
 
 def encode(message):

@@ -32,9 +32,11 @@ def results(effects):
 
 def connect(core, now=0.0):
     assert core.start(now) == [c.OpenLink()]
-    ident, ping = sent(core.link_opened(now))
-    assert ident == p.Ident() and isinstance(ping, p.Ping) and core.link == c.HANDSHAKE
-    core.received(now, 0, [p.Hello('fw', 'B1'), p.Pong(ping.token)])
+    ident, caps, ping = sent(core.link_opened(now))
+    assert ident == p.Ident() and caps == p.Caps() and isinstance(ping, p.Ping) and \
+        core.link == c.HANDSHAKE
+    core.received(now, 0, [p.Hello('fw', 'B1'), p.Err(None, 'BADCMD', 'unknown'),
+                           p.Pong(ping.token)])
     assert core.link == c.CONNECTED
     return core
 
@@ -84,9 +86,9 @@ def test_every_fire_is_announced_before_it_goes_out(core):
 def test_handshake_retries_ping_then_gives_up_and_backs_off():
     core = c.DriverCore(CFG)
     core.start(0.0)
-    first = sent(core.link_opened(0.0))[1]
+    first = sent(core.link_opened(0.0))[2]
     again = sent(core.tick(0.6, 0))
-    assert isinstance(again[1], p.Ping) and again[1].token != first.token
+    assert isinstance(again[2], p.Ping) and again[2].token != first.token
     # A PONG with an old token does not complete the handshake.
     core.received(0.7, 0, [p.Pong(first.token)])
     assert core.link == c.HANDSHAKE
@@ -308,7 +310,7 @@ def test_a_late_answer_to_a_repeated_id_is_not_a_reset():
     core = c.DriverCore(CFG)
     core.start(0.0)
     core.link_opened(0.0)
-    token = sent(core.tick(0.6, 0))[1].token      # ID + PING repeated: two IDs outstanding
+    token = sent(core.tick(0.6, 0))[2].token      # ID + PING repeated: two IDs outstanding
     core.received(0.61, 0, [p.Hello('fw', 'B1'), p.Pong(token)])
     assert core.link == c.CONNECTED
     core.received(0.62, 0, [p.Hello('fw', 'B1')])   # answer to the second ID
@@ -361,3 +363,201 @@ def test_a_reader_that_stops_reporting_does_not_hold_a_cycle_forever(core):
     assert 1.05 + CFG.watchdog_timeout_s < t <= 1.05 + CFG.watchdog_timeout_s + \
         c.READ_GRACE_S + 0.03
     assert not res.ok and 'serial link lost during cycle' in res.reason
+
+
+# ---- release-speed setpoints (issue 25 item 5) ---------------------------------------------
+
+SPEED_CFG = c.CoreConfig(ack_timeout_s=0.5, cycle_timeout_s=3.0, watchdog_timeout_s=2.0,
+                         reconnect_initial_s=0.1, reconnect_max_s=0.8, cycle_period=1.0,
+                         release_speed_mode='setpoint')
+CAP = p.Cap('SPEED', 1047, 12566)      # 60 .. 720 deg/s
+
+
+def speed_core(answer=CAP, config=SPEED_CFG, log=None):
+    """Return an active core whose controller answered CAPS with ``answer`` (None: nothing)."""
+    core = c.DriverCore(config, log=log)
+    core.start(0.0)
+    ident, caps, ping = sent(core.link_opened(0.0))
+    assert caps == p.Caps()
+    replies = [p.Hello('fw', 'B1')] + ([answer] if answer is not None else [])
+    core.received(0.01, 0, replies + [p.Pong(ping.token)])
+    assert core.link == c.CONNECTED
+    core.set_active(True, 0.0, 0)
+    return core
+
+
+def test_cap_in_the_handshake_means_the_controller_sets_the_speed():
+    logs = []
+    core = speed_core(log=lambda level, text: logs.append((level, text)))
+    assert core.speed_range == (1.047, 12.566)
+    assert any('1.047 .. 12.566 rad/s' in t for _, t in logs), logs
+    assert core.counters['controller_errors'] == 0
+
+
+def test_badcmd_to_caps_means_fixed_speed_and_is_no_controller_fault():
+    logs = []
+    core = speed_core(p.Err(None, 'BADCMD', 'unknown'),
+                      log=lambda level, text: logs.append((level, text)))
+    assert core.speed_range is None
+    assert core.counters['controller_errors'] == 0 and core.last_controller_error is None
+    assert ('info', 'controller cannot set the release speed (answered CAPS with BADCMD): '
+            'fixed speed') in logs
+    assert not any(level in ('warning', 'error') and 'BADCMD' in t for level, t in logs)
+    # In 'setpoint' mode an old controller fires at its own speed, said once per link.
+    ok, msg, eff = core.trigger(1.0)
+    assert ok, msg
+    (fire_msg,) = sent(eff)
+    assert fire_msg == p.Fire(1) and p.encode(fire_msg) == p.encode(p.Fire(1, None))
+    assert [e.speed_setpoint for e in eff if isinstance(e, c.Firing)] == [None]
+    ok, msg, _ = core.set_setpoint(1.1, 2, 5.0)
+    assert not ok and 'cannot set the release speed' in msg
+    core.received(1.2, 0, [p.Ack(1), p.Rel(1, 5585), p.Sens(1, 1)])
+    assert fire(core, 1.3) == 2
+    ignored = [t for level, t in logs if 'setpoints are ignored' in t]
+    assert len(ignored) == 1
+    # A BADCMD that answers no CAPS is a controller error as before.
+    core.received(1.4, 0, [p.Err(None, 'BADCMD', 'unknown')])
+    assert core.counters['controller_errors'] == 1
+
+
+def test_no_answer_to_caps_means_fixed_speed():
+    core = speed_core(None)
+    assert core.speed_range is None
+    assert fire(core, 1.0) == 1
+
+
+def test_a_late_cap_changes_nothing_and_is_counted():
+    core = speed_core(p.Err(None, 'BADCMD', 'unknown'))
+    core.received(0.5, 0, [p.Cap('SPEED', 1000, 2000)])
+    assert core.speed_range is None and core.counters['late_caps'] == 1
+
+
+def test_the_capability_is_forgotten_when_the_link_reopens():
+    core = speed_core()
+    core.link_lost(1.0, 0, 'unplugged')
+    ident, caps, ping = sent(core.link_opened(1.2))
+    assert core.speed_range is None
+    core.received(1.3, 0, [p.Err(None, 'BADCMD', 'unknown'), p.Pong(ping.token)])
+    assert core.speed_range is None and core.link == c.CONNECTED
+
+
+def test_trigger_without_a_setpoint_is_refused_with_the_reason():
+    core = speed_core()
+    ok, msg, eff = core.trigger(1.0)
+    assert not ok and eff == [] and core.counters['fired'] == 0
+    assert msg.startswith('refused: no release-speed setpoint for cycle 1 yet;'), msg
+    ok, msg, eff = core.set_setpoint(1.1, 1, 6.0)
+    assert ok and eff == [], msg
+    ok, msg, eff = core.trigger(1.2)
+    assert ok and msg == 'fired cycle seq 1 at 6 rad/s'
+    firing, send = eff
+    assert firing == c.Firing(1, 6.0) and send.message == p.Fire(1, 6000)
+    assert p.encode(send.message) == b'$FIRE,1,6000*%04X\r\n' % p.checksum(b'FIRE,1,6000')
+    # The setpoint is consumed by its cycle: the next one needs its own.
+    core.received(1.3, 5, [p.Ack(1), p.Rel(1, 6010), p.Sens(1, 1)])
+    assert core.setpoint is None
+    ok, msg, _ = core.trigger(1.4)
+    assert not ok and 'cycle 2' in msg
+
+
+def test_the_setpoint_is_in_the_fire_frame_and_in_the_cycle_result():
+    core = speed_core()
+    core.set_setpoint(1.0, 1, 3.14159)      # sent rounded to mrad/s
+    ok, _, eff = core.trigger(1.0)
+    (fire_msg,) = sent(eff)
+    assert fire_msg.speed_mrad_s == 3142 and fire_msg.speed_rad_s == pytest.approx(3.142)
+    (res,) = results(core.received(1.2, 7, [p.Ack(1), p.Rel(1, 3150), p.Sens(1, 0)]))
+    assert res.ok and res.speed_setpoint == pytest.approx(3.142)
+    assert res.release_speed == pytest.approx(3.150)
+    # A failed cycle keeps its setpoint too.
+    core.set_setpoint(1.3, 2, 2.0)
+    core.trigger(1.3)
+    (res,) = results(core.received(1.4, 8, [p.Err(2, 'FAULT', 'arm stalled')]))
+    assert not res.ok and res.speed_setpoint == 2.0
+
+
+@pytest.mark.parametrize('speed, text', [
+    (0.0, 'finite number > 0'), (-3.0, 'finite number > 0'), (float('nan'), 'finite'),
+    (float('inf'), 'finite'), (True, 'finite'), ('5', 'finite'),
+    (1.0, 'outside the range of the controller, 1.047 .. 12.566 rad/s'),
+    (12.6, 'outside the range of the controller'), (1e5, 'beyond the protocol limit'),
+])
+def test_bad_or_out_of_range_setpoints_are_refused(speed, text):
+    core = speed_core()
+    ok, msg, eff = core.set_setpoint(1.0, 1, speed)
+    assert not ok and eff == [] and msg.startswith('refused: ') and text in msg, msg
+    assert core.setpoint is None and core.counters['setpoints_refused'] == 1
+    # The range's ends are in it (compared on the wire value, mrad/s).
+    assert core.set_setpoint(1.0, 1, 1.0466)[0] and core.set_setpoint(1.0, 1, 12.566)[0]
+
+
+def test_a_setpoint_for_another_cycle_is_refused():
+    core = speed_core()
+    ok, msg, _ = core.set_setpoint(1.0, 2, 5.0)
+    assert not ok and 'setpoint for cycle 2, but the next cycle is 1' in msg
+    core.set_setpoint(1.0, 1, 5.0)
+    fire(core, 1.0)
+    ok, msg, _ = core.set_setpoint(1.1, 1, 5.0)
+    assert not ok and 'next cycle is 2 (cycle 1 is in flight)' in msg
+    assert core.set_setpoint(1.1, 2, 5.0)[0]
+
+
+def test_the_newest_setpoint_wins():
+    core = speed_core()
+    assert core.set_setpoint(1.0, 1, 5.0)[0] and core.set_setpoint(1.0, 1, 7.0)[0]
+    assert sent(core.trigger(1.1)[2]) == [p.Fire(1, 7000)]
+
+
+def test_enabled_cycling_waits_for_the_setpoint_then_fires_on_arrival():
+    core = speed_core()
+    ok, msg, eff = core.enable(True, 1.0)
+    assert ok and eff == [] and core.counters['waiting_for_setpoint'] == 1
+    assert core.tick(1.5, 0) == []
+    core.received(2.0, 0, [p.Hb(1, 'IDLE')])
+    assert core.tick(3.0, 0) == []
+    assert core.counters['waiting_for_setpoint'] == 1      # once per cycle that waits
+    ok, msg, eff = core.set_setpoint(3.1, 1, 4.0)
+    assert ok and 'fired cycle seq 1' in msg
+    assert sent(eff) == [p.Fire(1, 4000)] and core.pending.speed_setpoint == 4.0
+    core.received(3.2, 0, [p.Ack(1), p.Sens(1, 1)])
+    # A setpoint that comes early waits for the period; no wait is counted.
+    ok, msg, eff = core.set_setpoint(3.3, 2, 5.0)
+    assert ok and eff == [] and 'fired' not in msg
+    assert core.tick(3.9, 0) == []
+    assert sent(core.tick(4.1, 0)) == [p.Fire(2, 5000)]
+    assert core.counters['waiting_for_setpoint'] == 1
+    core.received(4.2, 0, [p.Ack(2), p.Sens(2, 1)])
+    assert core.tick(5.2, 0) == [] and core.counters['waiting_for_setpoint'] == 2
+
+
+def test_a_setpoint_held_while_disconnected_is_checked_at_the_handshake():
+    core = c.DriverCore(SPEED_CFG)
+    core.set_active(True, 0.0, 0)
+    ok, msg, _ = core.set_setpoint(0.0, 1, 20.0)
+    assert ok and 'held' in msg
+    core.start(0.0)
+    ping = sent(core.link_opened(0.0))[2]
+    core.received(0.1, 0, [CAP, p.Pong(ping.token)])
+    assert core.setpoint is None and core.counters['setpoints_refused'] == 1
+    assert core.set_setpoint(0.2, 1, 6.0)[0]
+    assert sent(core.trigger(0.3)[2]) == [p.Fire(1, 6000)]
+
+
+def test_fixed_mode_never_sends_a_speed(core):
+    core_fixed = speed_core(config=CFG)
+    assert core_fixed.speed_range == (1.047, 12.566)      # known, for diagnostics
+    ok, msg, _ = core_fixed.set_setpoint(0.5, 1, 5.0)
+    assert not ok and "release_speed_mode is 'fixed'" in msg
+    ok, msg, eff = core_fixed.trigger(1.0)
+    assert ok and msg == 'fired cycle seq 1' and sent(eff) == [p.Fire(1)]
+    assert sent(eff)[0].speed_mrad_s is None
+    (res,) = results(core_fixed.received(1.2, 0, [p.Ack(1), p.Sens(1, 1)]))
+    assert res.speed_setpoint is None
+    core_fixed.enable(True, 1.3)
+    assert sent(core_fixed.tick(2.3, 0)) == [p.Fire(2)]
+    assert core_fixed.counters['waiting_for_setpoint'] == 0
+
+
+def test_release_speed_mode_is_checked():
+    with pytest.raises(ValueError, match='release_speed_mode'):
+        c.CoreConfig(release_speed_mode='fast')

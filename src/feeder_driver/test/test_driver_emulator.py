@@ -523,3 +523,190 @@ def test_memory_stays_flat_over_many_cycles(emu_factory, link_path):
     assert grown < 100_000, f'{grown} bytes more after 1000 cycles'
     assert [r['seq'] for r in emu.records] == list(range(1201, 1301))
     cl.close()
+
+
+# ------------------------------------------------------------------ release-speed setpoint
+def test_caps_is_answered_with_the_speed_range(emu_factory, link_path):
+    emu_factory()
+    cl = Client(link_path)
+    cl.send(p.Caps())
+    (cap,) = cl.wait(lambda e: isinstance(e, p.Cap))
+    assert cap == p.Cap('SPEED', 1047, 12566)     # the default 60:720 deg/s
+    cl.close()
+
+
+def test_a_fire_with_a_speed_throws_at_that_speed(emu_factory, link_path, scene_path,
+                                                  sensor_radius):
+    # The same seed and start, thrown independently with throwmap.PartOnArm at each speed.
+    from throwmap import PartOnArm
+    emu = emu_factory()
+    cl = Client(link_path)
+    scene = load_scene(scene_path)
+    part = PartOnArm(scene, *scene.default_start(), sensor_radius=sensor_radius,
+                     seed=scene.seed)
+    fixed = PartOnArm(load_scene(scene_path), *scene.default_start(),
+                      sensor_radius=sensor_radius, seed=scene.seed)
+    speeds = [None, 8.0, 4.0, 6.5, None, 10.0, 3.0, 12.5]
+    differs = False
+    for seq, w in enumerate(speeds, 1):
+        cl.send(p.Fire(seq, None if w is None else int(round(w * 1000))))
+        sens = cl.wait(lambda e, s=seq: isinstance(e, p.Sens) and e.seq == s)[0]
+        rel = cl.wait(lambda e, s=seq: isinstance(e, p.Rel) and e.seq == s)[0]
+        t = part.throw(release_speed=w)
+        f = fixed.throw()
+        differs |= (t.edge, t.kind) != (f.edge, f.kind) or t.R != pytest.approx(f.R)
+        rec = emu.records[-1]
+        assert (rec['seq'], rec['outcome'], rec['setpoint']) == (seq, 'completed', w)
+        assert sens.bit == int(t.detected)
+        assert rec['edge'] == t.edge and rec['kind'] == t.kind
+        assert (rec['R'] is None) if t.edge < 0 else rec['R'] == pytest.approx(t.R)
+        expect = scene.release_speed if w is None else w
+        if t.edge0 >= 0:            # a part was thrown: the speed the arm released at
+            assert rec['release_speed'] == pytest.approx(t.release_speed)
+            expect = t.release_speed
+        assert rel.speed_mrad_s == round(expect * 1000)
+    assert differs, 'the setpoints should change the throws'
+    assert emu.records[-1]['kind'] == 'lost'     # 12.5 rad/s throws the part off the arm
+    cl.close()
+
+
+def test_a_speed_outside_the_range_is_refused_and_fires_nothing(emu_factory, link_path):
+    emu = emu_factory(speed_range=(2.0, 9.0))
+    cl = Client(link_path)
+    cl.send(p.Caps())
+    assert cl.wait(lambda e: isinstance(e, p.Cap))[0] == p.Cap('SPEED', 2000, 9000)
+    for seq, mrad in ((1, 1999), (2, 9001), (3, -5000)):
+        cl.send(p.Fire(seq, mrad))
+        (err,) = cl.wait(lambda e, s=seq: isinstance(e, p.Err) and e.seq == s)
+        assert (err.code, err.text) == ('BADARG', 'speed out of range')
+    cl.send(p.Fire(4, 2000))
+    cl.wait(lambda e: isinstance(e, p.Sens) and e.seq == 4)
+    assert [type(e) for e in cl.events if isinstance(e, (p.Ack, p.Rel))] == [p.Ack, p.Rel]
+    assert emu.controller.cycles == 1
+    assert [(r['seq'], r['outcome'], r['setpoint']) for r in emu.records] == \
+        [(1, 'bad_speed', 1.999), (2, 'bad_speed', 9.001), (3, 'bad_speed', -5.0),
+         (4, 'completed', 2.0)]
+    cl.close()
+
+
+def test_no_speed_setpoint_answers_as_an_old_controller(emu_factory, link_path):
+    emu = emu_factory(speed_range=None)
+    cl = Client(link_path)
+    cl.send(p.Caps())
+    (err,) = cl.wait(lambda e: isinstance(e, p.Err))
+    assert err == p.Err(None, 'BADCMD', 'unknown')
+    cl.events.clear()
+    cl.send(p.Fire(1, 6000))
+    (err,) = cl.wait(lambda e: isinstance(e, p.Err))
+    assert err == p.Err(None, 'BADARG', 'fields')       # the old parser's answer
+    cl.send(p.Fire(2))
+    rel = cl.wait(lambda e: isinstance(e, p.Rel))[0]
+    cl.wait(lambda e: isinstance(e, p.Sens) and e.seq == 2)
+    assert rel == p.Rel(2, 5585)
+    assert emu.controller.cycles == 1 and emu.records[-1]['setpoint'] is None
+    stats = emu.controller.parser.stats
+    assert (stats['unknown'], stats['fields']) == (1, 1)
+    cl.close()
+
+
+def test_a_speed_the_part_cannot_be_held_at_ends_with_err_fault(emu_factory, link_path,
+                                                                monkeypatch):
+    import throwmap
+    real = throwmap.PartOnArm.throw
+
+    def throw(self, release_speed=None):
+        if release_speed is not None and release_speed > 11.0:
+            raise throwmap.DomainError('grasp_bound_2', 'the part slides off at this speed')
+        return real(self, release_speed)
+
+    monkeypatch.setattr(throwmap.PartOnArm, 'throw', throw)
+    emu = emu_factory()
+    cl = Client(link_path)
+    cl.send(p.Fire(1, 12000))
+    (err,) = cl.wait(lambda e: isinstance(e, p.Err) and e.seq == 1)
+    assert (err.code, err.text) == ('FAULT', 'throw outside the throw map: grasp_bound_2')
+    assert cl.wait(lambda e: isinstance(e, p.Rel))[0] == p.Rel(1, 12000)
+    rec = emu.records[-1]
+    assert (rec['outcome'], rec['throw'], rec['setpoint'], rec['release_speed']) == \
+        ('fault', False, 12.0, None)
+    assert 'slides off' in rec['error']
+    cl.send(p.Fire(2, 6000))
+    cl.wait(lambda e: isinstance(e, p.Sens) and e.seq == 2)
+    cl.close()
+
+
+def test_the_truth_log_records_setpoint_and_release_speed(scene_path, sensor_radius,
+                                                          link_path, tmp_path):
+    log = tmp_path / 'truth.jsonl'
+    with EmulatorThread(scene_path, link_path, sensor_radius=sensor_radius, cycle_time=0.01,
+                        truth_log=str(log)):
+        cl = Client(link_path)
+        fire(cl, 1)
+        cl.send(p.Fire(2, 7000))
+        cl.wait(lambda e: isinstance(e, p.Sens) and e.seq == 2)
+        cl.close()
+    lines = [strict_json(x) for x in log.read_text().splitlines()]
+    assert lines[0]['speed_range'] == [1.047, 12.566]
+    assert [(x['setpoint'], x['release_speed']) for x in lines[1:]] == \
+        [(None, load_scene(scene_path).release_speed), (7.0, 7.0)]
+
+
+def test_core_handshake_with_the_emulator(emu_factory, link_path):
+    """Handshake of DriverCore over the pty: CAP gives speed_range, an old controller None."""
+    from feeder_driver import core as c
+    for speed_range, expect in ((None, None), ((2.0, 9.0), (2.0, 9.0))):
+        emu = emu_factory(speed_range=speed_range)
+        cl = Client(link_path)
+        logs = []
+        core = c.DriverCore(c.CoreConfig(release_speed_mode='setpoint'),
+                            log=lambda level, text: logs.append((level, text)))
+        core.start(0.0)
+        for eff in core.link_opened(0.0):
+            cl.send(eff.message)
+        cl.wait(lambda e: isinstance(e, p.Pong))
+        core.received(0.1, 0, cl.events)
+        assert core.link == c.CONNECTED and core.speed_range == expect
+        assert core.counters['controller_errors'] == 0
+        assert not [t for level, t in logs if level in ('warning', 'error')], logs
+        core.set_active(True, 0.2, 0)
+        if expect is not None:
+            assert core.set_setpoint(0.2, 1, 3.0)[0]
+        ok, msg, eff = core.trigger(0.3)
+        assert ok, msg
+        cl.events.clear()
+        for e in eff:
+            if isinstance(e, c.Send):
+                cl.send(e.message)
+        cl.wait(lambda e: isinstance(e, p.Sens))
+        (res,) = [e.result for e in core.received(0.4, 0, cl.events)
+                  if isinstance(e, c.CycleFinished)]
+        assert res.ok and res.speed_setpoint == (None if expect is None else 3.0)
+        assert res.release_speed == pytest.approx(5.585 if expect is None else 3.0, abs=1e-3)
+        cl.close()
+        emu.stop()
+
+
+@pytest.mark.parametrize('text, error', [
+    ('720:60', '0 < MIN <= MAX'), ('0:60', '0 < MIN <= MAX'), ('-5:60', '0 < MIN <= MAX'),
+    ('60', 'MIN:MAX in deg/s'), ('a:b', 'MIN:MAX in deg/s'), ('1:2:3', 'MIN:MAX'),
+    ('60:1e9', '<= 572958 deg/s'), ('60:inf', '0 < MIN'),
+])
+def test_bad_speed_ranges_are_refused(text, error):
+    from feeder_driver.emulator import parse_speed_range
+    with pytest.raises(EmulatorError, match='--speed-range') as info:
+        parse_speed_range(text)
+    assert error in str(info.value)
+
+
+def test_cli_speed_options(tmp_path, scene_path, sensor_radius):
+    from feeder_driver.emulator import parse_speed_range
+    assert parse_speed_range('60:720') == pytest.approx((1.0471976, 12.566371))
+    res = _run_cli('--scene', scene_path, '--link', str(tmp_path / 'l'), '--speed-range', '9:5')
+    assert res.returncode == 2 and '--speed-range' in res.stderr
+    link = str(tmp_path / 'tty')
+    res = _run_cli('--scene', scene_path, '--link', link, '--sensor-radius', str(sensor_radius),
+                   '--no-speed-setpoint', '--max-time', '0.3')
+    assert res.returncode == 0 and 'fixed release speed' in res.stdout, res.stderr
+    res = _run_cli('--scene', scene_path, '--link', link, '--sensor-radius', str(sensor_radius),
+                   '--speed-range', '30:400', '--max-time', '0.3')
+    assert res.returncode == 0 and 'release speed setpoints 30:400 deg/s' in res.stdout

@@ -15,13 +15,15 @@
 """Protocol codec: round trips, the worked CRC example, defensive decoding."""
 
 import random
+from typing import Optional
 
 from feeder_driver import protocol as p
 from hypothesis import given, settings
 from hypothesis import strategies as st
 import pytest
 
-ALL = [p.Fire(0), p.Fire(65535), p.Stop(), p.Ping('h1'), p.Ident(),
+ALL = [p.Fire(0), p.Fire(65535), p.Fire(17, 6283), p.Stop(), p.Ping('h1'), p.Ident(), p.Caps(),
+       p.Cap('SPEED', 1047, 12566), p.Cap('SPEED', 1, p.MAX_SPEED_MRAD_S),
        p.Hello('feeder-emu-1.0', '0A1B'), p.Ack(7), p.Rel(7, 5585), p.Rel(7, -12),
        p.Sens(7, 1), p.Sens(65535, 0),
        p.Err(7, 'BUSY', 'cycle 6 in progress'), p.Err(None, 'BADSUM', ''), p.Pong('h1'),
@@ -68,6 +70,14 @@ def test_doc_example_frames_are_exact():
         b'$ERR,18,ABORTED,stopped by host*A4EF',
         p.Err(None, 'BADSUM', 'checksum'): b'$ERR,-,BADSUM,checksum*4028',
         p.Err(19, 'FAULT', 'arm stalled'): b'$ERR,19,FAULT,arm stalled*5F27',
+        # The release-speed setpoint (section 5): the handshake's CAPS and its two answers,
+        # FIRE with a setpoint and its refusal.
+        p.Caps(): b'$CAPS*3F34', p.Cap('SPEED', 1047, 12566): b'$CAP,SPEED,1047,12566*57BD',
+        p.Err(None, 'BADCMD', 'unknown'): b'$ERR,-,BADCMD,unknown*5036',
+        p.Fire(17, 6283): b'$FIRE,17,6283*B95E', p.Rel(17, 6283): b'$REL,17,6283*FA2F',
+        p.Fire(18, 20000): b'$FIRE,18,20000*4CD4',
+        p.Err(18, 'BADARG', 'speed out of range'): b'$ERR,18,BADARG,speed out of range*C214',
+        p.Err(None, 'BADARG', 'fields'): b'$ERR,-,BADARG,fields*A98F',
     }
     for msg, line in examples.items():
         assert p.encode(msg) == line + b'\r\n'
@@ -165,6 +175,8 @@ def test_a_frame_of_exactly_max_line_is_accepted_and_one_more_byte_is_not():
     lambda: p.Sens(1, 2), lambda: p.Sens(1, 1.0),
     lambda: p.Err(1, 'busy', ''), lambda: p.Err(1, 'BUSY', 'a*b'),
     lambda: p.Hb(-1, 'IDLE'), lambda: p.Rel(1, 10 ** 8), lambda: p.Rel(1, 1.5),
+    lambda: p.Fire(1, 10 ** 8), lambda: p.Fire(1, 6.283), lambda: p.Cap('TURBO', 1, 2),
+    lambda: p.Cap('SPEED', 0, 5), lambda: p.Cap('SPEED', 6, 5), lambda: p.Cap('SPEED', 1, 2.5),
 ])
 def test_encoding_invalid_values_raises_a_clear_error(bad):
     with pytest.raises(p.ProtocolError) as info:
@@ -213,3 +225,49 @@ def test_reject_codes_cover_every_kind():
     parser = p.Parser()
     assert set(p.REJECT_CODES) == set(parser.STAT_KEYS) - {'bytes', 'lines', 'garbage_bytes'}
     assert set(p.REJECT_CODES.values()) <= set(p.ERROR_CODES)
+
+
+def test_fire_takes_an_optional_speed_field():
+    parser = p.Parser(p.HOST_MESSAGES)
+    assert parser.feed(p.frame(['FIRE', '17'])) == [p.Fire(17)]
+    assert parser.feed(p.frame(['FIRE', '17', '6283'])) == [p.Fire(17, 6283)]
+    assert p.Fire(17).speed_rad_s is None and p.Fire(17, 6283).speed_rad_s == 6.283
+    assert p.Fire(17).fields() == ['FIRE', '17']
+    for fields, text in [(['FIRE'], 'expected 1 or 2 field(s) (FIRE,<seq>[,<speed mrad/s>]), '
+                          'got 0'),
+                         (['FIRE', '1', '2', '3'], 'expected 1 or 2 field(s)'),
+                         (['FIRE', '1', ''], 'speed'), (['FIRE', '1', 'x'], 'speed'),
+                         (['FIRE', '1', '10000001'], 'speed')]:
+        (event,) = parser.feed(p.frame(fields))
+        assert event.kind == 'fields' and text in event.detail, event
+    assert p.Fire.usage() == 'FIRE,<seq>[,<speed mrad/s>]'
+    assert p.Cap.usage() == 'CAP,SPEED,<min mrad/s>,<max mrad/s>'
+
+
+def test_cap_range_and_name_are_checked_on_receipt():
+    parser = p.Parser()
+    for fields, text in [(['CAP', 'SPEED', '0', '5'], '0 < min <= max'),
+                         (['CAP', 'SPEED', '6', '5'], '0 < min <= max'),
+                         (['CAP', 'SPEED', '-5', '5'], '0 < min <= max'),
+                         (['CAP', 'TURBO', '1', '5'], 'capability'),
+                         (['CAP', 'SPEED', '5'], 'expected 3 field(s)')]:
+        (event,) = parser.feed(p.frame(fields))
+        assert event.kind == 'fields' and text in event.detail, event
+    (cap,) = parser.feed(p.frame(['CAP', 'SPEED', '1047', '12566']))
+    assert (cap.min_rad_s, cap.max_rad_s) == (1.047, 12.566)
+
+
+def test_only_trailing_fields_may_be_optional():
+    with pytest.raises(ValueError, match='optional'):
+        p._message('Bad', 'BAD', 'doc', ('a', int, p._SEQ, None), ('b', int, p._SEQ),
+                   optional=2)
+    with pytest.raises(ValueError, match='optional'):
+        p._message('Bad', 'BAD', 'doc', ('a', int, p._SEQ), optional=1)
+    two = p._message('Two', 'TWO', 'doc', ('a', int, p._SEQ),
+                     ('b', Optional[int], p._SEQ, None), ('c', Optional[int], p._SEQ, None),
+                     optional=2)
+    assert two.usage() == 'TWO,<seq>[,<seq>[,<seq>]]'
+    assert two(1).fields() == ['TWO', '1'] and two(1, 2).fields() == ['TWO', '1', '2']
+    with pytest.raises(p.ProtocolError, match='later optional field'):
+        two(1, None, 3).fields()
+    assert two.from_fields(['1', '2']) == two(1, 2)
