@@ -444,3 +444,14 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready, comple
     assert int(last['ready']) == sum(verdicts) and int(last['anomalies']) == 0
     assert int(last['completed']) == len(verdicts)
     assert sim.poll() is None and mon.poll() is None and pred.poll() is None
+
+
+def funnel_policy(out_dir, speeds='120:600:20', robust=0.005, scene=TRIANGLE):
+    """Write the policy of ``throwmap funnel SCENE --speeds SPEEDS`` into ``out_dir``; its path."""
+    import json
+    from throwmap import funnel as F
+    arm, _ = F.arm_scene(load_scene(scene), None)
+    result = F.plan(arm, F.parse_speeds(speeds), robust=robust, cells=200)
+    path = pathlib.Path(out_dir) / f'{arm.name}_funnel_policy.json'
+    path.write_text(json.dumps(F.policy_dict(result, scene)))
+    return path

@@ -35,7 +35,8 @@ import os
 
 from feeder_common.messages import parse_cycle_status
 from feeder_interfaces.msg import SpeedSetpoint
-from feeder_nodes import LATCHED, monitor, sim_as_hardware, TRIANGLE, watch_monitor
+from feeder_nodes import (funnel_policy, LATCHED, monitor, sim_as_hardware, TRIANGLE,
+                          watch_monitor)
 from feeder_sim.truth import read_truth_log
 import numpy as np
 import pytest
@@ -58,12 +59,7 @@ MONITOR = '/feeder/feeder_monitor'
 @pytest.fixture(scope='module')
 def policy_file(tmp_path_factory):
     """The policy of ``throwmap funnel scenes/triangle.yaml --speeds 120:600:20``."""
-    out = tmp_path_factory.mktemp('funnel')
-    scene, _ = F.arm_scene(load_scene(TRIANGLE), None)
-    result = F.plan(scene, F.parse_speeds(SPEEDS), robust=ROBUST, cells=200)
-    path = out / 'triangle_funnel_policy.json'
-    path.write_text(json.dumps(F.policy_dict(result, TRIANGLE)))
-    return path
+    return funnel_policy(tmp_path_factory.mktemp('funnel'), SPEEDS, ROBUST)
 
 
 def starts(policy_file, parts, seed=25):
@@ -178,6 +174,20 @@ def test_the_speed_policy_feeds_200_parts_live_with_no_false_ready(graph, ros, t
     print(f'\nsensor-based policy on the graph ({SPEEDS} deg/s, s = {ROBUST}, corner '
           f'errors): {json.dumps(policy)}; {len(speeds)} speeds used')
     assert policy['never'] == 0
+
+
+def test_one_speed_under_the_policys_proof_rule_feeds_the_same_parts(graph, ros, tmp_path,
+                                                                     policy_file):
+    # The policy machinery with the scene's own speed only (320 deg/s: the grid's and the
+    # scene's 320.0026): what the proof rule alone gives, without choosing speeds.
+    one_speed = funnel_policy(tmp_path, '320', ROBUST)
+    parts = starts(policy_file, PARTS)
+    run = feed(graph, ros, tmp_path, parts, str(one_speed))
+    check_run(*run, policy=True)
+    fixed = summary(run[0])
+    print(f'\none speed (320 deg/s) under the policy rule on the graph (s = {ROBUST}, corner '
+          f'errors): {json.dumps(fixed)}')
+    assert fixed['never'] == 0
 
 
 def test_the_fixed_design_feeds_the_same_parts_with_no_false_ready(graph, ros, tmp_path,

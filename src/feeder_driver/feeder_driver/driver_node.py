@@ -36,7 +36,8 @@ from feeder_common.messages import CycleSigner, joint_state, proximity
 from feeder_common.node import (clock_note, FeederLifecycleNode, flush, RateTimer, run_node,
                                 StartupError)
 from feeder_common.parameters import ParameterGate
-from feeder_interfaces.msg import CycleStatus
+from feeder_common.setpoints import SetpointInbox
+from feeder_interfaces.msg import CycleStatus, SpeedSetpoint
 from rclpy.lifecycle import TransitionCallbackReturn
 from sensor_msgs.msg import JointState, Range
 from std_srvs.srv import SetBool, Trigger
@@ -69,11 +70,16 @@ class DriverNode(FeederLifecycleNode):
         self._params.check_startup()
         self._p = self._params.values
         try:
-            # One session per process: a restarted driver is a new run to the monitor.
-            self._signer = CycleSigner(auth.node_key(self._p['key_file']),
-                                       self.get_fully_qualified_name())
+            key = auth.node_key(self._p['key_file'])
         except auth.KeyFileError as exc:
             raise StartupError(f'key_file: {exc}') from None
+        # One session per process: a restarted driver is a new run to the monitor.
+        self._signer = CycleSigner(key, self.get_fully_qualified_name())
+        # Release-speed setpoints (release_speed_mode setpoint): which one, if any, a cycle is
+        # fired at is feeder_common.setpoints'; the core holds it and puts it in the FIRE.
+        self._inbox = SetpointInbox(key, self.resolve_topic_name(self._p['speed_source']),
+                                    self._p['max_setpoint_age'])
+        self._setpoint_sub = None
         for name in self._params.unknown_given():
             self.get_logger().warning(f'parameter {name} is not a parameter of driver_node; '
                                       'ignored (docs/driver.md lists them)')
@@ -98,7 +104,8 @@ class DriverNode(FeederLifecycleNode):
                             watchdog_timeout_s=p['watchdog_timeout_s'],
                             reconnect_initial_s=p['reconnect_initial_s'],
                             reconnect_max_s=p['reconnect_max_s'],
-                            cycle_period=p['cycle_period'])
+                            cycle_period=p['cycle_period'],
+                            release_speed_mode=p['release_speed_mode'])
 
     def _apply_parameters(self, changed):
         self.core.reconfigure(self._core_config())
@@ -109,6 +116,8 @@ class DriverNode(FeederLifecycleNode):
             self._tick_timer = self.create_timer(self._tick_period(), self._tick)
         if 'joint_states_rate' in changed and self._pub_joint is not None:
             self._joint_timer.start(self._p['joint_states_rate'])
+        if 'max_setpoint_age' in changed:
+            self._inbox.max_age_s = self._p['max_setpoint_age']
 
     def _tick_period(self):
         return max(MIN_TICK_PERIOD_S, min(TICK_PERIOD_S, self._p['cycle_period'] / 2))
@@ -128,6 +137,9 @@ class DriverNode(FeederLifecycleNode):
                                    self._on_lost)
             self._tick_timer = self.create_timer(self._tick_period(), self._tick)
             self._joint_timer.start(self._p['joint_states_rate'])
+            self._setpoint_sub = self.create_subscription(
+                SpeedSetpoint, 'release_speed_setpoint', self._on_setpoint,
+                qos.RELEASE_SPEED_SETPOINT)
             self._apply(self.core.start(time.monotonic()))
         except Exception as exc:    # noqa: B902 - report, then let lifecycle fail cleanly
             self.get_logger().error(f'configure failed: {exc!r}')
@@ -176,6 +188,9 @@ class DriverNode(FeederLifecycleNode):
         if self._tick_timer is not None:
             self.destroy_timer(self._tick_timer)
             self._tick_timer = None
+        if self._setpoint_sub is not None:
+            self.destroy_subscription(self._setpoint_sub)
+            self._setpoint_sub = None
         self._joint_timer.stop()
         for pub in self._own_publishers():
             self.destroy_lifecycle_publisher(pub)
@@ -259,6 +274,30 @@ class DriverNode(FeederLifecycleNode):
             else:
                 self._apply(self.core.link_lost(t, stamp, payload))
 
+    def _on_setpoint(self, msg):
+        why = self._inbox.offer(msg, self._stamp())
+        if why:
+            self.get_logger().warning(f'release_speed_setpoint not taken: {why}',
+                                      throttle_duration_sec=5.0)
+            return
+        self._take_setpoint()
+
+    def _take_setpoint(self):
+        """Hand the core the setpoint of its next cycle, if the inbox holds one for it."""
+        core = self.core
+        if core.config.release_speed_mode != c.SETPOINT or \
+                (core.setpoint is not None and core.setpoint[0] == core.next_seq):
+            return
+        speed, _ = self._inbox.for_cycle(core.next_seq, self._signer.session, self._stamp())
+        if speed is None:
+            return
+        accepted, reason, effects = core.set_setpoint(time.monotonic(), core.next_seq, speed)
+        if not accepted:
+            self.get_logger().warning(f'release-speed setpoint {speed:.4f} rad/s for cycle '
+                                      f'{core.next_seq} refused: {reason}',
+                                      throttle_duration_sec=5.0)
+        self._apply(effects)
+
     def _tick(self):
         # What the reader has read so far is handled before any deadline is judged: after a
         # stall (SIGSTOP, starved CPU) a reply may be waiting in the queue or the port.
@@ -290,6 +329,8 @@ class DriverNode(FeederLifecycleNode):
                 if self.link is not None:
                     self.link.close()
             elif isinstance(effect, c.Firing):
+                if effect.speed_setpoint is not None:
+                    self._inbox.used()
                 stamp = self._stamp()
                 self._motion.fired(stamp)
                 if self._pub_fired is not None:
@@ -317,7 +358,7 @@ class DriverNode(FeederLifecycleNode):
         self._publish(self._pub_status, self._signer.cycle_status(
             result.seq, ok, '' if ok else result.reason,
             None if result.sensor is None else bool(result.sensor), result.stamp,
-            self._p['port']))
+            self._p['port'], result.speed_setpoint))
         if ok:
             self._publish_joint(result.stamp, 0.0)
 

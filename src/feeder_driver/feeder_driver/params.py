@@ -23,7 +23,7 @@ ranges (a test checks both).
 
 from feeder_common.params import (by_name, check_link, CYCLE_PERIOD, DIAGNOSTIC_PERIOD,
                                   FRAME_ID, JOINT_STATES_RATE, KEY_FILE, LINK_SPECS,
-                                  ParamSpec, REALTIME_PRIORITY, SENSOR_RANGE)
+                                  ParamSpec, REALTIME_PRIORITY, SENSOR_RANGE, SETPOINT_SPECS)
 
 BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 500000,
               921600, 1000000, 2000000)
@@ -45,6 +45,7 @@ SPECS = (
     DIAGNOSTIC_PERIOD,
     JOINT_STATES_RATE,
     KEY_FILE,
+    *SETPOINT_SPECS,
 )
 BY_NAME = by_name(SPECS)
 

@@ -226,6 +226,9 @@ def test_the_tracker_follows_the_speed_used_and_forgets_what_it_cannot_follow(pl
     # A speed the policy has no map for: every cell that can read the bit, never less.
     tracker.speed()
     assert tracker.observe(True, 1.2345) == 'unknown speed'
+    # A setpoint rounded to whole mrad/s on the serial line is still that speed.
+    assert all(tracker.speed_index(round(w * 1000) / 1000) == k
+               for k, w in enumerate(system.speeds))
     assert np.array_equal(tracker.know, system.can_see)
     # A bit no cell of the knowledge can read: an anomaly, then every cell that can read it.
     cells = [c for c in np.nonzero(system.goal & ~system.can_see)[0][:20]

@@ -643,6 +643,9 @@ def policy_dict(result, scene_path=''):
             'can_miss': s.can_miss.astype(int).tolist()}
 
 
+# A throw's speed is the policy's when within this (rad/s): half a mrad/s, the serial
+# protocol's resolution (docs/serial-protocol.md); 5 % of the error box at 120 deg/s, s 0.005.
+SPEED_RESOLUTION = 5e-4
 # A policy file larger than this is refused before it is read (26 speeds x 600 cells: 0.6 MB).
 MAX_POLICY_BYTES = 64 * 2 ** 20
 
@@ -775,10 +778,15 @@ class Tracker:
         return None if self.last < 0 else float(self.system.speeds[self.last])
 
     def speed_index(self, speed):
-        """Return the index of a policy speed within 1e-9 relative of ``speed`` (rad/s), or -1."""
+        """
+        Return the index of the policy speed nearest ``speed`` (rad/s), or -1 if none is near.
+
+        Near: within SPEED_RESOLUTION, half the serial protocol's step (setpoints travel to the
+        controller in whole mrad/s), plus a relative 1e-9.
+        """
         speeds = self.system.speeds
         k = int(np.argmin(np.abs(speeds - speed)))
-        return k if abs(speeds[k] - speed) <= 1e-9 * speeds[k] else -1
+        return k if abs(speeds[k] - speed) <= SPEED_RESOLUTION + 1e-9 * speeds[k] else -1
 
     def observe(self, bit, speed=None):
         """
