@@ -447,7 +447,7 @@ def check_ready_correctness(graph, ros, scene, cycles, period, min_ready, comple
 
 
 def funnel_policy(out_dir, speeds='120:600:20', robust=0.005, scene=TRIANGLE):
-    """Write the policy of ``throwmap funnel SCENE --speeds SPEEDS`` into ``out_dir``; its path."""
+    """Write the policy of ``throwmap funnel SCENE --speeds SPEEDS`` in ``out_dir``; return it."""
     import json
     from throwmap import funnel as F
     arm, _ = F.arm_scene(load_scene(scene), None)
@@ -455,3 +455,17 @@ def funnel_policy(out_dir, speeds='120:600:20', robust=0.005, scene=TRIANGLE):
     path = pathlib.Path(out_dir) / f'{arm.name}_funnel_policy.json'
     path.write_text(json.dumps(F.policy_dict(result, scene)))
     return path
+
+
+def start_emulator(graph, link, *args, scene=TRIANGLE):
+    """Start controller_emulator on a pty at ``link``; return its process once the link exists."""
+    import os
+    import time
+    emu = graph.start('feeder_driver', 'controller_emulator', '--scene', scene, '--link', link,
+                      *args, name='emulator')
+    end = time.monotonic() + STARTUP_TIMEOUT
+    while not os.path.islink(link):
+        assert emu.poll() is None, graph.log(emu)
+        assert time.monotonic() < end, 'the emulator did not create its pty link'
+        time.sleep(0.05)
+    return emu

@@ -25,11 +25,11 @@ the monitor follows with the scene's speed.
 """
 
 import math
-import os
 import time
 
-from feeder_nodes import (CycleStatuses, funnel_policy, monitor, STARTUP_TIMEOUT, Statements,
-                          TRIANGLE, Verdicts, wait_for_monitor, wait_reports_matched)
+from feeder_nodes import (CycleStatuses, funnel_policy, monitor, start_emulator,
+                          STARTUP_TIMEOUT, Statements, Verdicts, wait_for_monitor,
+                          wait_reports_matched)
 from feeder_sim.truth import read_truth_log
 from std_srvs.srv import SetBool
 
@@ -41,14 +41,8 @@ def run(graph, ros, tmp_path, emulator_args):
     link = tmp_path / 'feeder-tty'
     truth_path = tmp_path / 'truth.jsonl'
     policy = funnel_policy(tmp_path)
-    emu = graph.start('feeder_driver', 'controller_emulator', '--scene', TRIANGLE, '--link', link, '--truth-log', truth_path,
-                      '--cycle-time', '0.01', '--heartbeat', '0.2', *emulator_args,
-                      name='emulator')
-    end = time.monotonic() + STARTUP_TIMEOUT
-    while not os.path.islink(link):
-        assert emu.poll() is None, graph.log(emu)
-        assert time.monotonic() < end, 'the emulator did not create its pty link'
-        time.sleep(0.05)
+    start_emulator(graph, link, '--truth-log', truth_path, '--cycle-time', '0.01',
+                   '--heartbeat', '0.2', *emulator_args)
     graph.start('feeder_driver', 'driver_node', '--ros-args', '-r', '__ns:=/feeder', '-p',
                 f'port:={link}', '-p', f'cycle_period:={PERIOD}', '-p',
                 'release_speed_mode:=setpoint', name='driver')

@@ -26,12 +26,11 @@ ready; a fault-free run checks the readies themselves.
 """
 
 import json
-import os
 import time
 
 from feeder_interfaces.msg import CycleStatus, Verdict
 from feeder_nodes import (check_statements, Collector, CycleStatuses, Diagnostics, monitor,
-                          monitor_rules, STARTUP_TIMEOUT, Statements, TRIANGLE, Verdicts,
+                          monitor_rules, start_emulator, STARTUP_TIMEOUT, Statements, Verdicts,
                           wait_for_monitor, wait_reports_matched)
 from sensor_msgs.msg import Range
 from std_srvs.srv import SetBool
@@ -77,14 +76,8 @@ def run_driver_graph(graph, ros, tmp_path, emulator_faults, cycles, faults):
     """
     link = tmp_path / 'feeder-tty'
     truth_path = tmp_path / 'truth.jsonl'
-    emu = graph.start('feeder_driver', 'controller_emulator', '--scene', TRIANGLE,
-                      '--link', link, '--truth-log', truth_path, '--cycle-time', '0.02',
-                      '--heartbeat', '0.2', *emulator_faults, name='emulator')
-    end = time.monotonic() + STARTUP_TIMEOUT
-    while not os.path.islink(link):
-        assert emu.poll() is None, graph.log(emu)
-        assert time.monotonic() < end, 'the emulator did not create its pty link'
-        time.sleep(0.05)
+    emu = start_emulator(graph, link, '--truth-log', truth_path, '--cycle-time', '0.02',
+                         '--heartbeat', '0.2', *emulator_faults)
     args = ['--ros-args', '-r', '__ns:=/feeder', '-p', f'port:={link}']
     for p in DRIVER_PARAMS:
         args += ['-p', p]

@@ -22,7 +22,6 @@ never gets a ready: each forged report is an anomaly, and the monitor warms up a
 of a genuine signed report is refused; a replayed ready statement reads as stale to a consumer.
 """
 
-import os
 import signal
 import subprocess
 import sys
@@ -33,8 +32,8 @@ from feeder_common import auth, qos
 from feeder_common.messages import check_verdict, cycle_status
 from feeder_interfaces.msg import CycleStatus, Verdict
 from feeder_nodes import (CycleStatuses, Diagnostics, DRIVER, LATCHED, MONITOR, monitor,
-                          PredictedStates, predictor, STARTUP_TIMEOUT, sim_as_hardware,
-                          Statements, TRIANGLE, Verdicts, wait_for_monitor,
+                          PredictedStates, predictor, sim_as_hardware, start_emulator,
+                          STARTUP_TIMEOUT, Statements, TRIANGLE, Verdicts, wait_for_monitor,
                           wait_reports_matched, watch_monitor)
 import pytest
 from rclpy.duration import Duration
@@ -307,13 +306,7 @@ def test_a_huge_seq_does_not_hang_the_predictor(graph, ros):
 
 def start_emulator_and_driver(graph, tmp_path, *emulator_args):
     link = tmp_path / 'feeder-tty'
-    emu = graph.start('feeder_driver', 'controller_emulator', '--scene', TRIANGLE, '--link',
-                      link, '--heartbeat', '0.2', *emulator_args, name='emulator')
-    end = time.monotonic() + STARTUP_TIMEOUT
-    while not os.path.islink(link):
-        assert emu.poll() is None, graph.log(emu)
-        assert time.monotonic() < end, 'the emulator did not create its pty link'
-        time.sleep(0.05)
+    emu = start_emulator(graph, link, '--heartbeat', '0.2', *emulator_args)
     drv = graph.start('feeder_driver', 'driver_node', '--ros-args', '-r', '__ns:=/feeder',
                       '-p', f'port:={link}', '-p', 'cycle_timeout_s:=30.0',
                       '-p', 'watchdog_timeout_s:=5.0', name='driver')

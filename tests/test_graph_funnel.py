@@ -58,7 +58,7 @@ MONITOR = '/feeder/feeder_monitor'
 
 @pytest.fixture(scope='module')
 def policy_file(tmp_path_factory):
-    """The policy of ``throwmap funnel scenes/triangle.yaml --speeds 120:600:20``."""
+    """Write the policy of ``throwmap funnel scenes/triangle.yaml --speeds 120:600:20``."""
     return funnel_policy(tmp_path_factory.mktemp('funnel'), SPEEDS, ROBUST)
 
 
@@ -163,7 +163,7 @@ def check_run(throws, readies, truth, status, verdicts, policy):
 
 
 def test_the_speed_policy_feeds_200_parts_live_with_no_false_ready(graph, ros, tmp_path,
-                                                                    policy_file):
+                                                                   policy_file):
     parts = starts(policy_file, PARTS)
     run = feed(graph, ros, tmp_path, parts, str(policy_file))
     check_run(*run, policy=True)

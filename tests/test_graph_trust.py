@@ -30,8 +30,8 @@ import time
 from feeder_common import auth, qos
 from feeder_common.messages import signed_verdict
 from feeder_interfaces.msg import CycleStatus, Verdict
-from feeder_nodes import (CycleStatuses, DRIVER, monitor, sim_as_hardware, Statements,
-                          STARTUP_TIMEOUT, TRIANGLE, Verdicts, wait_for_monitor,
+from feeder_nodes import (CycleStatuses, DRIVER, monitor, sim_as_hardware, start_emulator,
+                          STARTUP_TIMEOUT, Statements, Verdicts, wait_for_monitor,
                           wait_reports_matched)
 from std_srvs.srv import SetBool, Trigger
 
@@ -96,14 +96,7 @@ def kill_when_ready_and_time_the_drop(ros, ready, driver):
 
 def start_driver_on_emulator(graph, tmp_path, cycle_time):
     link = tmp_path / 'feeder-tty'
-    emu = graph.start('feeder_driver', 'controller_emulator', '--scene', TRIANGLE,
-                      '--link', link, '--cycle-time', str(cycle_time), '--heartbeat', '0.2',
-                      name='emulator')
-    end = time.monotonic() + STARTUP_TIMEOUT
-    while not os.path.islink(link):
-        assert emu.poll() is None, graph.log(emu)
-        assert time.monotonic() < end, 'the emulator did not create its pty link'
-        time.sleep(0.05)
+    start_emulator(graph, link, '--cycle-time', str(cycle_time), '--heartbeat', '0.2')
     return graph.start('feeder_driver', 'driver_node', '--ros-args', '-r', '__ns:=/feeder',
                        '-p', f'port:={link}', '-p', 'cycle_period:=0.4', name='driver')
 

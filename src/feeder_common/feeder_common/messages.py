@@ -380,6 +380,14 @@ def signed_verdict(key, monitor, session, seq, stamp_ns, ready, state, anomaly, 
     return msg
 
 
+def _age_reason(age, max_age_s, who):
+    """Say why a statement sent ``age`` s ago (negative: ahead) is not fresh."""
+    if age > 0:
+        return (f'sent {age:.3f} s ago, more than {max_age_s:g} s: {who} stalled, died, or '
+                'this is a replay')
+    return f'sent {-age:.3f} s in the future: clocks apart'
+
+
 @dataclass(frozen=True)
 class VerdictCheck:
     """What a consumer may conclude from one ``Verdict`` (:func:`check_verdict`)."""
@@ -414,9 +422,7 @@ def check_verdict(msg, key, monitor, now_ns, max_age_s=1.0):
         reason = (f'not signed by {monitor} under this key (key id {auth.key_id(key)})'
                   if len(msg.mac) else 'unsigned verdict')
     elif abs(age) > max_age_s:
-        reason = (f'sent {age:.3f} s ago, more than {max_age_s:g} s: the monitor stalled, '
-                  'died, or this is a replay' if age > 0 else
-                  f'sent {-age:.3f} s in the future: clocks apart')
+        reason = _age_reason(age, max_age_s, 'the monitor')
     elif not msg.ready:
         reason = f'not ready: {msg.state}' + (f' ({msg.anomaly})' if msg.anomaly else '')
     else:
@@ -471,9 +477,7 @@ def check_setpoint(msg, key, sender, now_ns, max_age_s=1.0):
         reason = (f'not signed by {sender} under this key (key id {auth.key_id(key)})'
                   if len(msg.mac) else 'unsigned setpoint')
     elif abs(age) > max_age_s:
-        reason = (f'sent {age:.3f} s ago, more than {max_age_s:g} s: the sender stalled, '
-                  'died, or this is a replay' if age > 0 else
-                  f'sent {-age:.3f} s in the future: clocks apart')
+        reason = _age_reason(age, max_age_s, 'the sender')
     else:
         reason = ''
     return SetpointCheck(not reason, seq, session, speed, reason)
@@ -508,6 +512,9 @@ def parse_cycle_fired(msg):
     """Parse a ``cycle_fired`` (CycleStatus, outcome fired) as CycleSigner writes it."""
     what = 'cycle_fired'
     seq, _, stamp = _report_fields(msg, what, (CycleStatusMsg.OUTCOME_FIRED,))
+    if not math.isnan(msg.release_speed):
+        raise ValueError(f'{what} release_speed {msg.release_speed!r} is not NaN: a fired '
+                         'notice carries no speed (its cycle_status does)')
     session, tag = _signature(msg, what)
     return CycleFired(seq, stamp, session, tag)
 

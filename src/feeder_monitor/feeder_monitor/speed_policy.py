@@ -42,8 +42,9 @@ def load_tracker(path, rules, scene):
     """
     Return a Tracker of the policy file at ``path``, checked against the monitor's scene.
 
-    throwmap.InputError (a ValueError) naming the fault: a bad file, or a policy made for
-    another goal edge, sensor radius, arm offset or release speed than the monitor's.
+    throwmap.InputError (a ValueError) naming the fault: a bad file, a policy made for
+    another goal edge, sensor radius, arm offset or release speed than the monitor's, or a
+    noisy sensor (the policy's proof takes every bit as true).
     """
     policy = read_policy(path)
     tracker = Tracker(policy)
@@ -60,6 +61,10 @@ def load_tracker(path, rules, scene):
     if not math.isclose(tracker.home_speed, scene.release_speed, rel_tol=1e-9):
         problems.append(f"home speed {tracker.home_speed:.6g} rad/s, the scene's "
                         f'{scene.release_speed:.6g} rad/s')
+    if rules.noisy_sensor:
+        raise ValueError(f"{where}: the scene's sensor is noisy (sensor_noise), and the "
+                         "policy's proof takes every bit as true; run the fixed design's rules "
+                         "(speed_policy '') or a scene with an exact sensor")
     if problems:
         raise ValueError(f'{where} was made for another feeder: ' + '; '.join(problems) +
                          f'; write it again with throwmap funnel {scene.source} --speeds '

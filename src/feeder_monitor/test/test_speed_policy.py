@@ -54,7 +54,7 @@ def policy_path(scene, tmp_path_factory):
 
 def rules_of(policy_path, **change):
     d = json.loads(open(policy_path).read())
-    return types.SimpleNamespace(**{'goal_edge': d['goal_edge'],
+    return types.SimpleNamespace(**{'goal_edge': d['goal_edge'], 'noisy_sensor': False,
                                     'sensor_radius': d['sensor_radius'], **change})
 
 
@@ -67,6 +67,8 @@ def test_a_policy_for_another_feeder_is_refused_naming_what_differs(scene, polic
     other = load_scene(str(SCENES / 'bracket.yaml'))
     with pytest.raises(ValueError, match='another feeder'):
         load_tracker(policy_path, rules_of(policy_path), other)
+    with pytest.raises(ValueError, match='sensor is noisy'):
+        load_tracker(policy_path, rules_of(policy_path, noisy_sensor=True), scene)
     with pytest.raises(ValueError, match='cannot read'):
         load_tracker(policy_path + '.missing', rules_of(policy_path), scene)
 
