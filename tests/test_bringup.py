@@ -162,6 +162,27 @@ def test_realtime_priority_reaches_every_feeder_node_and_only_when_asked(support
     assert all('realtime_priority' not in s.parameters[-1] for s in default)
 
 
+@pytest.mark.parametrize('planner, thrower', [('plan_sim', 'standin_node'),
+                                              ('plan_hardware', 'driver_node'),
+                                              ('plan_feeders', 'standin_node')])
+def test_a_speed_policy_reaches_the_monitor_and_sets_the_thrower_to_setpoints(
+        support, planner, thrower, tmp_path):
+    policy = tmp_path / 'triangle_funnel_policy.json'
+    policy.write_text('{}')     # the monitor checks what it holds, at configure
+    plan = getattr(support, planner)({'speed_policy': str(policy)})
+    monitors = [s for s in plan if s.executable == 'monitor_node']
+    throwers = [s for s in plan if s.executable == thrower]
+    assert monitors and len(monitors) == len(throwers)
+    assert all(s.parameters[-1]['speed_policy'] == str(policy) for s in monitors)
+    assert all(s.parameters[-1]['release_speed_mode'] == 'setpoint' for s in throwers)
+    plain = getattr(support, planner)({})
+    assert all('speed_policy' not in s.parameters[-1] and
+               'release_speed_mode' not in s.parameters[-1]
+               for s in plain if s.executable in ('monitor_node', thrower))
+    with pytest.raises(support.LaunchArgumentError, match='no such file.*throwmap funnel'):
+        getattr(support, planner)({'speed_policy': str(tmp_path / 'missing.json')})
+
+
 def test_reading_an_undeclared_argument_is_an_error(support):
     args = support.Arguments(support.SIM_ARGUMENTS, {})
     with pytest.raises(KeyError, match='not declared'):

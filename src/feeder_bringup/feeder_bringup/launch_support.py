@@ -61,6 +61,9 @@ COMMON_ARGUMENTS = {
     'arm_length': ('0.4', 'm, length of the arm drawn in the robot model'),
     'key_file': ('', 'HMAC key file of the driver (or stand-in) and the monitor (mode 0600); '
                  'created with a new key when absent; empty: $ROS_HOME/feeder/hmac.key'),
+    'speed_policy': ('', 'policy file of throwmap funnel (<scene>_funnel_policy.json): the '
+                     "monitor chooses each cycle's release speed, the driver (or stand-in) "
+                     'throws at it; empty: the fixed design'),
 }
 SIM_ARGUMENTS = dict(COMMON_ARGUMENTS)
 HARDWARE_ARGUMENTS = dict(COMMON_ARGUMENTS, **{
@@ -340,6 +343,23 @@ def _key_parameter(args):
     return {'key_file': path}
 
 
+def _speed_policy(args):
+    """
+    ({'speed_policy': path} for the monitor, {'release_speed_mode': ...} for the thrower).
+
+    An empty ``speed_policy:=``: the fixed design, and the thrower's mode is left to its
+    config file. A given file must exist (the monitor checks what it holds at configure).
+    """
+    if not args['speed_policy']:
+        return {}, {}
+    path = os.path.abspath(os.path.expanduser(args['speed_policy']))
+    if not os.path.isfile(path):
+        raise LaunchArgumentError(f'speed_policy:={args["speed_policy"]}: no such file ({path}); '
+                                  'write one with throwmap funnel SCENE --speeds A:B:STEP --out '
+                                  "DIR, or give speed_policy:='' for the fixed design")
+    return {'speed_policy': path}, {'release_speed_mode': 'setpoint'}
+
+
 def _sensor_parameter(args):
     """{'sensor_radius': R} for the nodes when given, else {} (they design it themselves)."""
     if args['sensor_radius'].strip().lower() == 'auto':
@@ -387,7 +407,8 @@ def _common_nodes(args, ns, scene):
         _spec('predictor', ns, [str(share('feeder_sim') / 'config' / 'predictor.yaml'),
                                 {'scene': scene, **sensor, **rt}]),
         _spec('monitor', ns, [str(share('feeder_monitor') / 'config' / 'monitor.yaml'),
-                              {'scene': scene, **sensor, **rt, **_key_parameter(args)}]),
+                              {'scene': scene, **sensor, **rt, **_key_parameter(args),
+                               **_speed_policy(args)[0]}]),
         # The cell's "give me a part" action (~/feed_part), checking the monitor's signature.
         _spec('feed', ns, [{**rt, **_key_parameter(args)}]),
     ]
@@ -413,7 +434,7 @@ def plan_sim(given):
                                       {'scene': scene,
                                        'cycle_period': number(args, 'cycle_period', 0.005),
                                        **_sensor_parameter(args), **_realtime_parameter(args),
-                                       **_key_parameter(args)}])
+                                       **_key_parameter(args), **_speed_policy(args)[1]}])
     return [hardware] + _common_nodes(args, ns, scene)
 
 
@@ -435,7 +456,7 @@ def plan_hardware(given):
     nodes.append(_spec('driver', ns, [
         str(share('feeder_driver') / 'config' / 'driver.yaml'),
         {'port': port, 'cycle_period': number(args, 'cycle_period', 0.005),
-         **_realtime_parameter(args), **_key_parameter(args)}]))
+         **_realtime_parameter(args), **_key_parameter(args), **_speed_policy(args)[1]}]))
     return nodes + common
 
 

@@ -18,6 +18,7 @@ The simulated feeder: the hardware stand-in, the predictor, the monitor and feed
     ros2 launch feeder_bringup sim.launch.py [scene:=triangle] [namespace:=feeder]
         [cycle_period:=1.0] [sensor_radius:=auto] [record:=DIR] [rviz:=true]
         [robot_state_publisher:=auto] [arm_length:=0.4] [realtime_priority:=0]
+        [speed_policy:=FILE]
 
 Enable cycling with: ros2 service call /feeder/feeder_driver/enable std_srvs/srv/SetBool
 '{data: true}'; watch: ros2 topic echo /feeder/edge1_ready.
