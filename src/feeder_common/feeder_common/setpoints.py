@@ -18,8 +18,11 @@ The driver's side of ``release_speed_setpoint``: which setpoint, if any, a cycle
 The driver and its stand-in (``release_speed_mode: setpoint``) fire cycle N of run S only at a
 setpoint that proves itself: signed by ``speed_source`` under the key, sent at most
 ``max_setpoint_age`` ago, and addressed to (S, N), or to no run yet (``driver_session`` '':
-the sender has not seen this driver's cycles, after its start or the driver's restart). Each
-setpoint message is used for one cycle at most. Whatever setpoint a cycle was fired at, the
+the sender has not seen this driver's cycles, after its start). The first cycle of a run
+takes the newest fresh setpoint whatever run it names: after a driver's restart the sender
+still addresses the old run's next cycle until it sees the new run's first report, and that
+speed is the one it chose for the part's next throw. Each setpoint message is used for one
+cycle at most. Whatever setpoint a cycle was fired at, the
 cycle's signed report says it, and the monitor follows the part with that speed: a wrong
 setpoint can cost throws, never make a ready.
 """
@@ -70,7 +73,7 @@ class SetpointInbox:
         if age > self.max_age_s:
             return None, (f'the newest setpoint is {age:.2f} s old (max_setpoint_age '
                           f'{self.max_age_s:g} s): {self.sender} stalled or stopped')
-        if want_session and (want_session != session or want_seq != seq):
+        if want_session and seq != 1 and (want_session != session or want_seq != seq):
             return None, (f'the newest setpoint is for cycle {want_seq} of run {want_session}, '
                           f'this is cycle {seq} of run {session}')
         return speed, ''

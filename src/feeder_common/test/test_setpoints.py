@@ -101,3 +101,14 @@ def test_the_inbox_refuses_forgeries_and_keeps_the_newest():
     # Addressed to no run yet: the next cycle of whatever run.
     inbox.offer(setpoint(seq=0, driver_session='', speed=4.0, sent_ns=T0 + 20), T0)
     assert inbox.for_cycle(77, 'd9', T0) == (4.0, '')
+
+
+def test_a_restarted_drivers_first_cycle_takes_the_setpoint_of_the_old_run():
+    # The sender has seen only the old run (d1, up to cycle 40): its newest setpoint is for
+    # cycle 41 of d1. The new run d2 starts at cycle 1 and takes it; its cycle 2 does not.
+    inbox = SetpointInbox(KEY, MONITOR, 1.0)
+    inbox.offer(setpoint(seq=41, driver_session='d1', speed=5.5), T0)
+    assert inbox.for_cycle(1, 'd2', T0) == (5.5, '')
+    assert inbox.for_cycle(2, 'd2', T0)[0] is None
+    inbox.used()
+    assert inbox.for_cycle(1, 'd2', T0)[0] is None      # used once

@@ -81,6 +81,9 @@ class MonitorNode(FeederLifecycleNode):
         self._ready_pub = self._verdict_pub = self._setpoint_pub = None
         self._beat_timer = None
         self._tracker = None        # the speed policy (speed_policy set), configured
+        # The driver's run and its newest cycle the driver signed a report of (admitted or
+        # refused as stale): the next setpoint is for the cycle after it. None: not known.
+        self._last_driver_cycle = None
         super().__init__('feeder_monitor', **kwargs)
         # Scenes by path, loaded once (the parameter checks load them too).
         self._load_scene = functools.lru_cache(maxsize=None)(load_scene)
@@ -254,6 +257,7 @@ class MonitorNode(FeederLifecycleNode):
         self._ready_pub = self._verdict_pub = self._setpoint_pub = None
         self._tracker = None
         self._monitor = self._gate = self._key = None
+        self._last_driver_cycle = None
         self._recent_bits.clear()
         self._recent_proximity.clear()
         self._forget_analysis()
@@ -393,8 +397,11 @@ class MonitorNode(FeederLifecycleNode):
                                                 f'malformed cycle_status: {exc}'), None)
             return
         admission = self._gate.admit(status, self._now_ns())
+        if admission.authentic:
+            self._driver_cycle(status.session, status.seq)
         if not admission.admitted:
             self._judge(self._monitor.untrusted(status.seq, admission.reason), status.stamp_ns)
+            self._publish_setpoint()
             return
         if admission.new_run:
             # A restarted driver: its first cycles follow none of the old run's.
@@ -562,19 +569,27 @@ class MonitorNode(FeederLifecycleNode):
         """
         Sign and publish the next cycle's release speed (speed policy only; while active).
 
-        Addressed to the driver run and cycle after the last judged one; before the monitor has
-        judged a cycle of the current run, to that run's next cycle whatever it is
-        (driver_session ''): the cycle's signed report says the speed it was fired at, and the
-        knowledge follows that speed.
+        Addressed to the cycle after the newest the driver's run signed a report of (judged, or
+        refused as stale: either way it fired, and a setpoint for it would never be used);
+        before any, to the next cycle of any run (driver_session ''): the cycle's signed report
+        says the speed it was fired at, and the knowledge follows that speed.
         """
         if self._setpoint_pub is None or not self._active or \
                 not isinstance(self._monitor, PolicyReadiness):
             return
-        m = self._monitor
-        known = self._gate.session is not None and m.last_seq is not None
-        seq, session = (m.last_seq + 1, self._gate.session) if known else (0, '')
+        last = self._last_driver_cycle
+        seq, session = (last[1] + 1, last[0]) if last is not None else (0, '')
         self._setpoint_pub.publish(signed_setpoint(
-            self._key, self._fqn, self._session, seq, session, m.next_speed, self._now_ns()))
+            self._key, self._fqn, self._session, seq, session, self._monitor.next_speed,
+            self._now_ns()))
+
+    def _driver_cycle(self, session, seq):
+        """Note a cycle the driver signed (a report refused as stale too: it fired)."""
+        last = self._last_driver_cycle
+        if session != self._gate.session:
+            return      # an ended run's: the current run's numbering stands
+        if last is None or last[0] != session or seq > last[1]:
+            self._last_driver_cycle = (session, seq)
 
     def _note_interrupt(self, reason):
         self._anomaly_in_period = (self._monitor.last_seq, reason)

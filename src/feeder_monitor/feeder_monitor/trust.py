@@ -36,11 +36,17 @@ RETIRED_SESSIONS = 64       # ended runs remembered (a report of one is refused)
 
 @dataclass(frozen=True)
 class Admission:
-    """The gate's answer: admitted or not (``reason``), and whether a new run began."""
+    """
+    The gate's answer: admitted or not (``reason``), and whether a new run began.
+
+    ``authentic``: the report is signed by the driver (also when refused as stale, replayed
+    or of an ended run): its session and seq are the driver's own.
+    """
 
     admitted: bool
     reason: str = ''
     new_run: bool = False
+    authentic: bool = False
 
 
 class ReportGate:
@@ -56,9 +62,9 @@ class ReportGate:
         self.counts = {'admitted': 0, 'unsigned': 0, 'bad_mac': 0, 'stale': 0,
                        'replayed': 0, 'ended_run': 0}
 
-    def _refuse(self, kind, reason):
+    def _refuse(self, kind, reason, authentic=False):
         self.counts[kind] += 1
-        return Admission(False, reason)
+        return Admission(False, reason, authentic=authentic)
 
     def _age_problem(self, stamp_ns, now_ns):
         if stamp_ns is None:
@@ -99,14 +105,15 @@ class ReportGate:
             return self._refuse(*bad)
         problem = self._age_problem(report.stamp_ns, now_ns)
         if problem:
-            return self._refuse('stale', problem)
+            return self._refuse('stale', problem, authentic=True)
         if report.session in self._retired:
             return self._refuse('ended_run', f'report of an ended driver run (session '
-                                             f'{report.session}): a replay')
+                                             f'{report.session}): a replay', authentic=True)
         new_run = report.session != self.session
         if not new_run and self.high_seq is not None and report.seq <= self.high_seq:
             return self._refuse('replayed', f'replayed or duplicate report: seq {report.seq}, '
-                                            f'reports up to {self.high_seq} already seen')
+                                            f'reports up to {self.high_seq} already seen',
+                                authentic=True)
         if new_run:
             if self.session is not None:
                 self._retired.append(self.session)
@@ -114,7 +121,7 @@ class ReportGate:
             self.session = report.session
         self.high_seq = report.seq
         self.counts['admitted'] += 1
-        return Admission(True, new_run=new_run and len(self._retired) > 0)
+        return Admission(True, new_run=new_run and len(self._retired) > 0, authentic=True)
 
     def fired_authentic(self, notice) -> Optional[str]:
         """None if a fired notice is signed by the driver; else why not (it still lowers)."""
