@@ -321,10 +321,10 @@ def _run(make_node, prog, stop, context):
     if failed:
         # The half-built node (its rcl handles) lives on in reference cycles through the
         # exception's frames: collect it now, while its context is alive; left to the
-        # interpreter's exit it is destroyed after the context. Twice (issue 23's runs, and a
-        # CI run in issue 25's) such a process hung after its error line in the exit, with no
-        # Python frame and the GIL held (status 1 after 20 s); this is the suspected cause,
-        # not a proven one (it is rare).
+        # interpreter's exit it is destroyed after the context. Twice (an earlier session's
+        # runs at 1e5da99, and a CI run at 9955477) such a process hung after its error line
+        # in the exit, with no Python frame and the GIL held (status 1 after 20 s); this is the
+        # suspected cause, not a proven one (it is rare).
         gc.collect()
         return 2
     wake = None
