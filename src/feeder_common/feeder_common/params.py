@@ -193,11 +193,12 @@ LINK_SPECS = (
 
 
 # The release speed per cycle (issue 25): the driver and its stand-in take the same three.
+RELEASE_SPEED_MODES = ('fixed', 'setpoint')
 SETPOINT_SPECS = (
     ParamSpec('release_speed_mode', 'fixed', "'fixed': every cycle at the controller's own "
               "speed; 'setpoint': every cycle at the signed setpoint for it on "
               'release_speed_setpoint (from speed_source), none: no cycle (a controller that '
-              'cannot set its speed: fixed, said once)', choices=('fixed', 'setpoint')),
+              'cannot set its speed: fixed, said once)', choices=RELEASE_SPEED_MODES),
     ParamSpec('speed_source', 'feeder_monitor', 'node whose signed setpoints are taken '
               '(resolved like a topic name: relative to the namespace)', read_only=True,
               constraints='not empty', max_length=256),

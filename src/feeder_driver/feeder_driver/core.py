@@ -41,6 +41,8 @@ import itertools
 import math
 from typing import Any, Optional
 
+from feeder_common.params import RELEASE_SPEED_MODES
+
 from . import protocol as p
 
 DISCONNECTED = 'disconnected'
@@ -51,10 +53,9 @@ STALL_S = 0.25
 READ_GRACE_S = 0.5
 HANDSHAKE = 'handshake'
 CONNECTED = 'connected'
-# Release-speed modes: the controller's own speed, or a setpoint per cycle.
-FIXED = 'fixed'
-SETPOINT = 'setpoint'
-RELEASE_SPEED_MODES = (FIXED, SETPOINT)
+# Release-speed modes (the parameter's choices): the controller's own speed, or a setpoint
+# per cycle.
+FIXED, SETPOINT = RELEASE_SPEED_MODES
 
 
 @dataclass
@@ -173,11 +174,6 @@ class _Pending:
 
 def _fmt(x):
     return f'{x:.3g}'
-
-
-def _mrad(speed_rad_s):
-    """Return the wire value of a speed in rad/s: mrad/s, rounded to an integer."""
-    return int(round(speed_rad_s * 1000.0))
 
 
 class DriverCore:
@@ -345,7 +341,7 @@ class DriverCore:
         if not accepted:
             self.counters['setpoints_refused'] += 1
             return False, f'refused: {reason}', []
-        self.setpoint = (seq, _mrad(speed_rad_s) / 1000.0)
+        self.setpoint = (seq, p.speed_mrad_s(speed_rad_s) / 1000.0)
         effects = self._maybe_fire_enabled(now)
         if effects:
             reason += f'; fired cycle seq {self.pending.seq}'
@@ -365,7 +361,7 @@ class DriverCore:
                 not math.isfinite(speed) or speed <= 0.0:
             return False, (f'release-speed setpoint {speed!r} for cycle {seq}: must be a '
                            'finite number > 0 (rad/s)')
-        if _mrad(speed) > p.MAX_SPEED_MRAD_S:
+        if p.speed_mrad_s(speed) > p.MAX_SPEED_MRAD_S:
             return False, (f'release-speed setpoint {speed!r} rad/s for cycle {seq}: beyond '
                            f'the protocol limit of {p.MAX_SPEED_MRAD_S / 1000.0:g} rad/s')
         if self.link != CONNECTED:
@@ -383,7 +379,7 @@ class DriverCore:
 
     def _out_of_range(self, speed):
         low, high = self._speed_range_mrad
-        if low <= _mrad(speed) <= high:
+        if low <= p.speed_mrad_s(speed) <= high:
             return ''
         return (f'{speed:.4g} rad/s is outside the range of the controller, {low / 1000.0:g} .. '
                 f'{high / 1000.0:g} rad/s')
@@ -590,7 +586,7 @@ class DriverCore:
         self.counters['fired'] += 1
         self._last_fire_at = now
         self.last_controller_error = None
-        fire = p.Fire(self.pending.wire_seq, None if speed is None else _mrad(speed))
+        fire = p.Fire(self.pending.wire_seq, None if speed is None else p.speed_mrad_s(speed))
         # The notice first: whoever holds a ready must drop it before the arm can move.
         return [Firing(seq, speed), Send(fire)]
 

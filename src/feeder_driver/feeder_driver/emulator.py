@@ -98,7 +98,7 @@ def _speed_range_mrad(value):
         raise EmulatorError(f'--speed-range: must be two numbers MIN:MAX, got {value!r}') \
             from None
     finite = math.isfinite(low) and math.isfinite(high)
-    mrad = (int(round(low * 1000.0)), int(round(high * 1000.0))) if finite else (0, 0)
+    mrad = (p.speed_mrad_s(low), p.speed_mrad_s(high)) if finite else (0, 0)
     if not 0 < mrad[0] <= mrad[1] <= p.MAX_SPEED_MRAD_S:
         raise EmulatorError(f'--speed-range: needs 0 < MIN <= MAX <= '
                             f'{math.degrees(p.MAX_SPEED_MRAD_S / 1000.0):.0f} deg/s (at least '
@@ -376,7 +376,6 @@ class Controller:
         self._place = place
         self._place_requested = threading.Event()
         self.release_speed = float(release_speed)
-        self.release_speed_mrad_s = int(round(release_speed * 1000.0))
         self.speed_range_mrad = _speed_range_mrad(speed_range)
         self.state = state
         self.cycle_time = _nonneg('--cycle-time', cycle_time)
@@ -621,7 +620,7 @@ class Controller:
         speed = cyc.release_speed
         if speed is None:
             speed = self.release_speed if cyc.setpoint is None else cyc.setpoint
-        self._send(p.Rel(cyc.seq, int(round(speed * 1000.0))), cyc)
+        self._send(p.Rel(cyc.seq, p.speed_mrad_s(speed)), cyc)
         cyc.sent['rel'] = True
         if 'unplug' in cyc.faults:
             # Unplugged while the part is in flight: the throw happens, SENS never leaves.

@@ -294,6 +294,11 @@ def _speed_rad_s(mrad_s):
     return None if mrad_s is None else mrad_s / 1000.0
 
 
+def speed_mrad_s(speed_rad_s):
+    """Return a speed in rad/s as the wire carries it: whole mrad/s (REL, FIRE, CAP)."""
+    return int(round(speed_rad_s * 1000.0))
+
+
 def _check_cap(self):
     """Check a CAP's range: 0 < min <= max (raises ProtocolError; types are checked later)."""
     low, high = self.min_mrad_s, self.max_mrad_s
