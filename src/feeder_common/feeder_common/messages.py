@@ -439,6 +439,7 @@ class SetpointCheck:
     driver_session: str
     speed: float            # rad/s (NaN when not a valid speed)
     reason: str             # why not usable ('' when usable)
+    sent_ns: Optional[int] = None   # when the sender sent it (None: malformed)
 
 
 def signed_setpoint(key, sender, session, seq, driver_session, speed, sent_ns):
@@ -480,7 +481,7 @@ def check_setpoint(msg, key, sender, now_ns, max_age_s=1.0):
         reason = _age_reason(age, max_age_s, 'the sender')
     else:
         reason = ''
-    return SetpointCheck(not reason, seq, session, speed, reason)
+    return SetpointCheck(not reason, seq, session, speed, reason, sent_ns)
 
 
 def _signature(msg, what):

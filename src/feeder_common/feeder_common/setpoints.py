@@ -50,10 +50,9 @@ class SetpointInbox:
             self.counts['refused'] += 1
             self.last_refusal = chk.reason
             return chk.reason
-        sent_ns = msg.sent.sec * 1_000_000_000 + msg.sent.nanosec
-        if self._newest is not None and sent_ns < self._newest[3]:
+        if self._newest is not None and chk.sent_ns < self._newest[3]:
             return 'older than the setpoint held'
-        self._newest = (chk.seq, chk.driver_session, chk.speed, sent_ns, str(msg.session))
+        self._newest = (chk.seq, chk.driver_session, chk.speed, chk.sent_ns, str(msg.session))
         return ''
 
     def for_cycle(self, seq, session, now_ns):
