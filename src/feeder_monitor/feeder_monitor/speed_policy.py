@@ -161,8 +161,7 @@ class PolicyReadiness(ReadinessMonitor):
         gap = self._check_seq(seq)
         if gap:
             anomaly = self._anomaly(seq, gap)
-            super()._restart_all()
-            self.tracker.forget()
+            self._restart_all()     # the tracker forgets the part too
         if speed is None:
             self.counts['fixed_speed_cycles'] += 1
             speed = self.tracker.home_speed

@@ -152,8 +152,15 @@ def test_a_ready_is_never_given_for_a_superseded_cycle(scene, policy_path):
                 not (image & system.can_miss).any():
             break
     else:
-        pytest.skip('no such cell in this cell map')
+        pytest.fail('the cell map has no goal cell in the window whose image is all seen and '
+                    'on the goal edge: the test needs one')
     monitor.fired(2)        # the next cycle fired before this one was judged
     v = monitor.completed(1, True, speed=monitor.next_speed)
     assert not v.ready and monitor.counts['superseded'] == 1
     assert math.isfinite(monitor.next_speed)
+    # The same knowledge and detection for the newest cycle fired: a ready.
+    tracker.know[:] = False
+    tracker.know[c] = True
+    monitor.choose()
+    v = monitor.completed(2, True, speed=monitor.next_speed)
+    assert v.ready and v.state == READY
