@@ -28,6 +28,7 @@ the throw map and the part's state throwmap's, the contract feeder_common's. Int
 docs/interfaces.md; parameters: docs/nodes.md.
 """
 
+import math
 import sys
 
 from feeder_common import auth, qos
@@ -216,10 +217,12 @@ class StandInNode(PartNode):
         stamp = self.get_clock().now().nanoseconds
         pubs = self._pubs
         pubs['cycle_fired'].publish(self._signer.cycle_fired(self._seq, stamp, HARDWARE_ID))
+        commanded = self._scene.release_speed if speed is None else speed
         try:
             throw = self._predictor.throw(release_speed=speed)
         except ThrowmapError as exc:
             self._counts['failed'] += 1
+            self._released(stamp, commanded)
             pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
             pubs['cycle_status'].publish(self._signer.cycle_status(
                 self._seq, False, str(exc), None, stamp, HARDWARE_ID, speed))
@@ -228,12 +231,9 @@ class StandInNode(PartNode):
             self.get_logger().error(f'cycle {self._seq} failed: {exc}',
                                     throttle_duration_sec=5.0)
             return self._seq, str(exc)
-        released = throw.release_speed
-        if released != released:       # no part to throw: the arm swings at its setpoint
-            released = self._scene.release_speed if speed is None else speed
-        pubs['joint_states'].publish(joint_state(stamp, 0.0, released))
-        self._motion.released(stamp, released,
-                              follow=stand_in_follow(self._param('cycle_period')))
+        # The throw's speed (its release noise included); with no part to throw, the setpoint.
+        self._released(stamp, commanded if math.isnan(throw.release_speed)
+                       else throw.release_speed)
         self._throw_lost(self._seq, throw)
         self._counts['completed'] += 1
         self._last_throw = throw
@@ -247,6 +247,11 @@ class StandInNode(PartNode):
             self._seq, True, '', throw.detected, stamp, HARDWARE_ID, speed))
         pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
         return self._seq, None
+
+    def _released(self, stamp, speed):
+        """Say the arm released at ``speed`` (joint_states), and swing it from there."""
+        self._pubs['joint_states'].publish(joint_state(stamp, 0.0, speed))
+        self._motion.released(stamp, speed, follow=stand_in_follow(self._param('cycle_period')))
 
     def _joint_tick(self):
         """Publish the arm's angle now (the follow-through after a cycle), while active."""
