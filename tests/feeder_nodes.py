@@ -451,7 +451,7 @@ def funnel_policy(out_dir, speeds='120:600:20', robust=0.005, scene=TRIANGLE):
     import json
     from throwmap import funnel as F
     arm, _ = F.arm_scene(load_scene(scene), None)
-    result = F.plan(arm, F.parse_speeds(speeds), robust=robust, cells=200)
+    result = F.plan(arm, F.parse_speeds(speeds), robust=robust, cells=200, one_bit=False)
     path = pathlib.Path(out_dir) / f'{arm.name}_funnel_policy.json'
     path.write_text(json.dumps(F.policy_dict(result, scene)))
     return path

@@ -46,7 +46,8 @@ def scene():
 @pytest.fixture(scope='module')
 def policy_path(scene, tmp_path_factory):
     arm, _ = F.arm_scene(scene, None)
-    result = F.plan(arm, F.parse_speeds('200:440:40'), robust=0.005, cells=200)
+    result = F.plan(arm, F.parse_speeds('200:440:40'), robust=0.005, cells=200,
+                    one_bit=False)
     path = tmp_path_factory.mktemp('policy') / 'triangle_funnel_policy.json'
     path.write_text(json.dumps(F.policy_dict(result, TRIANGLE)))
     return str(path)

@@ -22,7 +22,8 @@ The funnel (issue 25): the knowledge and its proof rule against brute force, the
   corner errors for four throws from grid starts: no detection the rule calls a ready has the
   part off the goal edge (and a rule that trusts any detection does, so the enumeration
   reaches such detections).
-* The full-knowledge bound is at most every policy's throws, start by start.
+* The full-knowledge bound is at most every policy's throws, start by start; the one-bit
+  bound lies between them (its own checks: test_funnel_bound.py).
 * The policy file round-trips through JSON and its Tracker makes the same choices.
 * Bad CLI input is refused in one line naming the problem and the fix.
 """
@@ -182,6 +183,18 @@ def test_the_bound_is_below_every_policy_start_by_start(planned):
             assert np.all(planned.bound <= run.throws), name
 
 
+def test_the_one_bit_bound_is_between_the_cell_bound_and_every_policy(planned):
+    # Below every policy's nominal run (it bounds any policy that reads only the bit and never
+    # risks the part), above the full-knowledge cell bound (its paths are paths of the cells),
+    # and above it somewhere: the one bit costs throws.
+    one_bit = planned.one_bit.throws
+    assert np.isfinite(one_bit).all()
+    for name, run in planned.runs.items():
+        assert np.all(one_bit <= run.throws), name
+    assert np.all(planned.bound <= one_bit)
+    assert one_bit.sum() > planned.bound.sum()
+
+
 def test_the_fixed_policy_is_the_design_search_figure_within_the_error_box(planned):
     # The knowledge rule with the error box against the search's warm-up rule without errors:
     # the same design, so the same figures within a few throws.
@@ -306,8 +319,28 @@ def test_cli_json_and_files(tmp_path):
     assert main(['funnel', TRIANGLE, '--speeds', '240:400:40', '--arm-length', '40', '--json',
                  '--out', str(tmp_path)], out=out) == 0
     d = json.loads(out.getvalue())
-    assert set(d['figures']) >= {'bound', 'fixed', 'open-loop', 'sensor-based'}
+    assert set(d['figures']) >= {'bound', 'one-bit bound', 'fixed', 'open-loop', 'sensor-based'}
+    assert len(d['per_start']['one_bit_bound']) == d['starts']
+    assert d['one_bit_first_use']['240'] == 1
     assert d['figures']['fixed']['false_readies'] == 0
     assert (tmp_path / 'triangle_funnel.png').stat().st_size > 0
     policy = json.loads((tmp_path / 'triangle_funnel_policy.json').read_text())
     assert policy['format'] == F.POLICY_FORMAT
+
+
+def test_cli_table_names_the_one_bit_bound_and_the_speeds_it_holds_back():
+    out = io.StringIO()
+    assert main(['funnel', TRIANGLE, '--speeds', '320,360,400', '--arm-length', '40',
+                 '--quiet'], out=out) == 0
+    text = out.getvalue()
+    assert 'one-bit bound  ' in text
+    assert '360 from throw' in text and '400 from throw' in text
+
+
+def test_cli_without_the_one_bit_bound():
+    out = io.StringIO()
+    assert main(['funnel', TRIANGLE, '--speeds', '280,320', '--arm-length', '40', '--json',
+                 '--no-one-bit-bound'], out=out) == 0
+    d = json.loads(out.getvalue())
+    assert 'one-bit bound' not in d['figures'] and d['one_bit_first_use'] is None
+    assert 'one_bit_bound' not in d['per_start']

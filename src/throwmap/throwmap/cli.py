@@ -757,7 +757,8 @@ def cmd_funnel(scene, args, out):
     on_arm, note = funnel.arm_scene(scene, arm)
     t0 = time.perf_counter()
     res = funnel.plan(on_arm, speeds, robust=args.robust, cells=args.cells,
-                      max_throws=args.throws)
+                      max_throws=args.throws, one_bit=not args.no_one_bit_bound,
+                      progress=Progress('one-bit bound', args.quiet))
     seconds = time.perf_counter() - t0
     s = res.system
     notes = ([note] if note else []) + res.notes
@@ -782,8 +783,12 @@ def cmd_funnel(scene, args, out):
                'open_loop_speeds_deg': [None if k < 0 else math.degrees(s.speeds[k])
                                         for k in res.sequence[:50]],
                'safe_speeds_deg': [math.degrees(s.speeds[k]) for k in res.safe_speeds],
+               'one_bit_first_use': (None if res.one_bit is None else
+                                     {f'{math.degrees(w):g}': n for w, n in
+                                      zip(s.speeds, res.one_bit.first_use)}),
                'per_start': {'edge': res.starts[0], 'R': res.starts[1],
                              'bound': res.bound, 'safe_speed_bound': res.safe_bound,
+                             **({'one_bit_bound': res.one_bit.throws} if res.one_bit else {}),
                              **{n: r.throws for n, r in res.runs.items()}},
                'notes': notes, 'written': written, 'seconds': seconds}, out)
         return 0
@@ -795,8 +800,10 @@ def cmd_funnel(scene, args, out):
               f'{seconds:.1f} s\n')
     out.write('  throws to the first proven ready (a detection with every cell of the '
               'knowledge on the goal edge):\n')
-    rows = [_funnel_row('full-knowledge bound', figures['bound']),
-            _funnel_row('full knowledge, safe speeds', figures['safe-speed bound'])]
+    rows = [_funnel_row('full-knowledge bound', figures['bound'])]
+    if res.one_bit is not None:
+        rows.append(_funnel_row('one-bit bound', figures['one-bit bound']))
+    rows.append(_funnel_row('full knowledge, safe speeds', figures['safe-speed bound']))
     for name in ('fixed', 'open-loop', 'sensor-based'):
         rows.append(_funnel_row(name, figures[name]))
         rows.append(_funnel_row(f'{name} (errors)', figures[f'{name} (errors)']))
@@ -818,6 +825,20 @@ def cmd_funnel(scene, args, out):
     out.write('  full knowledge, safe speeds: the bound with only the speeds no start cell can '
               f'be lost by ({", ".join(f"{w:.0f}" for w in safe)} deg/s; not a bound on the '
               'policies, which may use others once the knowledge narrows)\n')
+    if res.one_bit is not None:
+        groups = []     # runs of neighbouring speeds first usable at the same throw
+        for w, n in zip(np.degrees(s.speeds), res.one_bit.first_use):
+            if n > 1 and groups and groups[-1][2] == n and groups[-1][3]:
+                groups[-1][1] = w
+            else:
+                groups.append([w, w, n, n > 1])
+        late = ', '.join(f'{a:.0f}' + (f'-{b:.0f}' if b != a else '') + f' from throw {n:.0f}'
+                         for a, b, n, later in groups if later)
+        out.write('  one-bit bound: no policy that reads only the bit and never risks the part '
+                  'has its first ready sooner (nominal throws; below the fixed, open-loop and '
+                  'sensor-based rows start by start): until the first detection every start '
+                  'gets the same speeds, and a speed is usable only once no state the zeros '
+                  f'allow can be lost by it ({late or "every speed from the first throw"})\n')
     out.write('  (errors): each throw at a corner, edge midpoint or centre of the error box, '
               'drawn at random (seeded)\n')
     for n in notes:
@@ -898,7 +919,7 @@ def build_parser():
     p.add_argument('--out', help='write heat maps, the Pareto plot and the chosen scene here')
     p = add('funnel', "choose each throw's release speed from the sensor's bits: throws to "
             'the first proven ready for the fixed design, an open-loop and a sensor-based '
-            'policy, and the full-knowledge bound (docs/funnel.md)')
+            'policy, the full-knowledge bound and the one-bit bound (docs/funnel.md)')
     p.add_argument('--speeds', required=True, help='the speeds the actuator allows, deg/s: '
                    'A:B:STEP (e.g. 120:600:20) or a list A,B,C')
     p.add_argument('--robust', type=float, default=0.005, help='per-throw error bound s: '
@@ -909,6 +930,9 @@ def build_parser():
     p.add_argument('--cells', type=int, default=200, help='cells per stable edge (default 200)')
     p.add_argument('--throws', type=int, default=200, help='throws per start at most '
                    '(default 200)')
+    p.add_argument('--no-one-bit-bound', action='store_true', help='skip the one-bit bound '
+                   '(what any policy reading only the bit needs at least: seconds to a '
+                   'minute)')
     p.add_argument('--out', help='write the plot and the policy file (JSON) here')
     return parser
 

@@ -63,6 +63,7 @@ from . import design as D
 from .analysis import scene_analysis
 from .basins import default_grid, design_radii
 from .errors import InputError
+from .funnel_bound import full_knowledge_bound, one_bit_bound
 from .robustness import cell_map
 from .scene import Scene
 from .sensor import sees
@@ -310,33 +311,6 @@ def start_knowledge(system, starts):
     return know
 
 
-# ------------------------------------------------------------------------------ the bound
-
-def full_knowledge_bound(system, speeds=None):
-    """
-    Return per cell the fewest throws to rest on the goal edge where the sensor may see it.
-
-    Full knowledge of the cell, any speed that cannot escape from it, any successor the cell
-    map allows (optimistic): a lower bound on the throws any policy needs to its first ready
-    from a start in that cell, under nominal throws or any throws within the error box (as
-    far as the cell map holds them). inf: never. ``speeds``: only these speed indices.
-    """
-    target = system.goal & system.can_see
-    dist = np.full(system.n, np.inf)
-    reach = target.copy()           # cells from which "landing there" ends the count
-    t = 0
-    while True:
-        t += 1
-        pre = np.zeros(system.n, dtype=np.bool_)
-        for k in range(len(system.speeds)) if speeds is None else speeds:
-            pre |= system.succ[k][:, reach].any(axis=1) & ~system.escape[k]
-        new = pre & ~np.isfinite(dist)
-        if not new.any():
-            return dist
-        dist[new] = t
-        reach = reach | new
-
-
 # ------------------------------------------------------------------------------ policies
 
 POLICIES = ('fixed', 'open-loop', 'sensor-based')
@@ -536,12 +510,15 @@ class FunnelResult:
     bound: np.ndarray           # per start: full-knowledge fewest throws
     safe_bound: np.ndarray      # the same with only the speeds safe from the start set
     safe_speeds: list           # those speeds (indices)
+    one_bit: object             # funnel_bound.OneBitBound, or None when not computed
     sequence: list              # the open-loop speeds (indices)
     notes: list
     search_figures: dict        # the design kernel's own first-ready figures, fixed design
 
     def figures(self):
         rows = {'bound': summary(self.bound), 'safe-speed bound': summary(self.safe_bound)}
+        if self.one_bit is not None:
+            rows['one-bit bound'] = summary(self.one_bit.throws)
         for name, run in self.runs.items():
             rows[name] = dict(run.figures(), false_readies=run.false_readies,
                               knowledge_lost=run.knowledge_lost, lost=run.lost,
@@ -556,12 +533,14 @@ class FunnelResult:
 
 
 def plan(scene, speeds, robust=0.005, cells=200, samples=5, radii_per_edge=20,
-         max_throws=200, noisy_seed=0):
+         max_throws=200, noisy_seed=0, one_bit=True, progress=None):
     """
-    Build the cells, the bound and the three policies for ``scene`` on its arm; run them.
+    Build the cells, the bounds and the three policies for ``scene`` on its arm; run them.
 
     ``scene`` must have an arm end (:func:`arm_scene`). The scene's own speed is added to
-    ``speeds`` when it is not there (the fixed design). Returns a :class:`FunnelResult`.
+    ``speeds`` when it is not there (the fixed design). ``one_bit``: also compute
+    throwmap.funnel_bound.one_bit_bound (seconds to a minute; ``progress(done, total)`` per
+    start). Returns a :class:`FunnelResult`.
     """
     notes = []
     speeds = np.asarray(speeds, dtype=float)
@@ -589,6 +568,9 @@ def plan(scene, speeds, robust=0.005, cells=200, samples=5, radii_per_edge=20,
     sequence = open_loop_sequence(system, know0, Chooser(system, home, home_first=True),
                                   max_throws)
     thrower = Thrower(scene, system)
+    bound_1 = (one_bit_bound(system, [thrower.model(k) for k in range(len(speeds))], starts,
+                             max_throws=max(max_throws, 300), progress=progress)
+               if one_bit else None)
     runs, noisy = {}, {}
     for name in POLICIES:
         kw = {'chooser': chooser, 'sequence': sequence, 'fixed': home, 'max_throws': max_throws}
@@ -602,8 +584,10 @@ def plan(scene, speeds, robust=0.005, cells=200, samples=5, radii_per_edge=20,
                       'p95': float(sensor[D.S_COLS.index('first_ready_p95')]),
                       'worst': float(sensor[D.S_COLS.index('first_ready_max')]),
                       'sensor_radius': float(sensor[D.S_COLS.index('sensor_radius')])}
-    return FunnelResult(system, starts, home, runs, noisy, bound, safe_bound, safe, sequence,
-                        notes, search_figures)
+    if bound_1 is not None:
+        notes.extend(bound_1.notes)
+    return FunnelResult(system, starts, home, runs, noisy, bound, safe_bound, safe, bound_1,
+                        sequence, notes, search_figures)
 
 
 # ------------------------------------------------------------------------------ the file
@@ -821,6 +805,8 @@ def plot_throws(result, path, title=''):
     fig, ax = plt.subplots(figsize=(10, 4.5))
     cap = 0.0
     series = [('full-knowledge bound', result.bound, 'k', 'v')]
+    if result.one_bit is not None:
+        series.append(('one-bit bound', result.one_bit.throws, 'tab:red', '^'))
     series += [(name, result.runs[name].throws, color, marker) for name, color, marker in
                (('fixed', 'tab:blue', 'o'), ('open-loop', 'tab:orange', 's'),
                 ('sensor-based', 'tab:green', 'D'))]
