@@ -344,3 +344,13 @@ def test_cli_without_the_one_bit_bound():
     d = json.loads(out.getvalue())
     assert 'one-bit bound' not in d['figures'] and d['one_bit_first_use'] is None
     assert 'one_bit_bound' not in d['per_start']
+
+
+def test_p95_is_inf_when_it_reaches_a_start_that_never_readied():
+    # 3 of 60 never: the 95th percentile lies between a ready and a never (found with 98
+    # speeds, whose open-loop run printed 5e298 for it).
+    f = F.summary([1.0] * 57 + [np.inf] * 3)
+    assert f['p95'] == np.inf and f['never'] == 3 and f['worst'] == np.inf
+    assert F.summary([1.0] * 59 + [np.inf])['p95'] == 1.0
+    finite = np.random.default_rng(0).integers(1, 200, 60).astype(float)
+    assert F.summary(finite)['p95'] == pytest.approx(np.percentile(finite, 95))
