@@ -101,7 +101,7 @@ def test_no_policy_finds_a_speed_safe_before_the_bound_says(setup):
 
 def test_the_search_is_brute_force_over_every_sequence(setup):
     _, system, models, starts = setup
-    dist = F.full_knowledge_bound(system)
+    dist = B.full_knowledge_bound(system)
     first = np.array([1, 1, 2, 3, 1, 5], dtype=float)     # gated speeds, as first_use gives
     part = models[0].part
     edges, radii = starts

@@ -54,6 +54,7 @@ LAYERS = [
     ('part_on_arm',),
     ('design',),
     ('robustness',),
+    ('funnel_bound',),
     ('search', 'funnel'),
     ('internal', 'plots'),
     ('cli',),

@@ -45,10 +45,10 @@ speed (the jogs there are far shorter than a cell), so a knowledge set can never
 part placed there is still there, and every policy's worst case on the cell abstraction is
 unbounded. The figures are measured point by point from every start of the design search's
 grid through the scene's model (nominal throws, and throws drawn in the error box), every
-ready checked against the true state. :func:`full_knowledge_bound`: the shortest path with the
-cell known (any speed that cannot escape from it, any successor: optimistic), a lower bound on
-every policy's throws from that start. :func:`policy_dict` writes the sensor-based policy for
-the nodes; :class:`Tracker` runs it on line (numpy only).
+ready checked against the true state. The lower bounds next to them (throwmap.funnel_bound):
+the full-knowledge shortest path on the cells, and the one-bit bound (what any policy that reads
+only the bit and never risks the part needs). :func:`policy_dict` writes the sensor-based policy
+for the nodes; :class:`Tracker` runs it on line (numpy only).
 """
 
 import copy
