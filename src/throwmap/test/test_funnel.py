@@ -52,7 +52,8 @@ def triangle():
 
 @pytest.fixture(scope='module')
 def planned(triangle):
-    return F.plan(triangle, F.parse_speeds('240:400:40'), robust=0.005, cells=200)
+    return F.plan(triangle, F.parse_speeds('240:400:40'), robust=0.005, cells=200,
+                  one_bit=True)
 
 
 # ------------------------------------------------------------------------- the knowledge
@@ -317,7 +318,7 @@ def test_unknown_scene_and_missing_arm_are_refused(capsys):
 def test_cli_json_and_files(tmp_path):
     out = io.StringIO()
     assert main(['funnel', TRIANGLE, '--speeds', '240:400:40', '--arm-length', '40', '--json',
-                 '--out', str(tmp_path)], out=out) == 0
+                 '--one-bit-bound', '--out', str(tmp_path)], out=out) == 0
     d = json.loads(out.getvalue())
     assert set(d['figures']) >= {'bound', 'one-bit bound', 'fixed', 'open-loop', 'sensor-based'}
     assert len(d['per_start']['one_bit_bound']) == d['starts']
@@ -331,7 +332,7 @@ def test_cli_json_and_files(tmp_path):
 def test_cli_table_names_the_one_bit_bound_and_the_speeds_it_holds_back():
     out = io.StringIO()
     assert main(['funnel', TRIANGLE, '--speeds', '320,360,400', '--arm-length', '40',
-                 '--quiet'], out=out) == 0
+                 '--one-bit-bound', '--quiet'], out=out) == 0
     text = out.getvalue()
     assert 'one-bit bound  ' in text
     assert '360 from throw' in text and '400 from throw' in text
@@ -339,8 +340,8 @@ def test_cli_table_names_the_one_bit_bound_and_the_speeds_it_holds_back():
 
 def test_cli_without_the_one_bit_bound():
     out = io.StringIO()
-    assert main(['funnel', TRIANGLE, '--speeds', '280,320', '--arm-length', '40', '--json',
-                 '--no-one-bit-bound'], out=out) == 0
+    assert main(['funnel', TRIANGLE, '--speeds', '280,320', '--arm-length', '40', '--json'],
+                out=out) == 0
     d = json.loads(out.getvalue())
     assert 'one-bit bound' not in d['figures'] and d['one_bit_first_use'] is None
     assert 'one_bit_bound' not in d['per_start']

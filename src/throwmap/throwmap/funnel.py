@@ -541,7 +541,7 @@ class FunnelResult:
 
 
 def plan(scene, speeds, robust=0.005, cells=200, samples=5, radii_per_edge=20,
-         max_throws=200, noisy_seed=0, one_bit=True, progress=None):
+         max_throws=200, noisy_seed=0, one_bit=False, progress=None):
     """
     Build the cells, the bounds and the three policies for ``scene`` on its arm; run them.
 
