@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 from throwmap import (InputError, limit_set, load_scene, orbit, PartLost, Scene, sees,
                       sensor_probability, ThrowModel)
-from throwmap.internal import (carry_margin, carry_release_state, plate_drag,
+from throwmap.internal import (carry_holds, carry_interval, carry_margin,
+                               carry_release_state, plate_drag,
                                routh_stronge_impact, sticking_impact)
 from throwmap_testing import PAPER_W, SCENES, TRIANGLE_VERTICES
 
@@ -320,6 +321,33 @@ def test_finite_carry_tends_to_the_impulsive_throw(base):
         args = (base.w, base.h, base.g, mu, 1e-7, 50, part.rho2, part.d, part.u_l, part.u_r)
         assert carry_margin(edge, rg * 1.01, *args)[0] <= 0
         assert carry_margin(edge, rg * 0.99, *args)[0] > 0
+
+
+def test_finite_carry_release_hook_decides_as_the_sampled_margin(base):
+    # The release hook's carry_holds (sines and cosines from tables made once) against
+    # carry_margin (trigonometry at every instant): the same decision on random carries, and
+    # just inside and outside the ends of each carry's grasp interval.
+    part = base.part
+    rng = np.random.default_rng(3)
+    decided = failed = 0
+    for _ in range(300):
+        edge = int(rng.choice(part.stable_edges))
+        w, h = rng.uniform(2.0, 12.0), rng.uniform(-0.01, 0.01)
+        mu, theta_r = rng.uniform(0.2, 1.5), rng.uniform(1e-3, 0.8)
+        samples = int(rng.integers(2, 300))
+        q = (np.arange(samples + 1) / samples) ** 2
+        sin_th, cos_th = np.sin(theta_r * q), np.cos(theta_r * q)
+        args = (part.rho2, part.d, part.u_l, part.u_r)
+        lo, hi = carry_interval(edge, w, h, base.g, mu, theta_r, samples, *args)
+        radii = list(rng.uniform(0.0, 0.4, 4))
+        radii += [x * (1 + s) for x in (lo, hi) if 0 < x < 1 for s in (-1e-6, 1e-6)]
+        for R in radii:
+            holds = carry_holds(edge, R, w, h, base.g, mu, q, sin_th, cos_th, theta_r, *args)
+            margin = carry_margin(edge, R, w, h, base.g, mu, theta_r, samples, *args)[0]
+            assert holds == (margin <= 0.0), (edge, R, w, h, mu, theta_r, samples)
+            decided += 1
+            failed += not holds
+    assert 0.1 * decided < failed < 0.9 * decided
 
 
 def test_finite_carry_grasp_and_returning_arm_are_checked():

@@ -65,9 +65,11 @@ PROFILES = ('constant_acceleration',)
 KEYS = {'profile', 'release_angle', 'release_angle_deg', 'return_time'}
 
 # theta_r (rad), return_time (s, 0: back at once), samples (carry_samples), mu (contact.mu),
-# arm_length (m, inf without finite_arm).
+# arm_length (m, inf without finite_arm); per sampled instant k of the carry (k / samples of
+# T_c), whatever the speed: (k / samples)^2, and sin and cos of the arm's angle there,
+# theta_r (k / samples)^2.
 CarryParams = namedtuple('CarryParams', ['theta_r', 'return_time', 'samples', 'mu',
-                                         'arm_length'])
+                                         'arm_length', 'q', 'sin_th', 'cos_th'])
 
 
 @dataclass(frozen=True)
@@ -117,8 +119,12 @@ def slots(params):
 
 def bundle(params, part, knobs):
     """Return the compiled parameters."""
-    return CarryParams(float(params.release_angle), float(params.return_time),
-                       int(knobs.carry_samples), float(params.mu), float(params.arm_length))
+    samples = int(knobs.carry_samples)
+    q = (np.arange(samples + 1) / samples) ** 2
+    theta = float(params.release_angle) * q
+    return CarryParams(float(params.release_angle), float(params.return_time), samples,
+                       float(params.mu), float(params.arm_length), q, np.sin(theta),
+                       np.cos(theta))
 
 
 @njit
@@ -162,6 +168,42 @@ def carry_margin(edge, R, w, h, g, mu, theta_r, samples, rho2, d, u_l, u_r):
                 worst_k = k
                 worst_c = c + 1
     return worst, worst_k, worst_c
+
+
+@njit
+def carry_holds(edge, R, w, h, g, mu, q, sin_th, cos_th, theta_r, rho2, d, u_l, u_r):
+    """
+    Tell whether the part stays in a dynamic grasp at every sampled instant of the carry.
+
+    The instants and the test of :func:`carry_margin` (its margins' signs: each margin is
+    w^T (w_j x w_k) / |w|), without its trigonometry: the arm's angle at instant k is
+    theta_r (k / samples)^2 and its rate squared w^2 (k / samples)^2 whatever the speed, so
+    their sines and cosines come from tables (``q``, ``sin_th``, ``cos_th``) made once.
+    """
+    hd = h + d[edge]
+    a = w * w / (2.0 * theta_r)
+    ul = u_l[edge]
+    ur = u_r[edge]
+    vl = -d[edge]
+    # The cone's generators and their cross products, as in grasp.cone_margins.
+    c00, c01, c02 = -mu, 1.0, ul + mu * vl
+    c10, c11, c12 = mu, 1.0, ul - mu * vl
+    c20, c21, c22 = mu, 1.0, ur - mu * vl
+    c30, c31, c32 = -mu, 1.0, ur + mu * vl
+    n10, n11, n12 = c01 * c12 - c02 * c11, c02 * c10 - c00 * c12, c00 * c11 - c01 * c10
+    n20, n21, n22 = c11 * c22 - c12 * c21, c12 * c20 - c10 * c22, c10 * c21 - c11 * c20
+    n30, n31, n32 = c21 * c32 - c22 * c31, c22 * c30 - c20 * c32, c20 * c31 - c21 * c30
+    n40, n41, n42 = c31 * c02 - c32 * c01, c32 * c00 - c30 * c02, c30 * c01 - c31 * c00
+    w2 = a * rho2
+    for k in range(q.size):
+        thd2 = w * w * q[k]
+        w0 = -a * hd - thd2 * R - g * sin_th[k]
+        w1 = a * R - thd2 * hd - g * cos_th[k]
+        if (w0 * n10 + w1 * n11 + w2 * n12 > 0.0 or w0 * n20 + w1 * n21 + w2 * n22 > 0.0
+                or w0 * n30 + w1 * n31 + w2 * n32 > 0.0
+                or w0 * n40 + w1 * n41 + w2 * n42 > 0.0):
+            return False
+    return True
 
 
 @njit
@@ -209,8 +251,8 @@ def carry_interval(edge, w, h, g, mu, theta_r, samples, rho2, d, u_l, u_r):
 def release(edge, R, w, h, ctx, prm):
     """Check the grasp along the carry, then return the state at release, y0 over the arm."""
     part = ctx.part
-    if carry_margin(edge, R, w, h, ctx.g, prm.mu, prm.theta_r, prm.samples, part.rho2, part.d,
-                    part.u_l, part.u_r)[0] > 0.0:
+    if not carry_holds(edge, R, w, h, ctx.g, prm.mu, prm.q, prm.sin_th, prm.cos_th,
+                       prm.theta_r, part.rho2, part.d, part.u_l, part.u_r):
         return ERR_CARRY_GRASP, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     x0, y0, phi0, vx, vy, om = release_state(edge, R, w, h, prm.theta_r, part.d)
     return OK, x0, y0 - h, phi0, vx, vy, om
