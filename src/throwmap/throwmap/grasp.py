@@ -101,30 +101,37 @@ def grasp_table(part, h, mu=None):
 
 
 @njit
-def cone_margins(ul, ur, vl, mu, w0, w1, w2):
+def cone_normals(ul, ur, vl, mu):
     """
-    Return w^T (w_j x w_k) / |w| for (j, k) = (1,2), (2,3), (3,4), (4,1); all <= 0: in the cone.
+    Return the cone's face normals w_j x w_k for (j, k) = (1,2), (2,3), (3,4), (4,1), flat.
 
     The contact wrench cone W^i of an edge with vertices (ul, vl), (ur, vl) in F^i and friction
     mu is spanned by w_1..w_4 = (-mu, 1, ul + mu vl), (mu, 1, ul - mu vl), (mu, 1, ur - mu vl),
-    (-mu, 1, ur + mu vl). Each value reads as a signed distance-like margin.
+    (-mu, 1, ur + mu vl); a wrench w is in it when every w . (w_j x w_k) <= 0.
     """
     c00, c01, c02 = -mu, 1.0, ul + mu * vl
     c10, c11, c12 = mu, 1.0, ul - mu * vl
     c20, c21, c22 = mu, 1.0, ur - mu * vl
     c30, c31, c32 = -mu, 1.0, ur + mu * vl
+    return (c01 * c12 - c02 * c11, c02 * c10 - c00 * c12, c00 * c11 - c01 * c10,
+            c11 * c22 - c12 * c21, c12 * c20 - c10 * c22, c10 * c21 - c11 * c20,
+            c21 * c32 - c22 * c31, c22 * c30 - c20 * c32, c20 * c31 - c21 * c30,
+            c31 * c02 - c32 * c01, c32 * c00 - c30 * c02, c30 * c01 - c31 * c00)
+
+
+@njit
+def cone_margins(ul, ur, vl, mu, w0, w1, w2):
+    """
+    Return w^T (w_j x w_k) / |w| for (j, k) = (1,2), (2,3), (3,4), (4,1); all <= 0: in the cone.
+
+    The cone of :func:`cone_normals`. Each value reads as a signed distance-like margin.
+    """
+    n10, n11, n12, n20, n21, n22, n30, n31, n32, n40, n41, n42 = cone_normals(ul, ur, vl, mu)
     norm = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
     if norm == 0.0:
         norm = 1.0
-    m1 = (w0 * (c01 * c12 - c02 * c11) + w1 * (c02 * c10 - c00 * c12)
-          + w2 * (c00 * c11 - c01 * c10)) / norm
-    m2 = (w0 * (c11 * c22 - c12 * c21) + w1 * (c12 * c20 - c10 * c22)
-          + w2 * (c10 * c21 - c11 * c20)) / norm
-    m3 = (w0 * (c21 * c32 - c22 * c31) + w1 * (c22 * c30 - c20 * c32)
-          + w2 * (c20 * c31 - c21 * c30)) / norm
-    m4 = (w0 * (c31 * c02 - c32 * c01) + w1 * (c32 * c00 - c30 * c02)
-          + w2 * (c30 * c01 - c31 * c00)) / norm
-    return m1, m2, m3, m4
+    return ((w0 * n10 + w1 * n11 + w2 * n12) / norm, (w0 * n20 + w1 * n21 + w2 * n22) / norm,
+            (w0 * n30 + w1 * n31 + w2 * n32) / norm, (w0 * n40 + w1 * n41 + w2 * n42) / norm)
 
 
 def required_wrench(part, edge, R, h, g, theta, theta_dot, theta_ddot):

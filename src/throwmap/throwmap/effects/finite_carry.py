@@ -54,7 +54,7 @@ import numpy as np
 
 from ._common import check_keys, number
 from ..errors import DomainError, InputError
-from ..grasp import cone_margins
+from ..grasp import cone_margins, cone_normals
 from ..jit import njit
 from ..status import bound_name, ERR_ARM_STRIKE, ERR_CARRY_GRASP, OK
 
@@ -182,18 +182,8 @@ def carry_holds(edge, R, w, h, g, mu, q, sin_th, cos_th, theta_r, rho2, d, u_l, 
     """
     hd = h + d[edge]
     a = w * w / (2.0 * theta_r)
-    ul = u_l[edge]
-    ur = u_r[edge]
-    vl = -d[edge]
-    # The cone's generators and their cross products, as in grasp.cone_margins.
-    c00, c01, c02 = -mu, 1.0, ul + mu * vl
-    c10, c11, c12 = mu, 1.0, ul - mu * vl
-    c20, c21, c22 = mu, 1.0, ur - mu * vl
-    c30, c31, c32 = -mu, 1.0, ur + mu * vl
-    n10, n11, n12 = c01 * c12 - c02 * c11, c02 * c10 - c00 * c12, c00 * c11 - c01 * c10
-    n20, n21, n22 = c11 * c22 - c12 * c21, c12 * c20 - c10 * c22, c10 * c21 - c11 * c20
-    n30, n31, n32 = c21 * c32 - c22 * c31, c22 * c30 - c20 * c32, c20 * c31 - c21 * c30
-    n40, n41, n42 = c31 * c02 - c32 * c01, c32 * c00 - c30 * c02, c30 * c01 - c31 * c00
+    n10, n11, n12, n20, n21, n22, n30, n31, n32, n40, n41, n42 = cone_normals(
+        u_l[edge], u_r[edge], -d[edge], mu)
     w2 = a * rho2
     for k in range(q.size):
         thd2 = w * w * q[k]
