@@ -933,7 +933,7 @@ def build_parser():
                    '(default 200)')
     p.add_argument('--one-bit-bound', action='store_true', help='also the one-bit bound: '
                    'what any policy that reads only the bit and never risks the part needs at '
-                   'least (about 20 s on the triangle, minutes on effect scenes)')
+                   'least (about a minute on the triangle, more on effect scenes)')
     p.add_argument('--out', help='write the plot and the policy file (JSON) here')
     return parser
 
