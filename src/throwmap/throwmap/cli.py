@@ -758,7 +758,8 @@ def cmd_funnel(scene, args, out):
     t0 = time.perf_counter()
     res = funnel.plan(on_arm, speeds, robust=args.robust, cells=args.cells,
                       max_throws=args.throws, one_bit=args.one_bit_bound,
-                      progress=Progress('one-bit bound', args.quiet))
+                      progress=(Progress('one-bit bound', args.quiet) if args.one_bit_bound
+                                else None))
     seconds = time.perf_counter() - t0
     s = res.system
     notes = ([note] if note else []) + res.notes
