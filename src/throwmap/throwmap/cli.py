@@ -829,12 +829,12 @@ def cmd_funnel(scene, args, out):
     if res.one_bit is not None:
         groups = []     # runs of neighbouring speeds first usable at the same throw
         for w, n in zip(np.degrees(s.speeds), res.one_bit.first_use):
-            if n > 1 and groups and groups[-1][2] == n and groups[-1][3]:
+            if groups and groups[-1][2] == n:
                 groups[-1][1] = w
             else:
-                groups.append([w, w, n, n > 1])
+                groups.append([w, w, n])
         late = ', '.join(f'{a:.0f}' + (f'-{b:.0f}' if b != a else '') + f' from throw {n:.0f}'
-                         for a, b, n, later in groups if later)
+                         for a, b, n in groups if n > 1)
         out.write('  one-bit bound: no policy that reads only the bit and never risks the part '
                   'has its first ready sooner (nominal throws; below the fixed, open-loop and '
                   'sensor-based rows start by start): until the first detection every start '

@@ -66,7 +66,7 @@ from .errors import InputError
 from .funnel_bound import full_knowledge_bound, one_bit_bound
 from .robustness import cell_map
 from .scene import Scene
-from .sensor import sees
+from .sensor import seen_radii, sees
 
 
 # ------------------------------------------------------------------------------ speeds, arm
@@ -182,16 +182,28 @@ class CellSystem:
     def n(self):
         return self.goal.size
 
+    def _place(self, edge, R):
+        """Return (i, c): edge's index and R's cell on it, c not clipped to the cells."""
+        i = self.edges.index(edge)
+        return i, int(math.floor((R - self.lo[i]) / ((self.hi[i] - self.lo[i]) / self.m)))
+
     def cell(self, edge, R):
         """Return the cell index of (edge, R), -1 outside the covered range or off the edges."""
         if edge not in self.edges:
             return -1
-        i = self.edges.index(edge)
-        width = (self.hi[i] - self.lo[i]) / self.m
-        c = int(math.floor((R - self.lo[i]) / width))
+        i, c = self._place(edge, R)
         if not 0 <= c < self.m:
             return -1
         return i * self.m + c
+
+    def cells_between(self, edge, r_lo, r_hi):
+        """Return the slice of cell indices of edge meeting [r_lo, r_hi] (empty: none)."""
+        if edge not in self.edges:
+            return slice(0, 0)
+        i, a = self._place(edge, r_lo)
+        _, b = self._place(edge, r_hi)
+        a, b = max(a, 0), min(b, self.m - 1)
+        return slice(i * self.m + a, i * self.m + b + 1) if a <= b else slice(0, 0)
 
     def bounds(self, index):
         """Return (edge, R_low, R_high) of a cell."""
@@ -265,15 +277,12 @@ def build_system(scene, speeds, robust=0.005, cells=160, samples=5, sensor_radiu
                 b = s_hi[e, :, f]
                 for c in np.nonzero(a >= 0)[0]:
                     succ[k, i * cells + c, j * cells + a[c]:j * cells + b[c] + 1] = True
-    u_min = part.U.min(axis=1)[edges]
-    u_max = part.U.max(axis=1)[edges]
     width = (hi - lo) / cells
     c_idx = np.arange(cells)
     a = (lo[:, None] + c_idx[None, :] * width[:, None])
     b = a + width[:, None]
-    # The sensor sees a part at R on edge e when [R + u_min, R + u_max] meets [x - fp, x + fp].
-    seen_lo = (sensor_radius - footprint - u_max)[:, None]
-    seen_hi = (sensor_radius + footprint - u_min)[:, None]
+    seen_lo, seen_hi = seen_radii(part, sensor_radius, footprint)
+    seen_lo, seen_hi = seen_lo[edges][:, None], seen_hi[edges][:, None]
     can_see = ((a <= seen_hi) & (b >= seen_lo)).ravel()
     can_miss = ((a < seen_lo) | (b > seen_hi)).ravel()
     goal = np.zeros(N, dtype=np.bool_)
@@ -577,7 +586,7 @@ def plan(scene, speeds, robust=0.005, cells=200, samples=5, radii_per_edge=20,
                                   max_throws)
     thrower = Thrower(scene, system)
     bound_1 = (one_bit_bound(system, [thrower.model(k) for k in range(len(speeds))], starts,
-                             max_throws=max(max_throws, 300), progress=progress)
+                             dist, max_throws=max(max_throws, 300), progress=progress)
                if one_bit else None)
     runs, noisy = {}, {}
     for name in POLICIES:

@@ -50,6 +50,8 @@ import math
 
 import numpy as np
 
+from .sensor import seen_radii
+
 
 def full_knowledge_bound(system, speeds=None):
     """
@@ -177,14 +179,13 @@ def first_use(system, models, starts, step=ONE_BIT_STEP, max_throws=300):
     """
     K = len(system.speeds)
     edges, radii = starts
-    u_max = models[0].part.U.max(axis=1)
+    r_seen, _ = seen_radii(models[0].part, system.sensor_radius, system.footprint)
     notes = []
     conts = []
     for e in sorted({int(v) for v in edges}):
         rs = radii[edges == e]
-        # The lowest R of edge e the sensor sees: below it a state always reads 0.
-        r_seen = system.sensor_radius - system.footprint - u_max[e]
-        c = _continuum(models, e, float(rs.min()), float(rs.max()), r_seen,
+        # Below the lowest R of edge e the sensor sees, a state always reads 0.
+        c = _continuum(models, e, float(rs.min()), float(rs.max()), float(r_seen[e]),
                        system.arm_length, step, notes)
         if c is not None:
             conts.append(c)
@@ -199,16 +200,19 @@ def first_use(system, models, starts, step=ONE_BIT_STEP, max_throws=300):
     return first, [c.edge for c in conts], notes
 
 
-def one_bit_bound(system, models, starts, step=ONE_BIT_STEP, max_throws=300, progress=None):
+def one_bit_bound(system, models, starts, dist=None, step=ONE_BIT_STEP, max_throws=300,
+                  progress=None):
     """
     Return a :class:`OneBitBound` (module docstring) for the starts of the grid.
 
     ``system``: the funnel's CellSystem (speeds, sensor, goal, cells for the bound after a
     detection); ``models``: per speed, the scene's nominal model at that speed (on its arm);
-    ``starts``: (edges, radii); ``progress(done, total)`` after each start.
+    ``starts``: (edges, radii); ``dist``: full_knowledge_bound(system) when the caller has it;
+    ``progress(done, total)`` after each start.
     """
     first, constraining, notes = first_use(system, models, starts, step, max_throws)
-    dist = full_knowledge_bound(system)
+    if dist is None:
+        dist = full_knowledge_bound(system)
     edges, radii = starts
     out = np.full(len(edges), np.inf)
     for i, (e0, r0) in enumerate(zip(edges, radii)):
@@ -235,11 +239,7 @@ def throws_to_first_ready(system, models, edge, R, first, dist, step=ONE_BIT_STE
     throws where one of them takes 27). max_throws + 1 when no detection comes within
     max_throws (at least that many); inf when every sequence loses the part first.
     """
-    part = models[0].part
-    u_min = part.U.min(axis=1)
-    u_max = part.U.max(axis=1)
-    seen_lo = system.sensor_radius - system.footprint - u_max
-    seen_hi = system.sensor_radius + system.footprint - u_min
+    seen_lo, seen_hi = seen_radii(models[0].part, system.sensor_radius, system.footprint)
     E = np.array([edge], dtype=np.int64)
     J = np.array([int(math.floor(R / step))], dtype=np.int64)
     best = math.inf
@@ -289,13 +289,6 @@ def throws_to_first_ready(system, models, edge, R, first, dist, step=ONE_BIT_STE
 
 def _least_dist(system, dist, edge, r_lo, r_hi):
     """Return the least full-knowledge bound over the cells of edge meeting [r_lo, r_hi]."""
-    if edge not in system.edges:
-        return 0.0
-    i = system.edges.index(edge)
-    width = (system.hi[i] - system.lo[i]) / system.m
-    a = int(math.floor((r_lo - system.lo[i]) / width))
-    b = int(math.floor((r_hi - system.lo[i]) / width))
-    if b < 0 or a >= system.m:
-        return 0.0          # outside the cells: nothing known, the least is 0
-    a, b = max(a, 0), min(b, system.m - 1)
-    return float(dist[i * system.m + a:i * system.m + b + 1].min())
+    cells = system.cells_between(edge, r_lo, r_hi)
+    # Outside the cells (or off the stable edges) nothing is known: the least is 0.
+    return float(dist[cells].min()) if cells.stop > cells.start else 0.0

@@ -36,6 +36,15 @@ def sees(part, edge, R, x, footprint=0.0):
     return (R + u_min <= x + footprint) & (R + u_max >= x - footprint)
 
 
+def seen_radii(part, x, footprint=0.0):
+    """
+    Return (lo, hi) per edge: the radii R at which :func:`sees` detects a part on that edge.
+
+    The part's extent [R + u_min, R + u_max] meets the sensor's [x - fp, x + fp].
+    """
+    return x - footprint - part.U.max(axis=1), x + footprint - part.U.min(axis=1)
+
+
 def read_sensor(part, edge, R, x, footprint=0.0, models=(), rng=None):
     """
     Return the sensor's readings for parts resting at (edge, R); edge -1 (lost) reads 0.
