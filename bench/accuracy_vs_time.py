@@ -28,10 +28,12 @@ state at several time steps; its reference is the base model (pymunk has no plat
 Prints markdown tables and writes a Pareto plot (time per throw vs error). Asserts nothing.
 Usage: python bench/accuracy_vs_time.py [--quick] [--out docs/accuracy_pareto.png]
        python bench/accuracy_vs_time.py --plate [--before REV] [--quick]
+       python bench/accuracy_vs_time.py --contact [--before REV] [--quick]
 --plate measures only backplate_friction's configurations (the experiment scene and the
-triangle with the plate), each time the best of 3 runs; --before REV measures the same with
-the code of git revision REV (git archive, in a child process) in the same run, on the same
-states against the same reference.
+triangle with the plate), --contact only impact_restitution's (the rectangle scene: bounces,
+unilateral pivots; the triangle at e 0.2, mu 0.8: bounces, pinned pivots), each time the best
+of 3 runs; --before REV measures the same with the code of git revision REV (git archive, in a
+child process) in the same run, on the same states against the same reference.
 """
 
 import argparse
@@ -70,13 +72,27 @@ PLATE_REF_KNOBS = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'plate_quadrature
                    'contact_root_tol': 1e-13, 'roll_method': 'rk4', 'flight_method': 'rk4'}
 PLATE_CONFIGS = [{}, {'integrator_step': 5e-3}, dict(RK8_FLIGHT, flight_tol=1e-6)] + [
     c for c in FAST_CONFIGS if c.get('flight_method') == 'picard']
-PLATE_SCENES = {  # scene name, changes, (seed, largest R) of the random states: the
-    # experiment's as in its table below, the triangle with the plate as in the effects table
-    'experiment': ('experiment', {}, (1, 0.28)),
+PLATE_SCENES = {  # scene name, changes, (seed, largest R) of the random states, orbit start:
+    # the experiment's as in its table below, the triangle with the plate as in the effects table
+    'experiment': ('experiment', {}, (1, 0.28), (1, 0.12)),
     'triangle': ('triangle', {'effects': ['backplate_friction'], 'gravity': None,
                               'plate': {'inclination_deg': 80, 'g0': 9.81, 'mu': 0.1}},
-                 (0, 0.3)),
+                 (0, 0.3), (1, 0.12)),
 }
+# --contact: impact_restitution's configurations, the same way (issue 24: closed-form flights
+# without a body force, closed-form rolls about unilateral pivots, events by regula falsi).
+CONTACT_REF_KNOBS = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'contact_root_tol': 1e-13,
+                     'settle_energy': 1e-10, 'roll_method': 'rk4', 'flight_method': 'rk4'}
+CONTACT_CONFIGS = [{}, {'roll_method': 'rk4'}, {'integrator_step': 5e-3, 'roll_step': 5e-3}]
+CONTACT_SCENES = {  # as the impact_restitution table and the effects table below
+    'rectangle': ('rectangle', {}, (2, 0.25), (0, 0.15)),
+    'triangle': ('triangle', {'effects': ['impact_restitution'],
+                              'contact': {'restitution': 0.2, 'mu': 0.8}}, (0, 0.3), (1, 0.12)),
+}
+# family: (scenes, configurations, reference knobs, what the tables call it)
+FAMILIES = {'plate': (PLATE_SCENES, PLATE_CONFIGS, PLATE_REF_KNOBS, 'backplate_friction'),
+            'contact': (CONTACT_SCENES, CONTACT_CONFIGS, CONTACT_REF_KNOBS,
+                        'impact_restitution')}
 
 
 def knob_text(v):
@@ -390,12 +406,12 @@ def orbit_pull_count(throws=400):
 
 
 # ----------------------------------------------------------------------------------- plate
-def plate_rows(configs, data, orbit_throws, band_throws, label):
-    """Rows of the plate's configurations on both scenes, against the references in ``data``."""
+def family_rows(family, configs, data, orbit_throws, band_throws, label):
+    """Rows of a family's configurations on its scenes, against the references in ``data``."""
+    scenes = FAMILIES[family][0]
     rows = []
-    for name, (scene_name, changes, _) in PLATE_SCENES.items():
+    for name, (scene_name, changes, _, start) in scenes.items():
         states = (data[f'{name}_edges'], data[f'{name}_radii'])
-        start = (1, 0.12)
         ref = {'throws': {k: data[f'{name}_ref_{k}'] for k in ('edge', 'R', 'status')},
                'orbit': tuple(data[f'{name}_orbit_{i}'] for i in range(3)),
                'ls': limit_set_from_orbit(*(data[f'{name}_long_{i}'] for i in range(3)))}
@@ -412,25 +428,29 @@ def plate_rows(configs, data, orbit_throws, band_throws, label):
     return rows
 
 
-def plate_comparison(quick, before):
-    """The plate (experiment and triangle): this code's configurations, and REV's (--before)."""
+def family_comparison(family, quick, before):
+    """A family's configurations with this code, and with REV's (--before), in one run."""
     import json
     import subprocess
     import tempfile
+    scenes, configs, ref_knobs, title = FAMILIES[family]
     n_states = 100 if quick else 250
     orbit_throws = 100 if quick else 300
     band_throws = 200 if quick else 1000
     tri = load('triangle')
     data = {}
-    for name, (scene_name, changes, (seed, r_hi)) in PLATE_SCENES.items():
-        edges, radii = random_states(tri.model, n_states, seed=seed, r_hi=r_hi)
-        ref_model = load(scene_name, accuracy=PLATE_REF_KNOBS, **copy.deepcopy(changes)).model
+    for name, (scene_name, changes, (seed, r_hi), start) in scenes.items():
+        # the plate's states are the triangle's on both scenes (as its tables were made); the
+        # rectangle has its own edges
+        own = tri if family == 'plate' else load(scene_name, **copy.deepcopy(changes))
+        edges, radii = random_states(own.model, n_states, seed=seed, r_hi=r_hi)
+        ref_model = load(scene_name, accuracy=ref_knobs, **copy.deepcopy(changes)).model
         ref = ref_model.f_batch(edges, radii)
         data[f'{name}_edges'], data[f'{name}_radii'] = edges, radii
         for k in ('edge', 'R', 'status'):
             data[f'{name}_ref_{k}'] = np.asarray(ref[k])
         for tag, throws in (('orbit', orbit_throws), ('long', 2 * band_throws)):
-            for i, a in enumerate(orbit_of(ref_model, (1, 0.12), throws)):
+            for i, a in enumerate(orbit_of(ref_model, start, throws)):
                 data[f'{name}_{tag}_{i}'] = a
     rows = []
     if before:
@@ -439,20 +459,20 @@ def plate_comparison(quick, before):
             subprocess.run(f'git -C {ROOT} archive {before} src/throwmap | tar -x -C {old}',
                            shell=True, check=True)
             np.savez(old / 'data.npz', **data)
-            old_configs = [c for c in PLATE_CONFIGS if c.get('flight_method') != 'picard']
+            old_configs = [c for c in configs if c.get('flight_method') != 'picard']
             (old / 'configs.json').write_text(json.dumps(old_configs))
             env = dict(os.environ, PYTHONPATH=str(old / 'src' / 'throwmap'))
-            subprocess.run([sys.executable, __file__, '--plate-child', str(old),
+            subprocess.run([sys.executable, __file__, '--child', family, str(old),
                             '--before', before] + (['--quick'] if quick else []),
                            env=env, check=True)
             rows += json.loads((old / 'rows.json').read_text())
-    rows += plate_rows(PLATE_CONFIGS, data, orbit_throws, band_throws, 'this branch')
+    rows += family_rows(family, configs, data, orbit_throws, band_throws, 'this branch')
     base_us = timed_best(tri.model, data['triangle_edges'], data['triangle_radii'])[1]
     print(f'\nbase model (triangle, the same states): {base_us:.2f} us per throw')
-    for name in PLATE_SCENES:
-        print(f'\n### backplate_friction ({name} scene, {n_states} states): before ({before}) '
-              'and after, against the reference (rk4 steps 5e-5 s, roots 1e-13 s); time: '
-              'best of 3 runs\n')
+    ref_text = ', '.join(f'{k} {knob_text(v)}' for k, v in ref_knobs.items())
+    for name in scenes:
+        print(f'\n### {title} ({name} scene, {n_states} states): before ({before}) and after, '
+              f'against the reference ({ref_text}); time: best of 3 runs\n')
         print('| code | config | time/throw (us) | edge differs | median abs dR (m) '
               '| max abs dR (m) | orbit agrees (throws) | band error (mm) |')
         print('|---|---|---:|---:|---:|---:|---:|---:|')
@@ -462,15 +482,16 @@ def plate_comparison(quick, before):
                   f"| {fmt(r['dR_max'] * 1e-3, '.2e')} | {r['orbit']} | {fmt(r['band'], '.2e')} |")
 
 
-def plate_child(folder, quick, before):
-    """Run the plate's configurations with the code in PYTHONPATH (a revision's)."""
+def family_child(family, folder, quick, before):
+    """Run a family's configurations with the code in PYTHONPATH (a revision's)."""
     import json
     import throwmap
     folder = pathlib.Path(folder)
     assert str(folder) in throwmap.__file__, throwmap.__file__
     data = dict(np.load(folder / 'data.npz'))
     configs = json.loads((folder / 'configs.json').read_text())
-    rows = plate_rows(configs, data, 100 if quick else 300, 200 if quick else 1000, before)
+    rows = family_rows(family, configs, data, 100 if quick else 300, 200 if quick else 1000,
+                       before)
     for r in rows:
         r['orbit'] = int(r['orbit'])
     (folder / 'rows.json').write_text(json.dumps(rows))
@@ -542,16 +563,22 @@ def main():
                         help='arm friction coefficients of the lift-off comparison')
     parser.add_argument('--plate', action='store_true',
                         help="only the plate's configurations on the experiment and the triangle")
+    parser.add_argument('--contact', action='store_true',
+                        help="only impact_restitution's configurations on the rectangle and "
+                        'the triangle')
     parser.add_argument('--before', metavar='REV',
-                        help='with --plate: also measure the code of git revision REV')
-    parser.add_argument('--plate-child', metavar='FOLDER', help=argparse.SUPPRESS)
+                        help='with --plate or --contact: also measure the code of git revision '
+                        'REV')
+    parser.add_argument('--child', nargs=2, metavar=('FAMILY', 'FOLDER'),
+                        help=argparse.SUPPRESS)
     args = parser.parse_args()
-    if args.plate_child:
-        plate_child(args.plate_child, args.quick, args.before)
+    if args.child:
+        family_child(args.child[0], args.child[1], args.quick, args.before)
         return
-    if args.plate:
-        plate_comparison(args.quick, args.before)
-        return
+    for family in ('plate', 'contact'):
+        if getattr(args, family):
+            family_comparison(family, args.quick, args.before)
+            return
     if args.liftoff:
         for mu in args.mu:
             liftoff_comparison(20 if args.quick else 100, mu)

@@ -23,20 +23,27 @@ The event simulator's fast paths (issue 24) against its accurate integrator, sta
   conditions, its step against a smooth ODE, and throws against the same reference.
 * The fallback: a body force whose torque about the pivot is not -sign(om) (a0 + a2 om^2)
   (the plate's regularised quadrature) rolls with rk4 steps, bit for bit the rk4 result.
+* The closed-form roll about a unilateral pivot (liftoff and slip found in the roll angle):
+  event by event against the rk4 rolls on the bouncing rectangle, a slipping and lifting one,
+  and the triangle under the plate and the air.
+* The closed-form flight without a body force: the rk4 flight of a zero plate drag (the same
+  gravity), throw by throw.
 
 Every comparison is a maximum over all states, not a median.
 """
 
 import copy
 import math
+import pathlib
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from throwmap import Scene
-from throwmap.event_sim import roll_turn, roll_u
+from throwmap.event_sim import roll_force_rates, roll_turn, roll_u
 from throwmap.jit import njit
 from throwmap.rk8 import A8, B8, C8, make_step
+from throwmap.scene import read_yaml
 from throwmap_testing import force_scene, FORCE_SETS, PLATE, REFERENCE_KNOBS, TRIANGLE_SCENE
 
 
@@ -167,6 +174,101 @@ def test_zero_drag_with_the_energy_roll_is_the_base_model():
     e, r = states(model, 150, 4)
     edges, dr = worst(zero.f_batch(e, r), base.f_batch(e, r))
     assert edges == 0 and dr < 1e-9
+
+
+# ------------------------------------------------- unilateral pivots and the free flight
+RECTANGLE = read_yaml(pathlib.Path(__file__).resolve().parents[3] / 'scenes' / 'rectangle.yaml')
+
+
+def unilateral_scene(case, **accuracy):
+    """Return a scene whose pivots may slide and lift off (impact_restitution, unilateral)."""
+    if case.startswith('rectangle'):
+        data = copy.deepcopy(RECTANGLE)          # e 0.3, mu 0.6: bounces and slides
+        if case == 'rectangle slipping':
+            data['contact'].update(restitution=0.0, mu=0.3)     # lifts off and slips
+    else:
+        data = copy.deepcopy(TRIANGLE_SCENE)
+        force = 'plate' if case == 'triangle plate' else 'air'
+        data.update(copy.deepcopy(FORCE_SETS[force]))
+        data['effects'] = data['effects'] + ['impact_restitution']
+        data['contact'] = {'restitution': 0.2 if force == 'plate' else 0.0,
+                           'mu': 0.6 if force == 'plate' else 0.4, 'pivot': 'unilateral'}
+    if accuracy:
+        data['accuracy'] = accuracy
+    return Scene(data)
+
+
+def ok_states(model, count, seed):
+    e, r = states(model, count, seed)
+    return e, np.minimum(r, 0.25)
+
+
+def test_the_contact_forces_of_a_roll_change_no_faster_than_their_bounds():
+    # Newton for the pendulum about the pivot, sampled in the roll angle: the closed-form
+    # roll's liftoff and slip search steps by the margins over these bounds.
+    g = -9.66
+    rng = np.random.default_rng(11)
+    for _ in range(300):
+        lp, rho2 = rng.uniform(0.005, 0.05), rng.uniform(1e-5, 4e-4)
+        inertia = rho2 + lp * lp
+        a0, om0 = rng.uniform(0.1, 3.0), rng.uniform(-30, 30)
+        energy = 0.5 * inertia * om0 ** 2 - g * lp * math.sin(a0)
+        a = a0 + np.linspace(-1.5, 1.5, 30001) * math.copysign(1.0, om0)
+        om2 = 2.0 * (energy + g * lp * np.sin(a)) / inertia
+        a, om2 = a[om2 >= 0], om2[om2 >= 0]
+        c, s = np.cos(a), np.sin(a)
+        alpha = g * lp * c / inertia               # angular acceleration about the pivot
+        n = alpha * lp * c - om2 * lp * s - g        # normal force per unit mass
+        ft = -alpha * lp * s - om2 * lp * c          # tangential force per unit mass
+        rate_n, rate_ft = roll_force_rates(g, om0, lp, inertia)
+        step = np.diff(a)
+        assert np.all(np.abs(np.diff(n) / step) <= rate_n * (1 + 1e-6))
+        assert np.all(np.abs(np.diff(ft) / step) <= rate_ft * (1 + 1e-6))
+
+
+@pytest.mark.parametrize('case', ['rectangle', 'rectangle slipping', 'triangle plate',
+                                  'triangle air'])
+def test_unilateral_closed_roll_agrees_with_rk4_rolls_event_by_event(case):
+    exact = unilateral_scene(case, **dict(REFERENCE_KNOBS, roll_method='energy')).model
+    ref = unilateral_scene(case, **REFERENCE_KNOBS).model
+    e, r = ok_states(exact, 30, 5)
+    kinds = set()
+    for i, rr in zip(e, r):
+        a, b = exact.throw(int(i), float(rr)), ref.throw(int(i), float(rr))
+        assert [(x.kind, x.vertex) for x in a.impacts] == [(x.kind, x.vertex) for x in b.impacts]
+        for x, y in zip(a.impacts, b.impacts):
+            kinds.add(x.kind)
+            # the plate's drag has kinks in flight, which the rk4 flight steps over: 2.4e-8
+            assert x.omega_before == pytest.approx(y.omega_before, abs=1e-7)
+            assert x.x == pytest.approx(y.x, abs=1e-9)
+        assert (a.edge, a.kind) == (b.edge, b.kind)
+        if a.edge >= 0:
+            assert a.R == pytest.approx(b.R, abs=1e-9)
+    assert 'landing' in kinds           # rolls that end on the next vertex
+    if case == 'rectangle slipping':
+        assert 'liftoff' in kinds       # the closed form found the normal force's zero
+
+
+@pytest.mark.parametrize('scene', ['triangle', 'rectangle'])
+def test_the_free_flight_is_the_stepped_flight_of_a_zero_force(scene):
+    # A plate drag of mu_p 0 keeps the body-force hook (its flight takes rk4 steps) and gives
+    # the plate's gravity; without the plate the same gravity flies in closed form.
+    free = copy.deepcopy(RECTANGLE if scene == 'rectangle' else TRIANGLE_SCENE)
+    free['effects'] = ['impact_restitution']
+    free.setdefault('contact', {'restitution': 0.3, 'mu': 0.6, 'pivot': 'unilateral'})
+    free['gravity'] = -9.81 * math.sin(math.radians(80))
+    stepped = copy.deepcopy(free)
+    del stepped['gravity']
+    stepped['plate'] = dict(PLATE, mu=0.0)
+    stepped['effects'] = ['backplate_friction', 'impact_restitution']
+    a = Scene(dict(free, accuracy=REFERENCE_KNOBS)).model
+    b = Scene(dict(stepped, accuracy=REFERENCE_KNOBS)).model
+    e, r = ok_states(a, 150, 7)
+    x, y = a.f_batch(e, r), b.f_batch(e, r)
+    assert np.array_equal(x['status'], y['status']) and np.array_equal(x['edge'], y['edge'])
+    ok = x['status'] == 0
+    assert ok.sum() > 100
+    assert np.max(np.abs(x['R'] - y['R'])[ok]) < 1e-11      # 2.3e-13 measured
 
 
 # ------------------------------------------------------------------------ the order-8 flight

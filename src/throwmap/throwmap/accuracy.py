@@ -112,19 +112,21 @@ class SimulatorAccuracy:
         or 'scan' (samples every contact_scan_step, bisects to contact_root_tol; misses any
         graze shorter than a step). Applies to ballistic flight.
     contact_scan_step : s, sample interval of the 'scan' method.
-    contact_root_tol : s, bisection tolerance of every scanned event (scan method, and all
-        events of the event simulator).
-    integrator_step : s, RK4 step of flight in the event simulator; contacts are looked for
-        at every step, so this is also its scan resolution.
+    contact_root_tol : s, location tolerance of every scanned event (scan method, and all
+        events of the event simulator: bisection, or regula falsi on the quantity that crossed
+        zero); rad for the closed-form roll's liftoff and slip.
+    integrator_step : s, RK4 step of flight in the event simulator under a body force;
+        contacts are looked for at every step, so this is also its scan resolution.
     roll_step : s, RK4 step of rolling/sliding phases in the event simulator.
     settle_energy : J/kg, rocking energy above the flat pose below which the event simulator
         lays the part flat (only when the impact law is not the sticking one; otherwise the
         exact rule holds).
     max_sim_steps : cap on integrator steps per throw in the event simulator: it bounds the work
         of one throw (500000 steps: 500 s simulated at 1 ms steps).
-    flight_method : how the event simulator integrates flight: 'rk4' (fixed RK4 steps of
-        integrator_step, contacts bisected on re-integrated sub-steps; the accuracy reference)
-        or 'rk8' (fixed steps of flight_step with the order-8 Dormand-Prince tableau, contacts
+    flight_method : how the event simulator integrates flight under a body force (without
+        one the flight is the base model's closed form whatever this says): 'rk4' (fixed RK4
+        steps of integrator_step, contacts bisected on re-integrated sub-steps; the accuracy
+        reference) or 'rk8' (fixed steps of flight_step with the order-8 Dormand-Prince tableau, contacts
         looked for on the step's quintic Hermite interpolant no farther apart than
         integrator_step, or farther where a speed bound proves no vertex can reach the arm,
         and the contact state integrated exactly from the step's start), or 'picard' (the
@@ -136,13 +138,13 @@ class SimulatorAccuracy:
         rad, m/s and rad/s alike); steps shrink and grow to meet it. For 'picard': the last
         sweep's increment at a piece's end (m; velocities times the piece, rad times the
         part's size), the series' remainder.
-    roll_method : how the event simulator rolls about a pinned pivot (a hinge: not
-        ``unilateral``): 'energy' (default: closed form, the work-energy equation in the roll
-        angle, exact when the body force's torque about the pivot is -sign(omega) (a0 +
-        a2 omega^2), as the plate's and the air's are; checked numerically for every pivot,
-        otherwise that roll takes rk4 steps) or 'rk4' (steps of roll_step, events bisected;
-        the default before issue 24, kept as the reference). Unilateral contacts (liftoff,
-        impact_restitution's) always take rk4 steps.
+    roll_method : how the event simulator rolls about a sticking pivot: 'energy' (default:
+        closed form, the work-energy equation in the roll angle, exact when the body force's
+        torque about the pivot is -sign(omega) (a0 + a2 omega^2), as the plate's and the
+        air's are; checked numerically for every pivot, otherwise that roll takes rk4 steps;
+        about a unilateral pivot liftoff and slip are found in the roll angle, sampled no
+        coarser than 10 rad/s times roll_step) or 'rk4' (steps of roll_step; the default
+        before issue 24, kept as the reference). Slides always take rk4 steps.
     """
 
     contact_method: str = 'advancement'

@@ -140,6 +140,20 @@ def vertex_contact_scan(f0, vy, g, om, u0, v0, t_limit, step, root_tol, max_step
 
 
 @njit
+def vertex_first_contact(f0, vy, g, om, u0, v0, s, t_limit, knobs):
+    """
+    First t in (0, t_limit) at which a vertex meets the arm moving down, inf if none, -1 at cap.
+
+    By the knobs' contact_method: conservative advancement or the scan.
+    """
+    if knobs.contact_method == METHOD_SCAN:
+        return vertex_contact_scan(f0, vy, g, om, u0, v0, t_limit, knobs.contact_scan_step,
+                                   knobs.contact_root_tol, knobs.max_flight_steps)
+    return vertex_contact(f0, vy, g, om, u0, v0, s, t_limit, knobs.contact_time_tol,
+                          knobs.max_flight_steps)
+
+
+@njit
 def first_contact(edge, y0, phi0, vy, om, g, part, knobs):
     """
     Return (status, flight time, first contact vertex) of the flight from a release state.
@@ -165,12 +179,8 @@ def first_contact(edge, y0, phi0, vy, om, g, part, knobs):
             f0 = max(y0 + u * s0 + v * c0, 0.0)
         u0 = u * c0 - v * s0
         v0 = u * s0 + v * c0
-        if knobs.contact_method == METHOD_SCAN:
-            t = vertex_contact_scan(f0, vy, g, om, u0, v0, t_best, knobs.contact_scan_step,
-                                    knobs.contact_root_tol, knobs.max_flight_steps)
-        else:
-            t = vertex_contact(f0, vy, g, om, u0, v0, math.sqrt(u * u + v * v), t_best,
-                               knobs.contact_time_tol, knobs.max_flight_steps)
+        t = vertex_first_contact(f0, vy, g, om, u0, v0, math.sqrt(u * u + v * v), t_best,
+                                 knobs)
         if t < 0.0:
             return ERR_FLIGHT_CAP, math.nan, -1
         if t < t_best:

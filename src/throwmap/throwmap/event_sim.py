@@ -49,6 +49,8 @@ Phases (per unit mass, frame F, heights over the arm surface):
   and the state at the crossing is integrated from the step's start in one order-8 sub-step
   (:func:`build`'s ``flight_to_contact``). With ``flight_method`` 'picard' the flight is the
   series about the ballistic flight of throwmap.picard (pieces split at the drag's kinks).
+  Without a body force the flight is the base model's closed form (:func:`ballistic_to_contact`)
+  whatever ``flight_method`` says.
 * IMPACT at one vertex: the impact hook. A vertex that stays on the arm has its normal velocity
   removed (a further normal impulse, which only dissipates); a pinned pivot (not
   ``unilateral``) is then caught by a sticking impulse. A pinned pivot also holds a vertex that
@@ -57,7 +59,9 @@ Phases (per unit mass, frame F, heights over the arm surface):
   RK4 at ``roll_step``. Events: another vertex lands (impact there; if the old pivot would then
   be driven into the arm, the edge lands flat instead), the normal force turns negative
   (liftoff into flight), the friction force leaves the cone (stick -> slip), the slip velocity
-  reaches zero (slip -> stick test).
+  reaches zero (slip -> stick test); located by regula falsi on the quantity that crossed zero
+  (:func:`build`'s ``first_contact_event``). With ``roll_method`` 'energy' a sticking roll is
+  in closed form, its liftoff and slip found in the roll angle (``closed_roll``).
 * FLAT on edge j: two-point contact, sliding with Coulomb friction until it stops; a vertex whose
   share of the normal force turns negative starts a rotation about the other one; at rest on an
   unstable edge the part tips over catch.tip_pivot.
@@ -70,7 +74,8 @@ from collections import namedtuple
 import math
 
 from .accuracy import FLIGHT_PICARD, FLIGHT_RK8, ROLL_ENERGY
-from .bracket import make_first_event
+from .ballistic import vertex_first_contact
+from .bracket import make_crossing, make_first_event
 from .catch import flat_landing_edge, record, stays_on_edge, sticking_impact, tip_pivot
 from .jit import njit
 from .picard import make_flight
@@ -87,6 +92,10 @@ STICKING_CONTACT = ContactLaw(math.inf, False, True)
 EPS = 2.220446049250313e-16
 GRADE = 4.0     # flight_method rk8: step ratio of the graded steps about a kink of the force
 CENTRE_SAMPLES = 8  # flight_method rk8: points per step at which centre crossings are looked for
+# A closed-form roll about a unilateral pivot looks for liftoff and slip at roll angles no
+# farther apart than this rate times roll_step (radians), farther where the margins' bounds
+# prove them out of reach: the rk4 roll's resolution at 10 rad/s.
+ROLL_EVENT_RATE = 10.0
 MODE_FLIGHT = 0
 MODE_CONTACT = 1
 MODE_FLAT = 2
@@ -303,6 +312,23 @@ def roll_turn(u0, alpha0, sd, psi_end, g, lp, inertia, a0, a2):
 
 
 @njit
+def roll_force_rates(g, om, lp, inertia):
+    """
+    Return bounds on |dn/dpsi| and |d ft/dpsi| over a force-free roll about a pivot.
+
+    n and ft: the contact's normal and tangential force per unit mass, as functions of the
+    roll angle psi from a state spinning at om (the CM at lp from the pivot, inertia = rho^2 +
+    lp^2 about it). With c, s the cosine and sine of the CM's angle from the arm,
+    n = |g| - |g| lp^2 c^2 / inertia - om^2 lp s and ft = |g| lp^2 c s / inertia - om^2 lp c,
+    and om^2 = om0^2 - 2 |g| lp (s - s0) / inertia: so |dn/dpsi| <= 2 |g| + om_max^2 lp and
+    |d ft/dpsi| <= 3 |g| + om_max^2 lp, om_max^2 <= om0^2 + 4 |g| lp / inertia.
+    """
+    g_abs = abs(g)
+    om2_max = om * om + 4.0 * g_abs * lp / inertia
+    return 2.0 * g_abs + om2_max * lp, 3.0 * g_abs + om2_max * lp
+
+
+@njit
 def hermite5(q0, v0, a0, q1, v1, a1, h):
     """Coefficients (q0, h v0, h^2 a0 / 2, c3, c4, c5) of the quintic in s = t / h on [0, h]."""
     d = q1 - q0 - h * v0 - 0.5 * h * h * a0
@@ -352,6 +378,38 @@ SimState = namedtuple('SimState', [
 # bundles, the event records, the vertices in the start edge's frame and the part's size.
 SimEnv = namedtuple('SimEnv', ['edge', 'g', 'part', 'knobs', 'law', 'prm', 'rec', 'bu', 'bv',
                                'size'])
+
+
+@njit
+def ballistic_to_contact(x, y, phi, vx, vy, om, t, sep, g, bu, bv, knobs, steps):
+    """
+    Fly in closed form until a vertex meets the arm moving down (no body force).
+
+    Returns (status, vertex, x, y, phi, vx, vy, om, t, steps) at the contact: each vertex's
+    first downward crossing by the base model's contact finder (ballistic.vertex_first_contact),
+    the earliest wins. The vertex that just left (sep) is found when it comes back down: after
+    a bounce it rises first, after a liftoff its normal acceleration is >= 0.
+    """
+    c = math.cos(phi)
+    s = math.sin(phi)
+    t_best = math.inf
+    k_best = -1
+    for k in range(bu.shape[0]):
+        rx = c * bu[k] - s * bv[k]
+        ry = s * bu[k] + c * bv[k]
+        f0 = 0.0 if k == sep else max(y + ry, 0.0)
+        tk = vertex_first_contact(f0, vy, g, om, rx, ry, math.sqrt(rx * rx + ry * ry), t_best,
+                                  knobs)
+        if tk < 0.0:
+            return ERR_SIM_CAP, -1, x, y, phi, vx, vy, om, t, steps + knobs.max_flight_steps
+        if tk < t_best:
+            t_best = tk
+            k_best = k
+    if k_best < 0:
+        return ERR_NONFINITE, -1, x, y, phi, vx, vy, om, t, steps
+    tb = t_best
+    return (OK, k_best, x + vx * tb, y + (vy + 0.5 * g * tb) * tb, phi + om * tb, vx,
+            vy + g * tb, om, t + tb, steps + 1)
 
 
 @njit(inline=True)
@@ -430,6 +488,9 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
     # A contact load depends on the normal force, which the roll's energy closed form does not
     # know: with one, rolls about a pinned pivot take rk4 steps (roll_method 'energy' falls back).
     contact_loaded = contact_load is not no_contact_load
+    # Without a body force the flight is the base model's closed form, whatever flight_method
+    # says (each method's steps are exact there; only their contact finders differ).
+    free_flight = body_force is no_force
 
     @njit(cache=False)
     def flight_rhs(vx, vy, om, phi, g, rho2, edge, prm):
@@ -812,7 +873,11 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         """Fly to the next contact: return (status, vertex, the state there)."""
         knobs = env.knobs
         rho2 = env.part.rho2
-        if knobs.flight_method == FLIGHT_RK8:
+        if free_flight:
+            code, k, x, y, phi, vx, vy, om, t, steps = ballistic_to_contact(
+                st.x, st.y, st.phi, st.vx, st.vy, st.om, st.t, st.sep, env.g, env.bu, env.bv,
+                knobs, st.steps)
+        elif knobs.flight_method == FLIGHT_RK8:
             code, k, x, y, phi, vx, vy, om, t, steps = flight_to_contact(
                 st.x, st.y, st.phi, st.vx, st.vy, st.om, st.t, st.sep, st.sep_rising, env.g,
                 rho2, env.bu, env.bv, env.size, env.edge, env.prm, knobs, st.steps)
@@ -975,13 +1040,178 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
     event_in_contact_step = make_first_event(contact_event_at)
 
     @njit(cache=False, inline=True)
+    def contact_event_value(tau, args):
+        """
+        Return the continuous quantity whose sign change makes event ``code`` (kk: its vertex).
+
+        After a contact step of tau: the slip velocity along sigma (SLIP_REVERSAL), vertex kk's
+        height (LANDING; over tau + ``lead`` where lead >= 0: a vertex that starts rising),
+        n (LIFTOFF), mu n - |ft| (STICK_TO_SLIP); -1 where no normal force is consistent.
+        """
+        (xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm, code, kk,
+         lead) = args
+        xm, pm, vm, omm = contact_step(xp, phi, vxp, om, tau, sliding, sigma, bu[p], bv[p], g,
+                                       rho2, law.mu, edge, prm)
+        if code == SLIP_REVERSAL:
+            return vm * sigma
+        if code == LANDING:
+            _, y, _, _ = contact_to_cm(xm, pm, vm, omm, bu[p], bv[p])
+            height = y + math.sin(pm) * bu[kk] + math.cos(pm) * bv[kk]
+            return height / (tau + lead) if lead >= 0.0 else height
+        _, _, ft, n, ok = contact_accel(xm, pm, vm, omm, sliding, sigma, bu[p], bv[p], g, rho2,
+                                        law.mu, edge, prm)
+        if not ok:
+            return -1.0
+        if code == LIFTOFF:
+            return n
+        return law.mu * n - abs(ft)
+
+    contact_event_crossing = make_crossing(contact_event_value)
+
+    @njit(cache=False, inline=True)
+    def contact_events_at(tau, args):
+        """
+        Return how many event conditions hold after a contact step of tau.
+
+        Each landing vertex, liftoff, slip reversal and stick-to-slip count one each; no
+        consistent normal force counts two (it makes any other event doubtful).
+        """
+        xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm = args
+        xm, pm, vm, omm = contact_step(xp, phi, vxp, om, tau, sliding, sigma, bu[p], bv[p], g,
+                                       rho2, law.mu, edge, prm)
+        _, y, _, vy = contact_to_cm(xm, pm, vm, omm, bu[p], bv[p])
+        c = math.cos(pm)
+        s = math.sin(pm)
+        count = 0
+        for k in range(bu.shape[0]):
+            if (k != p and y + s * bu[k] + c * bv[k] <= 0.0
+                    and vy + omm * (c * bu[k] - s * bv[k]) < 0.0):
+                count += 1
+        _, _, ft, n, ok = contact_accel(xm, pm, vm, omm, sliding, sigma, bu[p], bv[p], g, rho2,
+                                        law.mu, edge, prm)
+        if not ok:
+            return count + 2
+        if n < 0.0 and law.unilateral:
+            count += 1
+        if sliding:
+            if vm * sigma < 0.0:
+                count += 1
+        elif law.unilateral and abs(ft) > law.mu * n:
+            count += 1
+        return count
+
+    @njit(cache=False, inline=True)
+    def event_crossing(dt, tol, code, kk, args):
+        """
+        Return (tau, found): where event ``code``'s quantity crosses zero within a step of dt.
+
+        Illinois regula falsi on the quantity (a few sub-steps where bisection takes
+        log2(dt / tol) of them). found only where that event, and no other, holds at tau:
+        another would have begun earlier.
+        """
+        xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm = args
+        vargs = (xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm, code, kk,
+                 -1.0)
+        f0 = contact_event_value(0.0, vargs)
+        if code == LANDING:
+            _, _, _, vy0 = contact_to_cm(xp, phi, vxp, om, bu[p], bv[p])
+            un0 = vy0 + om * (math.cos(phi) * bu[kk] - math.sin(phi) * bv[kk])
+            if un0 > 0.0:
+                # A vertex that starts rising (on the arm, after the pivot left it: its height
+                # starts at 0, which regula falsi approaches in tiny steps): its height over
+                # tau + h0 / un0 has the same zero and starts at its normal speed.
+                f0 = max(f0, 0.0)
+                vargs = (xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm,
+                         code, kk, f0 / un0)
+                f0 = un0
+        f1 = contact_event_value(dt, vargs)
+        if not (f0 > 0.0 and f1 <= 0.0):
+            return dt, False
+        hi = contact_event_crossing(0.0, dt, f0, f1, tol, 200, vargs)
+        code_h, kk_h = contact_event_at(hi, args)
+        if code_h == NO_EVENT:
+            # the quantity is exactly zero there (the strict side is within tol)
+            hi = min(hi + tol, dt)
+            code_h, kk_h = contact_event_at(hi, args)
+        return hi, code_h == code and kk_h == kk and contact_events_at(hi, args) == 1
+
+    @njit(cache=False, inline=True)
+    def first_contact_event(dt, tol, code, kk, args):
+        """
+        Return (tau, code, vertex) of the first event within a contact step of dt.
+
+        The event found at the step's end names a continuous quantity crossing zero: its
+        crossing (:func:`event_crossing`); where another event holds there too, a slip that
+        reversed before it (a slide's most common earlier event); else bisection on the events.
+        """
+        if code != PAINLEVE:
+            tau, found = event_crossing(dt, tol, code, kk, args)
+            if found:
+                return tau, code, kk
+            if args[4] and code != SLIP_REVERSAL:
+                tau, found = event_crossing(dt, tol, SLIP_REVERSAL, -1, args)
+                if found:
+                    return tau, SLIP_REVERSAL, -1
+        return event_in_contact_step(0.0, dt, tol, code, kk, args)
+
+    @njit(cache=False, inline=True)
+    def roll_hold_margin(psi, args):
+        """
+        Return how far, in roll angle, a sticking unilateral pivot is from letting go.
+
+        At roll angle psi of the closed-form roll: the normal force n and the friction margin
+        mu n - |ft|, each divided by a bound on its rate of change in psi (so a margin m > 0
+        proves the contact holds for a further turn of m); -1 where no normal force is
+        consistent (Painleve).
+        """
+        xp, phi, u0, alpha, sd, lp, inertia, a0, a2, pu, pv, g, rho2, mu, edge, prm, l_n, l_h = \
+            args
+        u, _ = roll_u(psi, u0, alpha, sd, g, lp, inertia, a0, a2)
+        om = sd * math.sqrt(max(2.0 * u, 0.0))
+        _, _, ft, n, ok = contact_accel(xp, phi + sd * psi, 0.0, om, False, 0.0, pu, pv, g, rho2,
+                                        mu, edge, prm)
+        if not ok:
+            return -1.0
+        margin = n / l_n
+        if not math.isinf(mu):
+            margin = min(margin, (mu * n - abs(ft)) / l_h)
+        return margin
+
+    roll_hold_crossing = make_crossing(roll_hold_margin)
+
+    @njit(cache=False, inline=True)
+    def roll_hold_lost(psi_stop, dpsi_min, tol, args):
+        """
+        Return the first roll angle in [0, psi_stop] where the pivot lifts off or slips, or -1.
+
+        Samples step by the margin itself (it cannot reach zero sooner), at least dpsi_min (an
+        excursion narrower than that may go unseen, as a graze within an rk4 roll step does);
+        a sign change is refined by Illinois regula falsi to tol.
+        """
+        fa = roll_hold_margin(0.0, args)
+        if fa <= 0.0:
+            return 0.0
+        a = 0.0
+        while a < psi_stop:
+            b = min(psi_stop, a + max(fa, dpsi_min))
+            fb = roll_hold_margin(b, args)
+            if fb <= 0.0:
+                return roll_hold_crossing(a, b, fa, fb, tol, 200, args)
+            a = b
+            fa = fb
+        return -1.0
+
+    @njit(cache=False, inline=True)
     def closed_roll(st, env):
         """
-        Roll about the pinned pivot in closed form (roll_method energy).
+        Roll about the sticking pivot in closed form (roll_method energy).
 
-        Returns (landing vertex or -1, state): on to the next landing, or to the turning point
-        (then the hold test, and the next roll from rest); -1 with fit_ok cleared when the
-        part rests on the pivot with no hold rule (rk4 steps decide).
+        Returns (event code, landing vertex or -1, state): on to the next landing, or to the
+        turning point (then the hold test, and the next roll from rest); NO_EVENT with fit_ok
+        cleared when the part rests on the pivot with no hold rule (rk4 steps decide). A
+        unilateral pivot stops at the first roll angle where its normal force turns negative
+        (LIFTOFF) or its friction leaves the cone (STICK_TO_SLIP): both are functions of the
+        angle along the closed form (:func:`roll_hold_lost`).
         """
         part = env.part
         g = env.g
@@ -1015,6 +1245,29 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
             psi_end = max(sd * (target - alpha), 0.0)
             psi_t = roll_turn(0.5 * om * om, alpha, sd, psi_end, g, lp, inertia, a0, a2)
             vxp = 0.0
+            law = env.law
+            if law.unilateral:
+                # the bounds doubled for the weak body forces
+                rate_n, rate_ft = roll_force_rates(g, om, lp, inertia)
+                l_n = 2.0 * rate_n
+                l_h = law.mu * l_n + 2.0 * rate_ft
+                args = (st.xp, phi, 0.5 * om * om, alpha, sd, lp, inertia, a0, a2, bu[p], bv[p],
+                        g, part.rho2, law.mu, env.edge, env.prm, l_n, l_h)
+                psi_e = roll_hold_lost(psi_t if psi_t >= 0.0 else psi_end,
+                                       ROLL_EVENT_RATE * env.knobs.roll_step,
+                                       env.knobs.contact_root_tol, args)
+                if psi_e >= 0.0:
+                    u_e, _ = roll_u(psi_e, 0.5 * om * om, alpha, sd, g, lp, inertia, a0, a2)
+                    phi += sd * psi_e
+                    om = sd * math.sqrt(max(2.0 * u_e, 0.0))
+                    _, _, _, n, ok = contact_accel(st.xp, phi, 0.0, om, False, 0.0, bu[p], bv[p],
+                                                   g, part.rho2, law.mu, env.edge, env.prm)
+                    code = PAINLEVE if not ok else (LIFTOFF if n <= 0.0 else STICK_TO_SLIP)
+                    return code, -1, SimState(
+                        st.mode, st.t, st.x, st.y, phi, st.vx, st.vy, om, st.sep, st.sep_rising,
+                        p, st.xp, 0.0, st.sliding, st.sigma, st.fit_p, fit_ok, a0, a2,
+                        st.j_flat, st.out_edge, st.out_r, st.steps, st.impacts, nrec,
+                        st.t_first, st.k_first, st.x_lo, st.x_hi)
             if psi_t >= 0.0:
                 phi += sd * psi_t
                 om = 0.0
@@ -1029,10 +1282,10 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 phi += target - alpha
                 om = sd * math.sqrt(max(2.0 * u_end, 0.0))
                 kk = (p + 1) % part.n if sd < 0.0 else (p - 1) % part.n
-        return kk, SimState(st.mode, st.t, st.x, st.y, phi, st.vx, st.vy, om, st.sep,
-                            st.sep_rising, p, st.xp, vxp, st.sliding, st.sigma, st.fit_p, fit_ok,
-                            a0, a2, st.j_flat, st.out_edge, st.out_r, st.steps, st.impacts,
-                            nrec, st.t_first, st.k_first, st.x_lo, st.x_hi)
+        return (NO_EVENT if kk < 0 else LANDING), kk, SimState(
+            st.mode, st.t, st.x, st.y, phi, st.vx, st.vy, om, st.sep, st.sep_rising, p, st.xp,
+            vxp, st.sliding, st.sigma, st.fit_p, fit_ok, a0, a2, st.j_flat, st.out_edge,
+            st.out_r, st.steps, st.impacts, nrec, st.t_first, st.k_first, st.x_lo, st.x_hi)
 
     @njit(cache=False, inline=True)
     def rk4_contact(st, env):
@@ -1059,11 +1312,13 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         steps = st.steps
         x_lo, x_hi = st.x_lo, st.x_hi
         status = OK
+        clear = False       # no event at the current state (the last step's end was checked)
         while True:
-            code, kk = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law,
-                                       edge, prm)
-            if code != NO_EVENT:
-                break
+            if not clear:
+                code, kk = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2,
+                                           law, edge, prm)
+                if code != NO_EVENT:
+                    break
             xp1, p1, v1, o1 = contact_step(xp, phi, vxp, om, rdt, sliding, sigma, bu[p], bv[p],
                                            g, rho2, law.mu, edge, prm)
             if not (math.isfinite(p1) and math.isfinite(o1)):
@@ -1072,8 +1327,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
             code, kk = contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, g, rho2, law,
                                        edge, prm)
             if code != NO_EVENT:
-                hi, code, kk = event_in_contact_step(
-                    0.0, rdt, env.knobs.contact_root_tol, code, kk,
+                hi, code, kk = first_contact_event(
+                    rdt, env.knobs.contact_root_tol, code, kk,
                     (xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm))
                 xp, phi, vxp, om = contact_step(xp, phi, vxp, om, hi, sliding, sigma, bu[p],
                                                 bv[p], g, rho2, law.mu, edge, prm)
@@ -1091,9 +1346,11 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
             t += rdt
             x_lo = min(x_lo, xp)
             x_hi = max(x_hi, xp)
+            clear = True
             if not sliding:
                 held, dphi = static_hold(phi, om, turned, env.size, bu[p], bv[p], g, edge, prm)
                 if held:
+                    clear = False
                     # A resisting torque holds the part balanced on a corner; the feeder's
                     # vibration breaks the tie: turned to the edge of the holding zone on its
                     # CM's side, it falls from rest.
@@ -1245,8 +1502,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         st = SimState(MODE_FLIGHT, 0.0, x0, y0, phi0, vx0, vy0, om0, -1, False, -1, 0.0, 0.0,
                       False, 0.0, -1, False, 0.0, 0.0, -1, -1, math.nan, 0, 0, 0, math.nan, -1,
                       math.inf, -math.inf)
-        roll_energy = (knobs.roll_method == ROLL_ENERGY and not law.unilateral
-                       and not contact_loaded)
+        roll_energy = knobs.roll_method == ROLL_ENERGY and not contact_loaded
         while True:
             st = counted(st)
             if st.steps > knobs.max_sim_steps:
@@ -1263,8 +1519,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                     fit_ok, a0, a2 = roll_torque_fit(st.phi, bu[st.p], bv[st.p], edge, prm)
                     st = with_fit(st, st.p, fit_ok, a0, a2)
                 if roll_energy and not st.sliding and st.fit_ok:
-                    kk, st = closed_roll(st, env)
-                    code = NO_EVENT if kk < 0 else LANDING
+                    code, kk, st = closed_roll(st, env)
                 else:
                     status, code, kk, st = rk4_contact(st, env)
                     if status != OK:
