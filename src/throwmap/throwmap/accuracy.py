@@ -126,10 +126,10 @@ class SimulatorAccuracy:
     flight_method : how the event simulator integrates flight under a body force (without
         one the flight is the base model's closed form whatever this says): 'rk4' (fixed RK4
         steps of integrator_step, contacts bisected on re-integrated sub-steps; the accuracy
-        reference) or 'rk8' (fixed steps of flight_step with the order-8 Dormand-Prince tableau, contacts
-        looked for on the step's quintic Hermite interpolant no farther apart than
-        integrator_step, or farther where a speed bound proves no vertex can reach the arm,
-        and the contact state integrated exactly from the step's start), or 'picard' (the
+        reference) or 'rk8' (fixed steps of flight_step with the order-8 Dormand-Prince
+        tableau, contacts looked for on the step's quintic Hermite interpolant no farther apart
+        than integrator_step, or farther where a speed bound proves no vertex can reach the
+        arm, and the contact state integrated exactly from the step's start), or 'picard' (the
         series about the ballistic flight: pieces of at most flight_step, ended where the
         plate drag has a kink, each solved by Picard sweeps at Gauss-Legendre nodes until a
         sweep moves its end by less than flight_tol; throwmap.picard).
