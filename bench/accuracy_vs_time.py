@@ -30,9 +30,9 @@ Usage: python bench/accuracy_vs_time.py [--quick] [--out docs/accuracy_pareto.pn
        python bench/accuracy_vs_time.py --plate [--before REV] [--quick]
        python bench/accuracy_vs_time.py --contact [--before REV] [--quick]
 --plate measures only backplate_friction's configurations (the experiment scene and the
-triangle with the plate), --contact only impact_restitution's (the rectangle scene: bounces,
-unilateral pivots; the triangle at e 0.2, mu 0.8: bounces, pinned pivots), each time the best
-of 3 runs; --before REV measures the same with the code of git revision REV (git archive, in a
+triangle with the plate), --contact only the contact effects' (the rectangle scene: bounces,
+unilateral pivots; the triangle at e 0.2, mu 0.8: bounces, pinned pivots; the liftoff scene),
+each time the best of 3 runs; --before REV measures the same with the code of git revision REV (git archive, in a
 child process) in the same run, on the same states against the same reference.
 """
 
@@ -88,11 +88,12 @@ CONTACT_SCENES = {  # as the impact_restitution table and the effects table belo
     'rectangle': ('rectangle', {}, (2, 0.25), (0, 0.15)),
     'triangle': ('triangle', {'effects': ['impact_restitution'],
                               'contact': {'restitution': 0.2, 'mu': 0.8}}, (0, 0.3), (1, 0.12)),
+    'liftoff': ('liftoff', {}, (3, 0.3), (1, 0.12)),
 }
 # family: (scenes, configurations, reference knobs, what the tables call it)
 FAMILIES = {'plate': (PLATE_SCENES, PLATE_CONFIGS, PLATE_REF_KNOBS, 'backplate_friction'),
             'contact': (CONTACT_SCENES, CONTACT_CONFIGS, CONTACT_REF_KNOBS,
-                        'impact_restitution')}
+                        'impact_restitution / liftoff')}
 
 
 def knob_text(v):
@@ -564,8 +565,8 @@ def main():
     parser.add_argument('--plate', action='store_true',
                         help="only the plate's configurations on the experiment and the triangle")
     parser.add_argument('--contact', action='store_true',
-                        help="only impact_restitution's configurations on the rectangle and "
-                        'the triangle')
+                        help="only the contact effects' configurations (the rectangle, the "
+                        'triangle with restitution, the liftoff scene)')
     parser.add_argument('--before', metavar='REV',
                         help='with --plate or --contact: also measure the code of git revision '
                         'REV')

@@ -40,7 +40,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from throwmap import Scene
-from throwmap.event_sim import roll_force_rates, roll_turn, roll_u
+from throwmap.catch import roll_force_rates
+from throwmap.event_sim import roll_turn, roll_u
 from throwmap.jit import njit
 from throwmap.rk8 import A8, B8, C8, make_step
 from throwmap.scene import read_yaml

@@ -303,6 +303,24 @@ def pivot_normal(s, energy_k, lp, inertia, g_abs):
 
 
 @njit
+def roll_force_rates(g, om, lp, inertia):
+    """
+    Return bounds on |dN/dalpha| and |dFt/dalpha| over a roll about a pinned vertex.
+
+    N and Ft: the arm's normal and tangential force per unit mass (above), as functions of the
+    roll angle from a state spinning at om (the CM at lp from the pivot, inertia = rho^2 +
+    lp^2 about it). With c, s the cosine and sine of alpha,
+    N = |g| - |g| lp^2 c^2 / inertia - om^2 lp s and Ft = |g| lp^2 c s / inertia - om^2 lp c,
+    and om^2 = om0^2 - 2 |g| lp (s - s0) / inertia: so |dN/dalpha| <= 2 |g| + om_max^2 lp and
+    |dFt/dalpha| <= 3 |g| + om_max^2 lp, om_max^2 <= om0^2 + 4 |g| lp / inertia. A margin
+    divided by its bound is a turn within which the force cannot reach zero.
+    """
+    g_abs = abs(g)
+    om2_max = om * om + 4.0 * g_abs * lp / inertia
+    return 2.0 * g_abs + om2_max * lp, 3.0 * g_abs + om2_max * lp
+
+
+@njit
 def roll_pieces(alpha, omega, target, lp, inertia, g_abs):
     """
     Split a roll from alpha (rate omega) to target into pieces along which sin(alpha) is monotone.

@@ -76,7 +76,8 @@ import math
 from .accuracy import FLIGHT_PICARD, FLIGHT_RK8, ROLL_ENERGY
 from .ballistic import vertex_first_contact
 from .bracket import make_crossing, make_first_event
-from .catch import flat_landing_edge, record, stays_on_edge, sticking_impact, tip_pivot
+from .catch import (flat_landing_edge, record, roll_force_rates, stays_on_edge,
+                    sticking_impact, tip_pivot)
 from .jit import njit
 from .picard import make_flight
 from .rk8 import make_step
@@ -309,23 +310,6 @@ def roll_turn(u0, alpha0, sd, psi_end, g, lp, inertia, a0, a2):
         if step <= 4.0 * EPS * (1.0 + psi):
             return psi
     return psi
-
-
-@njit
-def roll_force_rates(g, om, lp, inertia):
-    """
-    Return bounds on |dn/dpsi| and |d ft/dpsi| over a force-free roll about a pivot.
-
-    n and ft: the contact's normal and tangential force per unit mass, as functions of the
-    roll angle psi from a state spinning at om (the CM at lp from the pivot, inertia = rho^2 +
-    lp^2 about it). With c, s the cosine and sine of the CM's angle from the arm,
-    n = |g| - |g| lp^2 c^2 / inertia - om^2 lp s and ft = |g| lp^2 c s / inertia - om^2 lp c,
-    and om^2 = om0^2 - 2 |g| lp (s - s0) / inertia: so |dn/dpsi| <= 2 |g| + om_max^2 lp and
-    |d ft/dpsi| <= 3 |g| + om_max^2 lp, om_max^2 <= om0^2 + 4 |g| lp / inertia.
-    """
-    g_abs = abs(g)
-    om2_max = om * om + 4.0 * g_abs * lp / inertia
-    return 2.0 * g_abs + om2_max * lp, 3.0 * g_abs + om2_max * lp
 
 
 @njit

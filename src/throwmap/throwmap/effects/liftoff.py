@@ -54,8 +54,8 @@ import numpy as np
 from ._common import check_keys, number, routh_stronge_impact
 from .. import event_sim
 from ..ballistic import first_contact, state_at
-from ..catch import (catch_at_contact, flat_landing_edge, pivot_normal, record, roll_pieces,
-                     sticking_impact)
+from ..catch import (catch_at_contact, flat_landing_edge, pivot_normal, record,
+                     roll_force_rates, roll_pieces, sticking_impact)
 from ..jit import njit
 from ..status import (ERR_SETTLE_CAP, EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_LANDING, EV_LIFTOFF,
                       OK, Outcome, REC_COLS)
@@ -65,7 +65,8 @@ SCHEMA = {'liftoff': ('mu',)}
 KNOBS = {}
 # The sticking limit: slip starts where |Ft| = MU_DEFAULT N, a 1e-3 fraction of N from its zero.
 MU_DEFAULT = 1000.0
-# Samples of a roll's path to find where it leaves the friction cone (then bisection).
+# A roll's path is looked at every 1 / CONE_SAMPLES of it (farther where the forces' margins
+# prove it in the friction cone) for where it leaves the cone (then bisection).
 CONE_SAMPLES = 256
 # mu: the arm's friction while the part rolls on it; scratch: the closed-form catch writes its
 # events here to find the first roll that leaves the cone (f and f_batch pass no record
@@ -156,6 +157,20 @@ def roll_forces(alpha, energy_k, lp, inertia, g_abs):
 
 
 @njit
+def in_cone(n, ft, mu, rate_n, rate_ft):
+    """
+    Return the turn within which a roll's contact stays in the cone |Ft| <= mu N; <= 0 outside.
+
+    The margins N and mu N - |Ft| over bounds on their rates (catch.roll_force_rates).
+    """
+    if n < 0.0 or abs(ft) > mu * n:
+        return -1.0
+    if math.isinf(mu):
+        return n / rate_n
+    return min(n / rate_n, (mu * n - abs(ft)) / (mu * rate_n + rate_ft))
+
+
+@njit
 def _path(u, alpha, a_turn, target):
     # The angle at arc length u along a roll from alpha (through a_turn) to target.
     first = abs(a_turn - alpha)
@@ -170,8 +185,9 @@ def roll_cone_exit(alpha, omega, target, lp, rho2, g_abs, mu):
     Return (alpha, omega) where a roll first leaves the friction cone |Ft| <= mu N, else nan.
 
     N < 0 is outside it for every mu. The path (roll_pieces: through the turning point of a
-    roll that turns back) is sampled at CONE_SAMPLES points, the first one outside is refined
-    by bisection to 1e-14 rad.
+    roll that turns back) is sampled at 1 / CONE_SAMPLES of its length, or farther where the
+    forces' margins prove the cone holds (in_cone); the first point outside is refined by
+    bisection to 1e-14 rad.
     """
     inertia = rho2 + lp * lp
     energy_k, peak, two, sg1, sg2 = roll_pieces(alpha, omega, target, lp, inertia, g_abs)
@@ -181,16 +197,21 @@ def roll_cone_exit(alpha, omega, target, lp, rho2, g_abs, mu):
         if alpha > 0.5 * math.pi:
             a_turn = math.pi - a_turn
     length = abs(a_turn - alpha) + abs(target - a_turn)
+    rate_n, rate_ft = roll_force_rates(g_abs, omega, lp, inertia)
     lo = 0.0
     hi = -1.0
-    for i in range(CONE_SAMPLES + 1):
-        u = length * i / CONE_SAMPLES
+    u = 0.0
+    while True:
         a, _ = _path(u, alpha, a_turn, target)
         n, ft = roll_forces(a, energy_k, lp, inertia, g_abs)
-        if n < 0.0 or abs(ft) > mu * n:
+        room = in_cone(n, ft, mu, rate_n, rate_ft)
+        if room <= 0.0:
             hi = u
             break
         lo = u
+        if u >= length:
+            break
+        u = min(length, u + max(room, length / CONE_SAMPLES))
     if hi < 0.0:
         return math.nan, math.nan
     if hi > 0.0:
@@ -232,11 +253,18 @@ def rocking_sticks(i, rec, part, g_abs, mu):
     a_turn = math.asin(peak)
     if a0 > 0.5 * math.pi:
         a_turn = math.pi - a_turn
-    for k in range(CONE_SAMPLES + 1):
-        a = a0 + (a_turn - a0) * k / CONE_SAMPLES
+    rate_n, rate_ft = roll_force_rates(g_abs, om, lq, inertia)
+    length = abs(a_turn - a0)
+    u = 0.0
+    while True:
+        a = a0 + math.copysign(u, a_turn - a0)
         n, ft = roll_forces(a, energy_k, lq, inertia, g_abs)
-        if n < 0.0 or abs(ft) > mu * n:
+        room = in_cone(n, ft, mu, rate_n, rate_ft)
+        if room <= 0.0:
             return False
+        if u >= length:
+            break
+        u = min(length, u + max(room, length / CONE_SAMPLES))
     # back down, rolling about q at -om, onto p (edge j flat)
     return sticks(part.U[j][p], part.V[j][p], -om * part.V[j][q], om * part.U[j][q], -om,
                   part.rho2, mu)
