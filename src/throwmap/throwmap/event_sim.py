@@ -165,6 +165,18 @@ def lowest_approaching(x, y, phi, vx, vy, om, bu, bv, skip):
 
 
 @njit
+def vertices_down(y, phi, bu, bv, skip):
+    """Return how many vertices (but ``skip``) are at or below the arm."""
+    c = math.cos(phi)
+    s = math.sin(phi)
+    count = 0
+    for k in range(bu.shape[0]):
+        if k != skip and y + s * bu[k] + c * bv[k] <= 0.0:
+            count += 1
+    return count
+
+
+@njit
 def vertex_normal(y, phi, vy, om, bu_k, bv_k):
     """Height over the arm and normal velocity of the vertex at (bu_k, bv_k) in the body frame."""
     c = math.cos(phi)
@@ -821,6 +833,39 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
 
     contact_in_rk4_step = make_first_event(rk4_flight_event)
 
+    @njit(cache=False, inline=True)
+    def rk4_vertex_height(tau, args):
+        """Return vertex k's height over the arm after an rk4 flight step of tau."""
+        x, y, phi, vx, vy, om, g, rho2, edge, prm, bu, bv, sep, k = args
+        _, ym, pm, _, _, _ = flight_step(x, y, phi, vx, vy, om, tau, g, rho2, edge, prm)
+        return ym + math.sin(pm) * bu[k] + math.cos(pm) * bv[k]
+
+    rk4_height_crossing = make_crossing(rk4_vertex_height)
+
+    @njit(cache=False, inline=True)
+    def rk4_contact_in_step(dt, tol, k, args):
+        """
+        Return (tau, vertex) of the first contact within an rk4 flight step of dt.
+
+        Vertex k, found at the step's end, by Illinois regula falsi on its height (a few
+        sub-steps where bisection takes log2(dt / tol)), accepted where no other vertex (but
+        the one that just left) is at or below the arm: two crossing within one step (a nearly
+        flat landing) are bisected on the event, which finds the earlier.
+        """
+        x, y, phi, vx, vy, om, g, rho2, edge, prm, bu, bv, sep = args
+        hargs = (x, y, phi, vx, vy, om, g, rho2, edge, prm, bu, bv, sep, k)
+        f0 = rk4_vertex_height(0.0, hargs)
+        f1 = rk4_vertex_height(dt, hargs)
+        if f0 > 0.0 and f1 <= 0.0:
+            tau = rk4_height_crossing(0.0, dt, f0, f1, tol, 200, hargs)
+            xm, ym, pm, vxm, vym, omm = flight_step(x, y, phi, vx, vy, om, tau, g, rho2, edge,
+                                                    prm)
+            kh, _ = lowest_approaching(xm, ym, pm, vxm, vym, omm, bu, bv, sep)
+            if kh == k and vertices_down(ym, pm, bu, bv, sep) == 1:
+                return tau, k
+        hi, _, k = contact_in_rk4_step(0.0, dt, tol, 1, k, args)
+        return hi, k
+
     @njit(cache=False)
     def rk4_flight_to_contact(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, edge,
                               prm, knobs, steps):
@@ -843,9 +888,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
             steps += 1
             if steps > knobs.max_sim_steps:
                 return ERR_SIM_CAP, -1, x, y, phi, vx, vy, om, t, steps
-        hi, _, k = contact_in_rk4_step(
-            0.0, dt, knobs.contact_root_tol, 1, k,
-            (x, y, phi, vx, vy, om, g, rho2, edge, prm, bu, bv, sep))
+        hi, k = rk4_contact_in_step(dt, knobs.contact_root_tol, k,
+                                    (x, y, phi, vx, vy, om, g, rho2, edge, prm, bu, bv, sep))
         x, y, phi, vx, vy, om = flight_step(x, y, phi, vx, vy, om, hi, g, rho2, edge, prm)
         k2, _ = lowest_approaching(x, y, phi, vx, vy, om, bu, bv, sep)
         if k2 >= 0:
