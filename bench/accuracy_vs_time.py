@@ -32,8 +32,9 @@ Usage: python bench/accuracy_vs_time.py [--quick] [--out docs/accuracy_pareto.pn
 --plate measures only backplate_friction's configurations (the experiment scene and the
 triangle with the plate), --contact only the contact effects' (the rectangle scene: bounces,
 unilateral pivots; the triangle at e 0.2, mu 0.8: bounces, pinned pivots; the liftoff scene),
-each time the best of 3 runs; --before REV measures the same with the code of git revision REV (git archive, in a
-child process) in the same run, on the same states against the same reference.
+each time the best of 3 runs; --before REV measures the same with the code of git revision
+REV (git archive, in a child process) in the same run, on the same states against the same
+reference.
 """
 
 import argparse
