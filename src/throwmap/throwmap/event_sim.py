@@ -393,8 +393,14 @@ def ballistic_to_contact(x, y, phi, vx, vy, om, t, sep, g, bu, bv, knobs, steps)
     for k in range(bu.shape[0]):
         rx = c * bu[k] - s * bv[k]
         ry = s * bu[k] + c * bv[k]
-        f0 = 0.0 if k == sep else max(y + ry, 0.0)
-        tk = vertex_first_contact(f0, vy, g, om, rx, ry, math.sqrt(rx * rx + ry * ry), t_best,
+        f0 = max(y + ry, 0.0)
+        vy_k = vy
+        if k == sep:
+            # It left rising (a bounce) or with zero normal speed (a liftoff: its free normal
+            # acceleration >= 0); a rounding-sized approach would be found at t = 0.
+            f0 = 0.0
+            vy_k = vy - min(vy + om * rx, 0.0)
+        tk = vertex_first_contact(f0, vy_k, g, om, rx, ry, math.sqrt(rx * rx + ry * ry), t_best,
                                   knobs)
         if tk < 0.0:
             return ERR_SIM_CAP, -1, x, y, phi, vx, vy, om, t, steps + knobs.max_flight_steps
