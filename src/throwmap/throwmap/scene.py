@@ -22,6 +22,7 @@ beyond the paper's base model (throwmap.effects, docs/effects.md); a scene witho
 the base ThrowModel itself.
 """
 
+import dataclasses
 import math
 import os
 import re
@@ -407,6 +408,9 @@ class Scene:
             mu = ThrowModel._number(mu, 'contact.mu', 'the friction coefficient')
         self.effects = fx.compose(fx.parse_names(data.get('effects')),
                                   fx.SceneValues(data, self.plate, mu, self.arm_length))
+        step = self.effects.flight_step()
+        if step is not None and 'integrator_step' not in acc:
+            simulator = dataclasses.replace(simulator, integrator_step=step)
         self.seed = _seed(data, seed)
         self.cycle = _cycle(data)
         with warnings.catch_warnings(record=True) as caught:

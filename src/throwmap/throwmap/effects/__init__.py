@@ -39,7 +39,9 @@ effect is one module of this package that owns its scene keys, its parsing and i
 ``bundle(params, part, knobs)``
     the named tuple of compiled parameters its hooks receive as ``prm``.
 
-Optional, at the Python level: ``contact_law(params)`` (friction, pivot model and whether the
+Optional, at the Python level: ``FLIGHT_STEP`` (s: the rk4 flight step its body force needs;
+a scene whose body forces all declare one takes the smallest as ``integrator_step`` unless it
+sets that knob), ``contact_law(params)`` (friction, pivot model and whether the
 impact law is sticking, for the event simulator), ``STOCHASTIC = True`` (noise: nominal models
 leave it out), ``read_sensor(seen, rng, params)``, ``domain(model, params)`` /
 ``domain_error(model, params, edge, R)`` / ``domain_note(model, params)`` (an effect that moves
@@ -165,6 +167,19 @@ class EffectSet:
         """Tell whether flight or the catch needs the event simulator (a force or impact law)."""
         return any(set(s) & set(EVENT_SLOTS) for s in self.slots().values()) or any(
             hasattr(m, 'contact_law') for _, m, _ in self.modules())
+
+    def flight_step(self):
+        """
+        Return the rk4 flight step the body forces need (the smallest they declare), or None.
+
+        None where no effect fills body_force or one of them declares no FLIGHT_STEP: then
+        the knob's own default holds.
+        """
+        steps = [getattr(MODULES[name], 'FLIGHT_STEP', None)
+                 for name, filled in self.slots().items() if 'body_force' in filled]
+        if not steps or None in steps:
+            return None
+        return min(steps)
 
     @property
     def stochastic(self):
