@@ -142,8 +142,9 @@ class SimulatorAccuracy:
         closed form, the work-energy equation in the roll angle, exact when the body force's
         torque about the pivot is -sign(omega) (a0 + a2 omega^2), as the plate's and the
         air's are; checked numerically for every pivot, otherwise that roll takes rk4 steps;
-        about a unilateral pivot liftoff and slip are found in the roll angle, sampled no
-        coarser than 10 rad/s times roll_step) or 'rk4' (steps of roll_step; the default
+        about a unilateral pivot liftoff and slip are found in the roll angle, in steps the
+        forces' margins prove clear and of at least 10 rad/s times roll_step, where an event
+        narrower than that may go unseen) or 'rk4' (steps of roll_step; the default
         before issue 24, kept as the reference). Slides always take rk4 steps.
     """
 
