@@ -93,9 +93,10 @@ STICKING_CONTACT = ContactLaw(math.inf, False, True)
 EPS = 2.220446049250313e-16
 GRADE = 4.0     # flight_method rk8: step ratio of the graded steps about a kink of the force
 CENTRE_SAMPLES = 8  # flight_method rk8: points per step at which centre crossings are looked for
-# A closed-form roll about a unilateral pivot looks for liftoff and slip at roll angles no
-# farther apart than this rate times roll_step (radians), farther where the margins' bounds
-# prove them out of reach: the rk4 roll's resolution at 10 rad/s.
+# A closed-form roll about a unilateral pivot looks for liftoff and slip in steps of the roll
+# angle that the margins' bounds prove clear, but of at least this rate times roll_step
+# (radians; the rk4 roll's resolution at 10 rad/s): near a tangency the margins would shrink
+# the steps without end.
 ROLL_EVENT_RATE = 10.0
 MODE_FLIGHT = 0
 MODE_CONTACT = 1
