@@ -321,6 +321,19 @@ def roll_force_rates(g, om, lp, inertia):
 
 
 @njit
+def cone_margin(n, ft, mu, rate_n, rate_ft):
+    """
+    Return the turn within which a roll's contact stays in the cone |Ft| <= mu N; <= 0 outside.
+
+    The margins N and mu N - |Ft| over bounds on their rates (roll_force_rates): continuous,
+    so its zero can be bracketed.
+    """
+    if math.isinf(mu):
+        return n / rate_n
+    return min(n / rate_n, (mu * n - abs(ft)) / (mu * rate_n + rate_ft))
+
+
+@njit
 def roll_pieces(alpha, omega, target, lp, inertia, g_abs):
     """
     Split a roll from alpha (rate omega) to target into pieces along which sin(alpha) is monotone.

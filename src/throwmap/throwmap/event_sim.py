@@ -76,7 +76,7 @@ import math
 from .accuracy import FLIGHT_PICARD, FLIGHT_RK8, ROLL_ENERGY
 from .ballistic import vertex_first_contact
 from .bracket import make_crossing, make_first_event
-from .catch import (flat_landing_edge, record, roll_force_rates, stays_on_edge,
+from .catch import (cone_margin, flat_landing_edge, record, roll_force_rates, stays_on_edge,
                     sticking_impact, tip_pivot)
 from .jit import njit
 from .picard import make_flight
@@ -844,8 +844,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
     def rk4_vertex_height(tau, args):
         """Return vertex k's height over the arm after an rk4 flight step of tau."""
         x, y, phi, vx, vy, om, g, rho2, edge, prm, bu, bv, sep, k = args
-        _, ym, pm, _, _, _ = flight_step(x, y, phi, vx, vy, om, tau, g, rho2, edge, prm)
-        return ym + math.sin(pm) * bu[k] + math.cos(pm) * bv[k]
+        _, ym, pm, _, vym, omm = flight_step(x, y, phi, vx, vy, om, tau, g, rho2, edge, prm)
+        return vertex_normal(ym, pm, vym, omm, bu[k], bv[k])[0]
 
     rk4_height_crossing = make_crossing(rk4_vertex_height)
 
@@ -1090,8 +1090,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         if code == SLIP_REVERSAL:
             return vm * sigma
         if code == LANDING:
-            _, y, _, _ = contact_to_cm(xm, pm, vm, omm, bu[p], bv[p])
-            height = y + math.sin(pm) * bu[kk] + math.cos(pm) * bv[kk]
+            _, y, _, vy = contact_to_cm(xm, pm, vm, omm, bu[p], bv[p])
+            height, _ = vertex_normal(y, pm, vy, omm, bu[kk], bv[kk])
             return height / (tau + lead) if lead >= 0.0 else height
         _, _, ft, n, ok = contact_accel(xm, pm, vm, omm, sliding, sigma, bu[p], bv[p], g, rho2,
                                         law.mu, edge, prm)
@@ -1149,8 +1149,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                  -1.0)
         f0 = contact_event_value(0.0, vargs)
         if code == LANDING:
-            _, _, _, vy0 = contact_to_cm(xp, phi, vxp, om, bu[p], bv[p])
-            un0 = vy0 + om * (math.cos(phi) * bu[kk] - math.sin(phi) * bv[kk])
+            _, y0, _, vy0 = contact_to_cm(xp, phi, vxp, om, bu[p], bv[p])
+            _, un0 = vertex_normal(y0, phi, vy0, om, bu[kk], bv[kk])
             if un0 > 0.0:
                 # A vertex that starts rising (on the arm, after the pivot left it: its height
                 # starts at 0, which regula falsi approaches in tiny steps): its height over
@@ -1183,7 +1183,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
             tau, found = event_crossing(dt, tol, code, kk, args)
             if found:
                 return tau, code, kk
-            if args[4] and code != SLIP_REVERSAL:
+            sliding = args[4]
+            if sliding and code != SLIP_REVERSAL:
                 tau, found = event_crossing(dt, tol, SLIP_REVERSAL, -1, args)
                 if found:
                     return tau, SLIP_REVERSAL, -1
@@ -1194,23 +1195,19 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         """
         Return how far, in roll angle, a sticking unilateral pivot is from letting go.
 
-        At roll angle psi of the closed-form roll: the normal force n and the friction margin
-        mu n - |ft|, each divided by a bound on its rate of change in psi (so a margin m > 0
-        proves the contact holds for a further turn of m); -1 where no normal force is
-        consistent (Painleve).
+        At roll angle psi of the closed-form roll: catch.cone_margin over the bounds on the
+        forces' rates in psi (so a margin m > 0 proves the contact holds for a further turn of
+        m); -1 where no normal force is consistent (Painleve).
         """
-        xp, phi, u0, alpha, sd, lp, inertia, a0, a2, pu, pv, g, rho2, mu, edge, prm, l_n, l_h = \
-            args
+        (xp, phi, u0, alpha, sd, lp, inertia, a0, a2, pu, pv, g, rho2, mu, edge, prm, rate_n,
+         rate_ft) = args
         u, _ = roll_u(psi, u0, alpha, sd, g, lp, inertia, a0, a2)
         om = sd * math.sqrt(max(2.0 * u, 0.0))
         _, _, ft, n, ok = contact_accel(xp, phi + sd * psi, 0.0, om, False, 0.0, pu, pv, g, rho2,
                                         mu, edge, prm)
         if not ok:
             return -1.0
-        margin = n / l_n
-        if not math.isinf(mu):
-            margin = min(margin, (mu * n - abs(ft)) / l_h)
-        return margin
+        return cone_margin(n, ft, mu, rate_n, rate_ft)
 
     roll_hold_crossing = make_crossing(roll_hold_margin)
 
@@ -1273,6 +1270,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         else:
             sd = 1.0 if alpha <= part.acw[p] else -1.0
         kk = -1
+        code = NO_EVENT
         if om == 0.0 and sd * g * lp * math.cos(alpha) - a0 <= 0.0:
             fit_ok = False      # held at rest with no hold rule: rk4 decides
         else:
@@ -1282,12 +1280,10 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
             vxp = 0.0
             law = env.law
             if law.unilateral:
-                # the bounds doubled for the weak body forces
                 rate_n, rate_ft = roll_force_rates(g, om, lp, inertia)
-                l_n = 2.0 * rate_n
-                l_h = law.mu * l_n + 2.0 * rate_ft
+                # the bounds doubled for the weak body forces
                 args = (st.xp, phi, 0.5 * om * om, alpha, sd, lp, inertia, a0, a2, bu[p], bv[p],
-                        g, part.rho2, law.mu, env.edge, env.prm, l_n, l_h)
+                        g, part.rho2, law.mu, env.edge, env.prm, 2.0 * rate_n, 2.0 * rate_ft)
                 psi_e = roll_hold_lost(psi_t if psi_t >= 0.0 else psi_end,
                                        ROLL_EVENT_RATE * env.knobs.roll_step,
                                        env.knobs.contact_root_tol, args)
@@ -1298,12 +1294,9 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                     _, _, _, n, ok = contact_accel(st.xp, phi, 0.0, om, False, 0.0, bu[p], bv[p],
                                                    g, part.rho2, law.mu, env.edge, env.prm)
                     code = PAINLEVE if not ok else (LIFTOFF if n <= 0.0 else STICK_TO_SLIP)
-                    return code, -1, SimState(
-                        st.mode, st.t, st.x, st.y, phi, st.vx, st.vy, om, st.sep, st.sep_rising,
-                        p, st.xp, 0.0, st.sliding, st.sigma, st.fit_p, fit_ok, a0, a2,
-                        st.j_flat, st.out_edge, st.out_r, st.steps, st.impacts, nrec,
-                        st.t_first, st.k_first, st.x_lo, st.x_hi)
-            if psi_t >= 0.0:
+            if code != NO_EVENT:
+                pass        # stopped where the unilateral pivot lets go
+            elif psi_t >= 0.0:
                 phi += sd * psi_t
                 om = 0.0
                 held, dphi = static_hold(phi, 0.0, True, env.size, bu[p], bv[p], g, env.edge,
@@ -1317,7 +1310,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 phi += target - alpha
                 om = sd * math.sqrt(max(2.0 * u_end, 0.0))
                 kk = (p + 1) % part.n if sd < 0.0 else (p - 1) % part.n
-        return (NO_EVENT if kk < 0 else LANDING), kk, SimState(
+                code = LANDING
+        return code, kk, SimState(
             st.mode, st.t, st.x, st.y, phi, st.vx, st.vy, om, st.sep, st.sep_rising, p, st.xp,
             vxp, st.sliding, st.sigma, st.fit_p, fit_ok, a0, a2, st.j_flat, st.out_edge,
             st.out_r, st.steps, st.impacts, nrec, st.t_first, st.k_first, st.x_lo, st.x_hi)

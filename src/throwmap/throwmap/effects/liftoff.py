@@ -54,7 +54,7 @@ import numpy as np
 from ._common import check_keys, number, routh_stronge_impact
 from .. import event_sim
 from ..ballistic import first_contact, state_at
-from ..catch import (catch_at_contact, flat_landing_edge, pivot_normal, record,
+from ..catch import (catch_at_contact, cone_margin, flat_landing_edge, pivot_normal, record,
                      roll_force_rates, roll_pieces, sticking_impact)
 from ..jit import njit
 from ..status import (ERR_SETTLE_CAP, EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_LANDING, EV_LIFTOFF,
@@ -157,20 +157,6 @@ def roll_forces(alpha, energy_k, lp, inertia, g_abs):
 
 
 @njit
-def in_cone(n, ft, mu, rate_n, rate_ft):
-    """
-    Return the turn within which a roll's contact stays in the cone |Ft| <= mu N; <= 0 outside.
-
-    The margins N and mu N - |Ft| over bounds on their rates (catch.roll_force_rates).
-    """
-    if n < 0.0 or abs(ft) > mu * n:
-        return -1.0
-    if math.isinf(mu):
-        return n / rate_n
-    return min(n / rate_n, (mu * n - abs(ft)) / (mu * rate_n + rate_ft))
-
-
-@njit
 def _path(u, alpha, a_turn, target):
     # The angle at arc length u along a roll from alpha (through a_turn) to target.
     first = abs(a_turn - alpha)
@@ -186,7 +172,7 @@ def roll_cone_exit(alpha, omega, target, lp, rho2, g_abs, mu):
 
     N < 0 is outside it for every mu. The path (roll_pieces: through the turning point of a
     roll that turns back) is sampled at 1 / CONE_SAMPLES of its length, or farther where the
-    forces' margins prove the cone holds (in_cone); the first point outside is refined by
+    forces' margins prove the cone holds (catch.cone_margin); the first point outside is refined by
     bisection to 1e-14 rad.
     """
     inertia = rho2 + lp * lp
@@ -204,7 +190,7 @@ def roll_cone_exit(alpha, omega, target, lp, rho2, g_abs, mu):
     while True:
         a, _ = _path(u, alpha, a_turn, target)
         n, ft = roll_forces(a, energy_k, lp, inertia, g_abs)
-        room = in_cone(n, ft, mu, rate_n, rate_ft)
+        room = cone_margin(n, ft, mu, rate_n, rate_ft)
         if room <= 0.0:
             hi = u
             break
@@ -259,7 +245,7 @@ def rocking_sticks(i, rec, part, g_abs, mu):
     while True:
         a = a0 + math.copysign(u, a_turn - a0)
         n, ft = roll_forces(a, energy_k, lq, inertia, g_abs)
-        room = in_cone(n, ft, mu, rate_n, rate_ft)
+        room = cone_margin(n, ft, mu, rate_n, rate_ft)
         if room <= 0.0:
             return False
         if u >= length:
