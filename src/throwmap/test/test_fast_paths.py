@@ -40,7 +40,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from throwmap import Scene
-from throwmap.catch import roll_force_rates
+from throwmap.catch import first_cone_exit, roll_cone_forces, roll_force_rates
 from throwmap.event_sim import roll_turn, roll_u
 from throwmap.jit import njit
 from throwmap.rk8 import A8, B8, C8, make_step
@@ -225,6 +225,68 @@ def test_the_contact_forces_of_a_roll_change_no_faster_than_their_bounds():
         step = np.diff(a)
         assert np.all(np.abs(np.diff(n) / step) <= rate_n * (1 + 1e-6))
         assert np.all(np.abs(np.diff(ft) / step) <= rate_ft * (1 + 1e-6))
+
+
+def test_the_free_rolls_forces_their_slopes_and_curvature_bounds_are_newtons():
+    # Without a body force the search steps by a parabola under each of mu N -+ Ft: their
+    # values and slopes in closed form, their second derivatives bounded.
+    g = -9.66
+    rng = np.random.default_rng(12)
+    for _ in range(300):
+        lp, rho2 = rng.uniform(0.005, 0.05), rng.uniform(1e-5, 4e-4)
+        inertia = rho2 + lp * lp
+        a0, om0 = rng.uniform(0.1, 3.0), rng.uniform(-30, 30)
+        energy_k = om0 ** 2 - 2.0 * g * lp * math.sin(a0) / inertia
+        a = a0 + np.linspace(-1.5, 1.5, 30001) * math.copysign(1.0, om0)
+        om2 = energy_k + 2.0 * g * lp * np.sin(a) / inertia
+        a, om2 = a[om2 >= 0], om2[om2 >= 0]
+        c, s = np.cos(a), np.sin(a)
+        alpha = g * lp * c / inertia
+        n = alpha * lp * c - om2 * lp * s - g
+        ft = -alpha * lp * s - om2 * lp * c
+        got = np.array([roll_cone_forces(x, energy_k, lp, inertia, -g) for x in a])
+        assert np.allclose(got[:, 0], n, rtol=0, atol=1e-12 * (1 + np.abs(n).max()))
+        assert np.allclose(got[:, 1], ft, rtol=0, atol=1e-12 * (1 + np.abs(ft).max()))
+        step = np.diff(a)
+        near = np.abs(step) < 2e-4         # neighbours (om^2 < 0 may cut the range in two)
+        for value, slope in ((n, got[:, 2]), (ft, got[:, 3])):
+            mid = 0.5 * (slope[1:] + slope[:-1])
+            assert np.allclose((np.diff(value) / step)[near], mid[near], rtol=0,
+                               atol=1e-6 * (1 + np.abs(slope).max()))
+        b3, k = 3.0 * -g * lp * lp / inertia, abs(lp * energy_k)
+        assert np.all(np.abs(np.diff(got[:, 2]) / step) <= (2 * b3 + k) * (1 + 1e-6))
+        assert np.all(np.abs(np.diff(got[:, 3]) / step) <= (4 * b3 + k) * (1 + 1e-6))
+
+
+def test_the_free_rolls_cone_exit_is_the_first_sample_outside_the_cone():
+    g_abs = 9.66
+    rng = np.random.default_rng(13)
+    found = 0
+    for _ in range(300):
+        lp, rho2 = rng.uniform(0.005, 0.05), rng.uniform(1e-5, 4e-4)
+        inertia = rho2 + lp * lp
+        a0, om0 = rng.uniform(0.1, 3.0), rng.uniform(-30, 30)
+        mu = float(rng.choice([0.3, 1.0, 1000.0, math.inf]))
+        energy_k = om0 ** 2 + 2.0 * g_abs * lp * math.sin(a0) / inertia
+        sd = math.copysign(1.0, om0)
+        turn = math.pi / 2 if sd > 0 else -math.pi / 2     # om^2 >= 0 up to here at least
+        length = min(1.5, abs(turn - a0)) if energy_k * inertia > 2 * g_abs * lp else 0.2
+        u = np.linspace(0, length, 200001)
+        forces = np.array([roll_cone_forces(a0 + sd * x, energy_k, lp, inertia, g_abs)
+                           for x in u])
+        om2 = energy_k - 2.0 * g_abs * lp * np.sin(a0 + sd * u) / inertia
+        if np.any(om2 < 0):
+            continue
+        n, ft = forces[:, 0], forces[:, 1]
+        out = (n < 0) if math.isinf(mu) else (mu * n - np.abs(ft) < 0)
+        got = first_cone_exit(a0, sd, length, energy_k, lp, inertia, g_abs, mu, 0.0, 1e-13)
+        if not out.any():
+            assert got == -1.0
+            continue
+        found += 1
+        first = u[np.argmax(out)]
+        assert first - 1.5 * (u[1] - u[0]) <= got <= first + 1e-12
+    assert found > 30
 
 
 @pytest.mark.parametrize('case', ['rectangle', 'rectangle slipping', 'triangle plate',

@@ -27,8 +27,9 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from throwmap import InputError, Scene, ThrowmapError
-from throwmap.catch import pivot_normal, records_min_normal, roll_liftoff, roll_min_normal
-from throwmap.effects.liftoff import roll_cone_exit, roll_forces
+from throwmap.catch import (pivot_normal, records_min_normal, roll_cone_forces, roll_liftoff,
+                            roll_min_normal)
+from throwmap.effects.liftoff import roll_cone_exit
 from throwmap.status import REC_COLS
 from throwmap_testing import PAPER_W, TRIANGLE_VERTICES
 
@@ -113,7 +114,7 @@ def test_closed_form_against_newton_euler(seed):
         inertia = rho2 + lp * lp
         k = omega * omega + 2 * G * lp * math.sin(alpha) / inertia
         i = len(a) // 3
-        n_i, ft_i = roll_forces(a[i], k, lp, inertia, G)
+        n_i, ft_i, _, _ = roll_cone_forces(a[i], k, lp, inertia, G)
         assert (n_i, ft_i) == pytest.approx((n[i], ft[i]), abs=1e-6 * scale)
         a_lift, w_lift = roll_liftoff(alpha, omega, end, lp, rho2, G)
         if n.min() < -1e-6 * scale:

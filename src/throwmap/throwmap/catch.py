@@ -29,6 +29,7 @@ settling rule (:func:`stays_on_edge`), and the jog/flip classifier (:func:`is_jo
 
 import math
 
+from .bracket import make_crossing
 from .jit import njit
 from .status import (ERR_SETTLE_CAP, EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_LANDING,
                      EV_LIFTOFF, EV_TIP_FROM_REST, OK)
@@ -331,6 +332,83 @@ def cone_margin(n, ft, mu, rate_n, rate_ft):
     if math.isinf(mu):
         return n / rate_n
     return min(n / rate_n, (mu * n - abs(ft)) / (mu * rate_n + rate_ft))
+
+
+@njit
+def roll_cone_forces(theta, energy_k, lp, inertia, g_abs):
+    """
+    Return (N, Ft, dN/dalpha, dFt/dalpha) of a roll about a pinned vertex, no body force.
+
+    N(s) as :func:`pivot_normal` and Ft = l cos(alpha) (3 |g| l s / I - K) (both per unit
+    mass, K the energy constant), s = sin(alpha); their second derivatives in alpha are
+    bounded by 2 B + |l K| and 4 B + |l K|, B = 3 |g| l^2 / I (:func:`first_cone_exit`).
+    """
+    s = math.sin(theta)
+    c = math.cos(theta)
+    b3 = 3.0 * g_abs * lp * lp / inertia
+    k = lp * energy_k
+    n = g_abs * (1.0 - lp * lp / inertia) + b3 * s * s - k * s
+    ft = c * (b3 * s - k)
+    return n, ft, c * (2.0 * b3 * s - k), b3 * (c * c - s * s) + k * s
+
+
+@njit
+def _cone_value(u, args):
+    # The cone's margin mu N - |Ft| (N for mu = inf) at arc u of a monotone roll.
+    theta0, sd, energy_k, lp, inertia, g_abs, mu = args
+    n, ft, _, _ = roll_cone_forces(theta0 + sd * u, energy_k, lp, inertia, g_abs)
+    return n if math.isinf(mu) else mu * n - abs(ft)
+
+
+_cone_crossing = make_crossing(_cone_value)
+
+
+@njit
+def _safe_step(f, d, bound):
+    # The first zero of f + d h - bound h^2 / 2 (a lower bound of f, f > 0) in h > 0.
+    den = math.sqrt(d * d + 2.0 * bound * f) - d
+    return 2.0 * f / den if den > 0.0 else math.inf
+
+
+@njit
+def first_cone_exit(theta0, sd, length, energy_k, lp, inertia, g_abs, mu, floor, tol):
+    """
+    Return the first arc u in [0, length] where a roll leaves the cone |Ft| <= mu N, else -1.
+
+    The roll about a pinned vertex without body force runs from alpha = theta0 in the sense sd
+    (alpha = theta0 + sd u) along one rate's sign (no turning point inside); N < 0 is outside
+    the cone for every mu, and mu = inf asks for N < 0 only. Steps are safe: mu N -+ Ft with
+    their derivatives and the bounds on their second derivatives (:func:`roll_cone_forces`)
+    bound each margin from below by a parabola, which stays positive for the step. Steps are at
+    least ``floor`` (an excursion narrower than that may go unseen); a sign change is refined
+    by Illinois regula falsi to ``tol`` (returned: the bracket's right end).
+    """
+    k = abs(lp * energy_k)
+    b3 = abs(3.0 * g_abs * lp * lp / inertia)
+    finite = not math.isinf(mu)
+    bound_n = 2.0 * b3 + k
+    bound = mu * bound_n + 4.0 * b3 + k if finite else bound_n
+    args = (theta0, sd, energy_k, lp, inertia, g_abs, mu)
+    a = 0.0
+    fa = 0.0
+    b = 0.0
+    while True:
+        n, ft, dn, dft = roll_cone_forces(theta0 + sd * b, energy_k, lp, inertia, g_abs)
+        fb = mu * n - abs(ft) if finite else n
+        if fb <= 0.0:
+            if b == 0.0:
+                return 0.0
+            return _cone_crossing(a, b, fa, fb, tol, 200, args)
+        if b >= length:
+            return -1.0
+        a = b
+        fa = fb
+        if finite:
+            h = min(_safe_step(mu * n - ft, sd * (mu * dn - dft), bound),
+                    _safe_step(mu * n + ft, sd * (mu * dn + dft), bound))
+        else:
+            h = _safe_step(n, sd * dn, bound)
+        b = min(length, a + max(h, floor))
 
 
 @njit

@@ -60,8 +60,11 @@ Phases (per unit mass, frame F, heights over the arm surface):
   be driven into the arm, the edge lands flat instead), the normal force turns negative
   (liftoff into flight), the friction force leaves the cone (stick -> slip), the slip velocity
   reaches zero (slip -> stick test); located by regula falsi on the quantity that crossed zero
-  (:func:`build`'s ``first_contact_event``). With ``roll_method`` 'energy' a sticking roll is
-  in closed form, its liftoff and slip found in the roll angle (``closed_roll``).
+  along the step's quintic Hermite interpolant (positions, velocities and accelerations at
+  both ends; :func:`build`'s ``first_contact_event``). With ``roll_method`` 'energy' a
+  sticking roll is in closed form, its liftoff and slip found in the roll angle
+  (``closed_roll``; without a body force by safe steps under the forces' closed forms,
+  catch.first_cone_exit).
 * FLAT on edge j: two-point contact, sliding with Coulomb friction until it stops; a vertex whose
   share of the normal force turns negative starts a rotation about the other one; at rest on an
   unstable edge the part tips over catch.tip_pivot.
@@ -76,8 +79,8 @@ import math
 from .accuracy import FLIGHT_PICARD, FLIGHT_RK8, ROLL_ENERGY
 from .ballistic import vertex_first_contact
 from .bracket import make_crossing, make_first_event
-from .catch import (cone_margin, flat_landing_edge, record, roll_force_rates, stays_on_edge,
-                    sticking_impact, tip_pivot)
+from .catch import (cone_margin, first_cone_exit, flat_landing_edge, record, roll_force_rates,
+                    stays_on_edge, sticking_impact, tip_pivot)
 from .jit import njit
 from .picard import make_flight
 from .rk8 import make_step
@@ -146,8 +149,12 @@ def sticking_law(rx, ry, vx, vy, om, rho2, prm):
 @njit
 def lowest_approaching(x, y, phi, vx, vy, om, bu, bv, skip):
     """(index, height) of a vertex at or below the arm and moving down, else (-1, lowest)."""
-    c = math.cos(phi)
-    s = math.sin(phi)
+    return lowest_approaching_cs(y, math.cos(phi), math.sin(phi), vy, om, bu, bv, skip)
+
+
+@njit
+def lowest_approaching_cs(y, c, s, vy, om, bu, bv, skip):
+    """lowest_approaching with the cosine and sine of phi given (they are most of its cost)."""
     best = -1
     best_f = math.inf
     low = math.inf
@@ -697,14 +704,22 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         """
         Accelerations (axp, alpha) and contact force (Ft, N) with vertex p on the arm.
 
+        As :func:`contact_accel_cs`, which takes the cosine and sine of phi.
+        """
+        return contact_accel_cs(phi, math.cos(phi), math.sin(phi), vxp, om, sliding, sigma, bu_p,
+                                bv_p, g, rho2, mu, edge, prm)
+
+    @njit(cache=False)
+    def contact_accel_cs(phi, c, s, vxp, om, sliding, sigma, bu_p, bv_p, g, rho2, mu, edge, prm):
+        """
+        Accelerations (axp, alpha) and contact force (Ft, N) with vertex p on the arm.
+
         sliding = False: p sticks (axp = 0); True: p slides with friction -mu N sigma. Ft is
         the arm's friction (the contact load's tangential force comes on top). The contact
         load (ft0 + n ft1 at the contact, tq0 + n tq1 about the CM) enters the equations
         exactly: they stay linear in N. The status flag is False when no consistent normal
         force exists (Painleve).
         """
-        c = math.cos(phi)
-        s = math.sin(phi)
         cx = -(c * bu_p - s * bv_p)    # CM - P
         cy = -(s * bu_p + c * bv_p)
         vcx = vxp - om * cy
@@ -742,9 +757,9 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         return 0.0, 0.0, 0.0, 0.0, False
 
     @njit(cache=False)
-    def contact_step(xp, phi, vxp, om, dt, sliding, sigma, bu_p, bv_p, g, rho2, mu, edge, prm):
-        a1, b1, _, _, _ = contact_accel(xp, phi, vxp, om, sliding, sigma, bu_p, bv_p, g, rho2,
-                                        mu, edge, prm)
+    def contact_step(xp, phi, vxp, om, dt, a1, b1, sliding, sigma, bu_p, bv_p, g, rho2, mu, edge,
+                     prm):
+        """One RK4 step of the contact phase from the accelerations (a1, b1) at its start."""
         h2 = 0.5 * dt
         a2, b2, _, _, _ = contact_accel(xp + h2 * vxp, phi + h2 * om, vxp + h2 * a1,
                                         om + h2 * b1, sliding, sigma, bu_p, bv_p, g, rho2, mu,
@@ -765,23 +780,30 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
 
     @njit(cache=False)
     def contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm):
-        """Return the event at a contact state (NO_EVENT, LANDING, ...) and the landing vertex."""
-        x, y, vx, vy = contact_to_cm(xp, phi, vxp, om, bu[p], bv[p])
-        k, _ = lowest_approaching(x, y, phi, vx, vy, om, bu, bv, p)
+        """
+        Return the event at a contact state (NO_EVENT, LANDING, ...), the landing vertex.
+
+        And the accelerations (axp, alpha) there: the next step's first stage.
+        """
+        c = math.cos(phi)
+        s = math.sin(phi)
+        cx = -(c * bu[p] - s * bv[p])    # CM - P
+        cy = -(s * bu[p] + c * bv[p])
+        axp, alpha, ft, n, ok = contact_accel_cs(phi, c, s, vxp, om, sliding, sigma, bu[p],
+                                                 bv[p], g, rho2, law.mu, edge, prm)
+        k, _ = lowest_approaching_cs(cy, c, s, om * cx, om, bu, bv, p)
         if k >= 0:
-            return LANDING, k
-        _, _, ft, n, ok = contact_accel(xp, phi, vxp, om, sliding, sigma, bu[p], bv[p], g, rho2,
-                                        law.mu, edge, prm)
+            return LANDING, k, axp, alpha
         if not ok:
-            return PAINLEVE, -1
+            return PAINLEVE, -1, axp, alpha
         if n < 0.0 and law.unilateral:
-            return LIFTOFF, -1
+            return LIFTOFF, -1, axp, alpha
         if sliding:
             if vxp * sigma < 0.0:
-                return SLIP_REVERSAL, -1
+                return SLIP_REVERSAL, -1, axp, alpha
         elif law.unilateral and abs(ft) > law.mu * n:
-            return STICK_TO_SLIP, -1
-        return NO_EVENT, -1
+            return STICK_TO_SLIP, -1, axp, alpha
+        return NO_EVENT, -1, axp, alpha
 
     @njit(cache=False)
     def contact_mode(vxp, xp, phi, om, p, bu, bv, g, rho2, law, edge, prm):
@@ -1064,13 +1086,22 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         return resolve_impact(st, env, k, -1, -1, xk, rx, ry, e_before, EV_FLIGHT_IMPACT)
 
     @njit(cache=False, inline=True)
+    def contact_at(tau, args):
+        """Return the contact state (xp, phi, vxp, om) at tau of the step (its interpolants)."""
+        cx, cp, h = args[0], args[1], args[2]
+        s = tau / h
+        xm, vm = _quintic(cx, s)
+        pm, omm = _quintic(cp, s)
+        return xm, pm, vm / h, omm / h
+
+    @njit(cache=False, inline=True)
     def contact_event_at(tau, args):
-        """Return the event a contact step of tau ends in, and the landing vertex."""
-        xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm = args
-        xm, pm, vm, omm = contact_step(xp, phi, vxp, om, tau, sliding, sigma, bu[p], bv[p], g,
-                                       rho2, law.mu, edge, prm)
-        return contact_trigger(xm, pm, vm, omm, sliding, sigma, p, bu, bv, g, rho2, law, edge,
-                               prm)
+        """Return the event at tau of a contact step, and the landing vertex."""
+        _, _, _, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm = args
+        xm, pm, vm, omm = contact_at(tau, args)
+        code, kk, _, _ = contact_trigger(xm, pm, vm, omm, sliding, sigma, p, bu, bv, g, rho2,
+                                         law, edge, prm)
+        return code, kk
 
     event_in_contact_step = make_first_event(contact_event_at)
 
@@ -1079,19 +1110,17 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         """
         Return the continuous quantity whose sign change makes event ``code`` (kk: its vertex).
 
-        After a contact step of tau: the slip velocity along sigma (SLIP_REVERSAL), vertex kk's
+        At tau of a contact step: the slip velocity along sigma (SLIP_REVERSAL), vertex kk's
         height (LANDING; over tau + ``lead`` where lead >= 0: a vertex that starts rising),
         n (LIFTOFF), mu n - |ft| (STICK_TO_SLIP); -1 where no normal force is consistent.
         """
-        (xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm, code, kk,
-         lead) = args
-        xm, pm, vm, omm = contact_step(xp, phi, vxp, om, tau, sliding, sigma, bu[p], bv[p], g,
-                                       rho2, law.mu, edge, prm)
+        (cx, cp, h, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm, code, kk, lead) = args
+        xm, pm, vm, omm = contact_at(tau, args)
         if code == SLIP_REVERSAL:
             return vm * sigma
         if code == LANDING:
-            _, y, _, vy = contact_to_cm(xm, pm, vm, omm, bu[p], bv[p])
-            height, _ = vertex_normal(y, pm, vy, omm, bu[kk], bv[kk])
+            # vertex kk's height over the arm, pivot p on it: (R(pm) (b_kk - b_p))_y
+            height = (math.sin(pm) * (bu[kk] - bu[p]) + math.cos(pm) * (bv[kk] - bv[p]))
             return height / (tau + lead) if lead >= 0.0 else height
         _, _, ft, n, ok = contact_accel(xm, pm, vm, omm, sliding, sigma, bu[p], bv[p], g, rho2,
                                         law.mu, edge, prm)
@@ -1106,24 +1135,24 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
     @njit(cache=False, inline=True)
     def contact_events_at(tau, args):
         """
-        Return how many event conditions hold after a contact step of tau.
+        Return how many event conditions hold at tau of a contact step.
 
         Each landing vertex, liftoff, slip reversal and stick-to-slip count one each; no
         consistent normal force counts two (it makes any other event doubtful).
         """
-        xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm = args
-        xm, pm, vm, omm = contact_step(xp, phi, vxp, om, tau, sliding, sigma, bu[p], bv[p], g,
-                                       rho2, law.mu, edge, prm)
-        _, y, _, vy = contact_to_cm(xm, pm, vm, omm, bu[p], bv[p])
+        _, _, _, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm = args
+        xm, pm, vm, omm = contact_at(tau, args)
         c = math.cos(pm)
         s = math.sin(pm)
+        y = -(s * bu[p] + c * bv[p])
+        vy = -omm * (c * bu[p] - s * bv[p])
         count = 0
         for k in range(bu.shape[0]):
             if (k != p and y + s * bu[k] + c * bv[k] <= 0.0
                     and vy + omm * (c * bu[k] - s * bv[k]) < 0.0):
                 count += 1
-        _, _, ft, n, ok = contact_accel(xm, pm, vm, omm, sliding, sigma, bu[p], bv[p], g, rho2,
-                                        law.mu, edge, prm)
+        _, _, ft, n, ok = contact_accel_cs(pm, c, s, vm, omm, sliding, sigma, bu[p], bv[p], g,
+                                           rho2, law.mu, edge, prm)
         if not ok:
             return count + 2
         if n < 0.0 and law.unilateral:
@@ -1140,15 +1169,14 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         """
         Return (tau, found): where event ``code``'s quantity crosses zero within a step of dt.
 
-        Illinois regula falsi on the quantity (a few sub-steps where bisection takes
-        log2(dt / tol) of them). found only where that event, and no other, holds at tau:
-        another would have begun earlier.
+        Illinois regula falsi on the quantity along the step's interpolants. found only where
+        that event, and no other, holds at tau: another would have begun earlier.
         """
-        xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm = args
-        vargs = (xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm, code, kk,
-                 -1.0)
+        cx, cp, h, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm = args
+        vargs = (cx, cp, h, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm, code, kk, -1.0)
         f0 = contact_event_value(0.0, vargs)
         if code == LANDING:
+            xp, phi, vxp, om = contact_at(0.0, args)
             _, y0, _, vy0 = contact_to_cm(xp, phi, vxp, om, bu[p], bv[p])
             _, un0 = vertex_normal(y0, phi, vy0, om, bu[kk], bv[kk])
             if un0 > 0.0:
@@ -1156,8 +1184,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 # starts at 0, which regula falsi approaches in tiny steps): its height over
                 # tau + h0 / un0 has the same zero and starts at its normal speed.
                 f0 = max(f0, 0.0)
-                vargs = (xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm,
-                         code, kk, f0 / un0)
+                vargs = (cx, cp, h, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm, code, kk,
+                         f0 / un0)
                 f0 = un0
         f1 = contact_event_value(dt, vargs)
         if not (f0 > 0.0 and f1 <= 0.0):
@@ -1183,8 +1211,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
             tau, found = event_crossing(dt, tol, code, kk, args)
             if found:
                 return tau, code, kk
-            sliding = args[4]
-            if sliding and code != SLIP_REVERSAL:
+            if args[3] and code != SLIP_REVERSAL:      # sliding
                 tau, found = event_crossing(dt, tol, SLIP_REVERSAL, -1, args)
                 if found:
                     return tau, SLIP_REVERSAL, -1
@@ -1279,7 +1306,15 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
             psi_t = roll_turn(0.5 * om * om, alpha, sd, psi_end, g, lp, inertia, a0, a2)
             vxp = 0.0
             law = env.law
-            if law.unilateral:
+            psi_e = -1.0
+            if law.unilateral and free_flight:
+                # without a body force the forces are trigonometric in the angle: safe steps
+                energy_k = om * om - 2.0 * g * lp * math.sin(alpha) / inertia
+                psi_e = first_cone_exit(alpha, sd, psi_t if psi_t >= 0.0 else psi_end, energy_k,
+                                        lp, inertia, -g, law.mu,
+                                        ROLL_EVENT_RATE * env.knobs.roll_step,
+                                        env.knobs.contact_root_tol)
+            elif law.unilateral:
                 rate_n, rate_ft = roll_force_rates(g, om, lp, inertia)
                 # the bounds doubled for the weak body forces
                 args = (st.xp, phi, 0.5 * om * om, alpha, sd, lp, inertia, a0, a2, bu[p], bv[p],
@@ -1287,13 +1322,13 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 psi_e = roll_hold_lost(psi_t if psi_t >= 0.0 else psi_end,
                                        ROLL_EVENT_RATE * env.knobs.roll_step,
                                        env.knobs.contact_root_tol, args)
-                if psi_e >= 0.0:
-                    u_e, _ = roll_u(psi_e, 0.5 * om * om, alpha, sd, g, lp, inertia, a0, a2)
-                    phi += sd * psi_e
-                    om = sd * math.sqrt(max(2.0 * u_e, 0.0))
-                    _, _, _, n, ok = contact_accel(st.xp, phi, 0.0, om, False, 0.0, bu[p], bv[p],
-                                                   g, part.rho2, law.mu, env.edge, env.prm)
-                    code = PAINLEVE if not ok else (LIFTOFF if n <= 0.0 else STICK_TO_SLIP)
+            if psi_e >= 0.0:
+                u_e, _ = roll_u(psi_e, 0.5 * om * om, alpha, sd, g, lp, inertia, a0, a2)
+                phi += sd * psi_e
+                om = sd * math.sqrt(max(2.0 * u_e, 0.0))
+                _, _, _, n, ok = contact_accel(st.xp, phi, 0.0, om, False, 0.0, bu[p], bv[p], g,
+                                               part.rho2, law.mu, env.edge, env.prm)
+                code = PAINLEVE if not ok else (LIFTOFF if n <= 0.0 else STICK_TO_SLIP)
             if code != NO_EVENT:
                 pass        # stopped where the unilateral pivot lets go
             elif psi_t >= 0.0:
@@ -1342,36 +1377,43 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         x_lo, x_hi = st.x_lo, st.x_hi
         status = OK
         clear = False       # no event at the current state (the last step's end was checked)
+        ax, al = 0.0, 0.0   # the accelerations at the current state, once checked
         while True:
             if not clear:
-                code, kk = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2,
-                                           law, edge, prm)
+                code, kk, ax, al = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g,
+                                                   rho2, law, edge, prm)
                 if code != NO_EVENT:
                     break
-            xp1, p1, v1, o1 = contact_step(xp, phi, vxp, om, rdt, sliding, sigma, bu[p], bv[p],
-                                           g, rho2, law.mu, edge, prm)
+            xp1, p1, v1, o1 = contact_step(xp, phi, vxp, om, rdt, ax, al, sliding, sigma, bu[p],
+                                           bv[p], g, rho2, law.mu, edge, prm)
             if not (math.isfinite(p1) and math.isfinite(o1)):
                 status = ERR_NONFINITE
                 break
-            code, kk = contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, g, rho2, law,
-                                       edge, prm)
+            code, kk, ax1, al1 = contact_trigger(xp1, p1, v1, o1, sliding, sigma, p, bu, bv, g,
+                                                 rho2, law, edge, prm)
             if code != NO_EVENT:
-                hi, code, kk = first_contact_event(
-                    rdt, env.knobs.contact_root_tol, code, kk,
-                    (xp, phi, vxp, om, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm))
-                xp, phi, vxp, om = contact_step(xp, phi, vxp, om, hi, sliding, sigma, bu[p],
-                                                bv[p], g, rho2, law.mu, edge, prm)
+                # the step's dense output: quintic Hermite interpolants of xp and phi (their
+                # error, O(dt^6), is below the step's own), on which its events are located
+                dargs = (hermite5(xp, vxp, ax, xp1, v1, ax1, rdt),
+                         hermite5(phi, om, al, p1, o1, al1, rdt), rdt, sliding, sigma, p, bu, bv,
+                         g, rho2, law, edge, prm)
+                hi, code, kk = first_contact_event(rdt, env.knobs.contact_root_tol, code, kk,
+                                                   dargs)
+                xp, phi, vxp, om = contact_at(hi, dargs)
+                if not sliding:
+                    vxp = 0.0
                 t += hi
                 x_lo = min(x_lo, xp)
                 x_hi = max(x_hi, xp)
-                code2, kk2 = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv, g,
-                                             rho2, law, edge, prm)
+                code2, kk2, _, _ = contact_trigger(xp, phi, vxp, om, sliding, sigma, p, bu, bv,
+                                                   g, rho2, law, edge, prm)
                 if code2 != NO_EVENT:
                     code = code2
                     kk = kk2
                 break
             turned = om * o1 <= 0.0
             xp, phi, vxp, om = xp1, p1, v1, o1
+            ax, al = ax1, al1
             t += rdt
             x_lo = min(x_lo, xp)
             x_hi = max(x_hi, xp)
@@ -1545,7 +1587,10 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 st = touch_down(st, env, k)
             elif st.mode == MODE_CONTACT:
                 if roll_energy and not st.sliding and st.fit_p != st.p:
-                    fit_ok, a0, a2 = roll_torque_fit(st.phi, bu[st.p], bv[st.p], edge, prm)
+                    if free_flight:     # no body force: no torque to fit
+                        fit_ok, a0, a2 = True, 0.0, 0.0
+                    else:
+                        fit_ok, a0, a2 = roll_torque_fit(st.phi, bu[st.p], bv[st.p], edge, prm)
                     st = with_fit(st, st.p, fit_ok, a0, a2)
                 if roll_energy and not st.sliding and st.fit_ok:
                     code, kk, st = closed_roll(st, env)

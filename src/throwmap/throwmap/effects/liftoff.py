@@ -26,8 +26,9 @@ exactly where N = 0), so the part cannot simply fly off: it first slips, and lif
 normal force of the slipping contact turns negative (measured: docs/physics.md).
 
 Model: the closed-form catch (throwmap.catch) is run; the first roll that leaves the friction
-cone |Ft| <= mu N (N < 0 leaves it for every mu) is cut where it does (its path sampled, then
-bisection to 1e-14 rad), and from that rolling state the event simulator (throwmap.event_sim,
+cone |Ft| <= mu N (N < 0 leaves it for every mu) is cut where it does (safe steps along its
+path under the forces' closed forms, catch.first_cone_exit, the exit refined to 1e-14 rad), and
+from that rolling state the event simulator (throwmap.event_sim,
 no body force, the plastic impact with friction mu: Routh at e = 0, a unilateral Coulomb
 contact with friction mu) slips, lifts off, flies, lands and settles. The catch's impacts must
 use the same mu: where the e = 0 impact with friction mu is not the sticking one (the flight
@@ -54,8 +55,8 @@ import numpy as np
 from ._common import check_keys, number, routh_stronge_impact
 from .. import event_sim
 from ..ballistic import first_contact, state_at
-from ..catch import (catch_at_contact, cone_margin, flat_landing_edge, pivot_normal, record,
-                     roll_force_rates, roll_pieces, sticking_impact)
+from ..catch import (catch_at_contact, first_cone_exit, flat_landing_edge, record, roll_pieces,
+                     sticking_impact)
 from ..jit import njit
 from ..status import (ERR_SETTLE_CAP, EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_LANDING, EV_LIFTOFF,
                       OK, Outcome, REC_COLS)
@@ -65,8 +66,8 @@ SCHEMA = {'liftoff': ('mu',)}
 KNOBS = {}
 # The sticking limit: slip starts where |Ft| = MU_DEFAULT N, a 1e-3 fraction of N from its zero.
 MU_DEFAULT = 1000.0
-# A roll's path is looked at every 1 / CONE_SAMPLES of it (farther where the forces' margins
-# prove it in the friction cone) for where it leaves the cone (then bisection).
+# A roll's path is searched for where it leaves the friction cone in steps of at least
+# 1 / CONE_SAMPLES of it (farther where the forces' closed forms prove it inside the cone).
 CONE_SAMPLES = 256
 # mu: the arm's friction while the part rolls on it; scratch: the closed-form catch writes its
 # events here to find the first roll that leaves the cone (f and f_batch pass no record
@@ -149,14 +150,6 @@ def landing_sticks(i, rec, part, mu):
 
 
 @njit
-def roll_forces(alpha, energy_k, lp, inertia, g_abs):
-    """Return the arm's normal and tangential force per unit mass on the pivot (N, Ft)."""
-    s = math.sin(alpha)
-    ft = lp * math.cos(alpha) * (3.0 * g_abs * lp * s / inertia - energy_k)
-    return pivot_normal(s, energy_k, lp, inertia, g_abs), ft
-
-
-@njit
 def _path(u, alpha, a_turn, target):
     # The angle at arc length u along a roll from alpha (through a_turn) to target.
     first = abs(a_turn - alpha)
@@ -170,10 +163,10 @@ def roll_cone_exit(alpha, omega, target, lp, rho2, g_abs, mu):
     """
     Return (alpha, omega) where a roll first leaves the friction cone |Ft| <= mu N, else nan.
 
-    N < 0 is outside it for every mu. The path (roll_pieces: through the turning point of a
-    roll that turns back) is sampled at 1 / CONE_SAMPLES of its length, or farther where the
-    forces' margins prove the cone holds (catch.cone_margin); the first point outside is refined by
-    bisection to 1e-14 rad.
+    N < 0 is outside it for every mu. Along the path (roll_pieces: through the turning point
+    of a roll that turns back) piece by piece with catch.first_cone_exit: safe steps under the
+    forces' closed forms, at least 1 / CONE_SAMPLES of the path long, the exit refined to
+    1e-14 rad.
     """
     inertia = rho2 + lp * lp
     energy_k, peak, two, sg1, sg2 = roll_pieces(alpha, omega, target, lp, inertia, g_abs)
@@ -182,38 +175,22 @@ def roll_cone_exit(alpha, omega, target, lp, rho2, g_abs, mu):
         a_turn = math.asin(peak)
         if alpha > 0.5 * math.pi:
             a_turn = math.pi - a_turn
-    length = abs(a_turn - alpha) + abs(target - a_turn)
-    rate_n, rate_ft = roll_force_rates(g_abs, omega, lp, inertia)
-    lo = 0.0
-    hi = -1.0
-    u = 0.0
-    while True:
-        a, _ = _path(u, alpha, a_turn, target)
-        n, ft = roll_forces(a, energy_k, lp, inertia, g_abs)
-        room = cone_margin(n, ft, mu, rate_n, rate_ft)
-        if room <= 0.0:
-            hi = u
-            break
-        lo = u
-        if u >= length:
-            break
-        u = min(length, u + max(room, length / CONE_SAMPLES))
-    if hi < 0.0:
-        return math.nan, math.nan
-    if hi > 0.0:
-        for _ in range(200):
-            if hi - lo <= 1e-14:
-                break
-            mid = 0.5 * (lo + hi)
-            a, _ = _path(mid, alpha, a_turn, target)
-            n, ft = roll_forces(a, energy_k, lp, inertia, g_abs)
-            if n < 0.0 or abs(ft) > mu * n:
-                hi = mid
-            else:
-                lo = mid
-    a, first = _path(hi, alpha, a_turn, target)
+    first = abs(a_turn - alpha)
+    floor = (first + abs(target - a_turn)) / CONE_SAMPLES
+    hit = -1.0
+    if first > 0.0:
+        hit = first_cone_exit(alpha, math.copysign(1.0, a_turn - alpha), first, energy_k, lp,
+                              inertia, g_abs, mu, floor, 1e-14)
+    if hit < 0.0:
+        hit = first_cone_exit(a_turn, math.copysign(1.0, target - a_turn),
+                              abs(target - a_turn), energy_k, lp, inertia, g_abs, mu, floor,
+                              1e-14)
+        if hit < 0.0:
+            return math.nan, math.nan
+        hit += first
+    a, on_first = _path(hit, alpha, a_turn, target)
     w2 = max(energy_k - 2.0 * g_abs * lp * math.sin(a) / inertia, 0.0)
-    return a, (sg1 if first else sg2) * math.sqrt(w2)
+    return a, (sg1 if on_first else sg2) * math.sqrt(w2)
 
 
 @njit
@@ -224,8 +201,9 @@ def rocking_sticks(i, rec, part, g_abs, mu):
     The closed-form catch ends a throw whose last landing keeps turning on a stable edge by
     the exact settling rule (it rocks down to rest where it landed). Each rock rolls about the
     landed vertex q up to a turning point and back, then lands on the other vertex p of the
-    edge: the friction the roll needs is checked along its path, the landing's impact like
-    the catch's (its impulse ratio does not depend on the rate, so one check covers them all).
+    edge: the friction the roll needs is checked along its path (catch.first_cone_exit), the
+    landing's impact like the catch's (its impulse ratio does not depend on the rate, so one
+    check covers them all).
     """
     q = int(rec[i, 1])
     j = int(rec[i, 2])
@@ -239,18 +217,10 @@ def rocking_sticks(i, rec, part, g_abs, mu):
     a_turn = math.asin(peak)
     if a0 > 0.5 * math.pi:
         a_turn = math.pi - a_turn
-    rate_n, rate_ft = roll_force_rates(g_abs, om, lq, inertia)
     length = abs(a_turn - a0)
-    u = 0.0
-    while True:
-        a = a0 + math.copysign(u, a_turn - a0)
-        n, ft = roll_forces(a, energy_k, lq, inertia, g_abs)
-        room = cone_margin(n, ft, mu, rate_n, rate_ft)
-        if room <= 0.0:
-            return False
-        if u >= length:
-            break
-        u = min(length, u + max(room, length / CONE_SAMPLES))
+    if first_cone_exit(a0, math.copysign(1.0, a_turn - a0), length, energy_k, lq, inertia,
+                       g_abs, mu, length / CONE_SAMPLES, 1e-14) >= 0.0:
+        return False
     # back down, rolling about q at -om, onto p (edge j flat)
     return sticks(part.U[j][p], part.V[j][p], -om * part.V[j][q], om * part.U[j][q], -om,
                   part.rho2, mu)
