@@ -204,23 +204,33 @@ def ok_states(model, count, seed):
     return e, np.minimum(r, 0.25)
 
 
-def test_the_contact_forces_of_a_roll_change_no_faster_than_their_bounds():
-    # Newton for the pendulum about the pivot, sampled in the roll angle: the closed-form
-    # roll's liftoff and slip search steps by the margins over these bounds.
-    g = -9.66
-    rng = np.random.default_rng(11)
-    for _ in range(300):
+def newton_rolls(seed, g=-9.66, count=300):
+    """
+    Yield random rolls about a pivot: (lp, inertia, om0, K, angles, N, Ft), sampled.
+
+    Newton for the pendulum about the pivot, sampled in the roll angle over 1.5 rad each side
+    of the start (where omega^2 >= 0); K the energy constant, N and Ft per unit mass.
+    """
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
         lp, rho2 = rng.uniform(0.005, 0.05), rng.uniform(1e-5, 4e-4)
         inertia = rho2 + lp * lp
         a0, om0 = rng.uniform(0.1, 3.0), rng.uniform(-30, 30)
-        energy = 0.5 * inertia * om0 ** 2 - g * lp * math.sin(a0)
+        energy_k = om0 ** 2 - 2.0 * g * lp * math.sin(a0) / inertia
         a = a0 + np.linspace(-1.5, 1.5, 30001) * math.copysign(1.0, om0)
-        om2 = 2.0 * (energy + g * lp * np.sin(a)) / inertia
+        om2 = energy_k + 2.0 * g * lp * np.sin(a) / inertia
         a, om2 = a[om2 >= 0], om2[om2 >= 0]
         c, s = np.cos(a), np.sin(a)
         alpha = g * lp * c / inertia               # angular acceleration about the pivot
         n = alpha * lp * c - om2 * lp * s - g        # normal force per unit mass
         ft = -alpha * lp * s - om2 * lp * c          # tangential force per unit mass
+        yield lp, inertia, om0, energy_k, a, n, ft
+
+
+def test_the_contact_forces_of_a_roll_change_no_faster_than_their_bounds():
+    # The closed-form roll's liftoff and slip search steps by the margins over these bounds.
+    g = -9.66
+    for lp, inertia, om0, _, a, n, ft in newton_rolls(11, g):
         rate_n, rate_ft = roll_force_rates(g, om0, lp, inertia)
         step = np.diff(a)
         assert np.all(np.abs(np.diff(n) / step) <= rate_n * (1 + 1e-6))
@@ -231,19 +241,7 @@ def test_the_free_rolls_forces_their_slopes_and_curvature_bounds_are_newtons():
     # Without a body force the search steps by a parabola under each of mu N -+ Ft: their
     # values and slopes in closed form, their second derivatives bounded.
     g = -9.66
-    rng = np.random.default_rng(12)
-    for _ in range(300):
-        lp, rho2 = rng.uniform(0.005, 0.05), rng.uniform(1e-5, 4e-4)
-        inertia = rho2 + lp * lp
-        a0, om0 = rng.uniform(0.1, 3.0), rng.uniform(-30, 30)
-        energy_k = om0 ** 2 - 2.0 * g * lp * math.sin(a0) / inertia
-        a = a0 + np.linspace(-1.5, 1.5, 30001) * math.copysign(1.0, om0)
-        om2 = energy_k + 2.0 * g * lp * np.sin(a) / inertia
-        a, om2 = a[om2 >= 0], om2[om2 >= 0]
-        c, s = np.cos(a), np.sin(a)
-        alpha = g * lp * c / inertia
-        n = alpha * lp * c - om2 * lp * s - g
-        ft = -alpha * lp * s - om2 * lp * c
+    for lp, inertia, _, energy_k, a, n, ft in newton_rolls(12, g):
         got = np.array([roll_cone_forces(x, energy_k, lp, inertia, -g) for x in a])
         assert np.allclose(got[:, 0], n, rtol=0, atol=1e-12 * (1 + np.abs(n).max()))
         assert np.allclose(got[:, 1], ft, rtol=0, atol=1e-12 * (1 + np.abs(ft).max()))
