@@ -408,7 +408,8 @@ def first_cone_exit(theta0, sd, length, energy_k, lp, inertia, g_abs, mu, floor,
                     _safe_step(mu * n + ft, sd * (mu * dn + dft), bound))
         else:
             h = _safe_step(n, sd * dn, bound)
-        b = min(length, a + max(h, floor))
+        # (at least a few ulps: a floor below them, a tiny roll_step, must not stall the walk)
+        b = min(length, a + max(h, floor, 1e-15 * (1.0 + a)))
 
 
 @njit

@@ -1306,7 +1306,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
             return 0.0
         a = 0.0
         while a < psi_stop:
-            b = min(psi_stop, a + max(fa, dpsi_min))
+            b = min(psi_stop, a + max(fa, dpsi_min, 1e-15 * (1.0 + a)))   # (a few ulps at least)
             fb = roll_hold_margin(b, args)
             if fb <= 0.0:
                 return roll_hold_crossing(a, b, fa, fb, tol, 200, args)
