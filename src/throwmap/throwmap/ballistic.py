@@ -66,20 +66,10 @@ def flight_height(t, f0, vy, g, om, u0, v0):
 
 
 @njit
-def flight_height_rate(t, f0, vy, g, om, u0, v0):
-    """
-    Return F(t) and F'(t) from one sine and cosine (of half the turn).
-
-    1 - cos(wt) = 2 sin(wt/2)^2 keeps F exact for small turns; the trigonometric calls are
-    most of the contact finder's cost.
-    """
+def flight_height_rate(t, vy, g, om, u0, v0):
+    """Return F'(t)."""
     wt = om * t
-    sh = math.sin(0.5 * wt)
-    ch = math.cos(0.5 * wt)
-    sin_wt = 2.0 * sh * ch
-    vers = 2.0 * sh * sh
-    f = f0 + ((vy * t + u0 * sin_wt) + (0.5 * g * t * t - v0 * vers))
-    return f, vy + g * t + om * (u0 * (1.0 - vers) - v0 * sin_wt)
+    return vy + g * t + om * (u0 * math.cos(wt) - v0 * math.sin(wt))
 
 
 @njit
@@ -92,10 +82,10 @@ def vertex_contact(f0, vy, g, om, u0, v0, s, t_limit, tol_t, max_steps):
     m = abs(g) + om * om * s
     a = 0.0
     f = f0
-    fp = vy + om * u0
     for _ in range(max_steps):
         if a >= t_limit:
             return math.inf
+        fp = flight_height_rate(a, vy, g, om, u0, v0)
         # Shortest step: tol_t, or the spacing of doubles at a when that is coarser (a + tau
         # must move a, else the loop stalls until the cap; late in a long flight, or with a
         # tiny tol_t, the safe step can be smaller than the time resolution).
@@ -104,7 +94,7 @@ def vertex_contact(f0, vy, g, om, u0, v0, s, t_limit, tol_t, max_steps):
             if fp < 0.0:
                 return a
             a += t_min   # touching while not approaching: a graze, not an impact
-            f, fp = flight_height_rate(a, f0, vy, g, om, u0, v0)
+            f = flight_height(a, f0, vy, g, om, u0, v0)
             continue
         sq = math.sqrt(fp * fp + 2.0 * m * f)
         if fp >= 0.0:
@@ -116,7 +106,7 @@ def vertex_contact(f0, vy, g, om, u0, v0, s, t_limit, tol_t, max_steps):
                 return a + tau
             tau = t_min  # at a tangency the vertex is not approaching: step past it
         a += tau
-        f, fp = flight_height_rate(a, f0, vy, g, om, u0, v0)
+        f = flight_height(a, f0, vy, g, om, u0, v0)
     return -1.0
 
 
