@@ -347,9 +347,9 @@ def roll_cone_forces(theta, energy_k, lp, inertia, g_abs):
     c = math.cos(theta)
     b3 = 3.0 * g_abs * lp * lp / inertia
     k = lp * energy_k
-    n = g_abs * (1.0 - lp * lp / inertia) + b3 * s * s - k * s
     ft = c * (b3 * s - k)
-    return n, ft, c * (2.0 * b3 * s - k), b3 * (c * c - s * s) + k * s
+    return (pivot_normal(s, energy_k, lp, inertia, g_abs), ft, c * (2.0 * b3 * s - k),
+            b3 * (c * c - s * s) + k * s)
 
 
 @njit

@@ -1242,8 +1242,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         polynomial's remainder is below rounding; a move of more than 1e-6 of the step (coarse
         steps) is a second sub-step, and one of more than 1e-4 of it is not made.
         """
-        _, _, _, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm = dargs
-        dt = dargs[2]
+        _, _, dt, sliding, sigma, p, bu, bv, g, rho2, law, edge, prm = dargs
         xs, ps, vs, os_ = contact_step(xp, phi, vxp, om, hi, ax, al, sliding, sigma, bu[p],
                                        bv[p], g, rho2, law.mu, edge, prm)
         if code == PAINLEVE or code == NO_EVENT:
