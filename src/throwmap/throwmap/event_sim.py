@@ -1382,9 +1382,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 _, _, _, n, ok = contact_accel(st.xp, phi, 0.0, om, False, 0.0, bu[p], bv[p], g,
                                                part.rho2, law.mu, env.edge, env.prm)
                 code = PAINLEVE if not ok else (LIFTOFF if n <= 0.0 else STICK_TO_SLIP)
-            if code != NO_EVENT:
-                pass        # stopped where the unilateral pivot lets go
-            elif psi_t >= 0.0:
+            # an event found above: the roll stopped where the unilateral pivot lets go
+            if code == NO_EVENT and psi_t >= 0.0:
                 phi += sd * psi_t
                 om = 0.0
                 held, dphi = static_hold(phi, 0.0, True, env.size, bu[p], bv[p], g, env.edge,
@@ -1393,7 +1392,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                     phi += dphi
                     e_now = -g * contact_to_cm(st.xp, phi, 0.0, 0.0, bu[p], bv[p])[1]
                     nrec = _event(env.rec, nrec, EV_HELD, p, -1, st.xp, 0.0, 0.0, e_now, e_now)
-            else:
+            elif code == NO_EVENT:
                 u_end, _ = roll_u(psi_end, 0.5 * om * om, alpha, sd, g, lp, inertia, a0, a2)
                 phi += target - alpha
                 om = sd * math.sqrt(max(2.0 * u_end, 0.0))
