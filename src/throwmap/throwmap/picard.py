@@ -23,11 +23,14 @@ velocities are the start's plus the twice (once) integrated interpolant of the n
 accelerations, exact for the ballistic part. Each sweep evaluates the force along the current
 motion: a Picard iteration, the perturbation series about the ballistic flight term by term,
 from a predictor (the force at the piece's start and its rate at the previous piece's end). It
-contracts by about L h (L the force's Lipschitz constant in the velocities, h the piece);
-sweeps stop when the last one moved the piece's end by less than ``flight_tol`` (positions
-and velocities times h in m, phi times the part's size). That increment, times q / (1 - q)
-with q its ratio to the one before, is the series' remainder, reported (largest over the
-pieces) by ``fly``; a piece whose sweeps do not contract is quartered.
+contracts by about L h (L the force's Lipschitz constant in the velocities, h the piece). The
+last sweep's increment at the piece's end (positions and velocities times h in m, phi times
+the part's size), times q / (1 - q) with q its ratio to the increment before, is the series'
+remainder: sweeps stop when it is at most ``flight_tol``, and ``fly`` reports the largest over
+the pieces. On a piece's first sweep q is not measured yet: Q_SAFETY times the last piece's
+(the contraction changes slowly along a flight; the flight's first piece always takes two
+sweeps). Stopping on the increment itself would take one sweep more for an iterate already
+q times closer. A piece whose sweeps do not contract is quartered.
 
 Converged, a piece is Gauss collocation, of order 2 NODES at its end and NODES + 2 inside it
 (positions). The quadrature needs a smooth force: the plate's drag has a kink where the
@@ -62,8 +65,9 @@ KINK_MARGIN = 0.1   # a crossing of an edge's line this far (times the edge) pas
 MAX_SWEEPS = 12     # sweeps before a piece is quartered
 KINK_SKIP = 1e-3    # a kink this close (times the piece) after a piece's start is not split at
 KINK_REACH = 0.25   # how far about the predicted kink the first sweep's motion is searched
-KINK_TOL = 1e-8     # s, how exactly a kink is located (a piece's end off it by dt costs ~dt^3)
+KINK_TOL = 1e-5     # s, how exactly a kink is located (a piece's end off it by dt costs ~dt^3)
 EPS = 2.220446049250313e-16
+Q_SAFETY = 2.0      # a piece's first sweep: its contraction taken as this times the last piece's
 
 
 def tables(n=NODES):
@@ -355,7 +359,7 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES):
 
     @njit(cache=False)
     def piece(x, y, phi, vx, vy, om, h, a0x, a0y, a0o, dax, day, dao, g, rho2, bu, bv, size,
-              edge, prm, tol, root):
+              edge, prm, tol, root, q_prev):
         """
         Solve one piece from its start state, from the predictor a0 + da t of the accelerations.
 
@@ -390,7 +394,7 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES):
             cy = dense(y, vy, h, ay)
             cp = dense(phi, om, h, ao)
             if not (math.isfinite(inc)):
-                return False, h, cx, cy, cp, evals, inc
+                return False, h, cx, cy, cp, evals, inc, q_prev
             if it == 0 and kink >= 0:
                 # the predicted kink, located again on the first sweep's motion (near it; the
                 # motion's polynomials reach a little past the piece)
@@ -415,14 +419,15 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES):
                     h = hk
                     prev = math.inf
                     continue
-            if inc <= tol:
-                q = inc / prev if prev < math.inf and prev > 0.0 else 0.0
-                rem = inc * q / (1.0 - q) if q < 1.0 else inc
-                return True, h, cx, cy, cp, evals, max(rem, inc)
+            measured = prev < math.inf and prev > 0.0
+            q = inc / prev if measured else Q_SAFETY * q_prev
+            rem = inc * q / (1.0 - q) if q < 1.0 else (0.0 if inc == 0.0 else math.inf)
+            if rem <= tol:
+                return True, h, cx, cy, cp, evals, rem, q if measured else q_prev
             if it >= 3 and inc > 0.5 * prev:
-                return False, h, cx, cy, cp, evals, inc
+                return False, h, cx, cy, cp, evals, inc, q_prev
             prev = inc
-        return False, h, cx, cy, cp, evals, rem
+        return False, h, cx, cy, cp, evals, rem, q_prev
 
     @njit(cache=False)
     def fly(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge, prm, knobs,
@@ -439,13 +444,14 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES):
         evals = 1
         worst = 0.0
         h_try = H
+        q_prev = 1.0
         while True:
             steps += 1
             if steps > knobs.max_sim_steps:
                 return ERR_SIM_CAP, -1, x, y, phi, vx, vy, om, t, steps, evals, worst
-            ok, h, cx, cy, cp, ne, rem = piece(x, y, phi, vx, vy, om, h_try, a0x, a0y, a0o, dax,
-                                               day, dao, g, rho2, bu, bv, size, edge, prm, tol,
-                                               root)
+            ok, h, cx, cy, cp, ne, rem, q_prev = piece(
+                x, y, phi, vx, vy, om, h_try, a0x, a0y, a0o, dax, day, dao, g, rho2, bu, bv, size,
+                edge, prm, tol, root, q_prev)
             evals += ne
             if not ok:
                 if not math.isfinite(rem) and h_try <= 64.0 * root:
@@ -480,9 +486,10 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES):
             if hit < 0:
                 x, y, phi, vx, vy, om = x1, y1, p1, vx1, vy1, om1
                 t += h
-                a0x, a0y, a0o = rhs(vx, vy, om, phi, g, rho2, edge, prm)
-                evals += 1
-                # the predictor's slope: the piece's acceleration's at its end
+                # the predictor: the piece's acceleration and its slope at its end
+                a0x = acc_at_end(cx, h)
+                a0y = acc_at_end(cy, h)
+                a0o = acc_at_end(cp, h)
                 dax = jerk_at_end(cx, h)
                 day = jerk_at_end(cy, h)
                 dao = jerk_at_end(cp, h)
