@@ -29,12 +29,16 @@ Prints markdown tables and writes a Pareto plot (time per throw vs error). Asser
 Usage: python bench/accuracy_vs_time.py [--quick] [--out docs/accuracy_pareto.png]
        python bench/accuracy_vs_time.py --plate [--before REV] [--quick]
        python bench/accuracy_vs_time.py --contact [--before REV] [--quick]
+       python bench/accuracy_vs_time.py --overhead [--quick]
 --plate measures only backplate_friction's configurations (the experiment scene and the
 triangle with the plate), --contact only the contact effects' (the rectangle scene: bounces,
 unilateral pivots; the triangle at e 0.2, mu 0.8: bounces, pinned pivots; the liftoff scene),
 each time the best of 3 runs; --before REV measures the same with the code of git revision
 REV (git archive, in a child process) in the same run, on the same states against the same
 reference.
+--overhead measures what the plate's flight methods cost with a drag that costs nothing
+(mu_p 0, the same steps and kink searches) beside mu_p 0.1, and air_drag on the experiment
+scene's geometry (its in-plane gravity and 40 cm arm, the air instead of the plate).
 """
 
 import argparse
@@ -461,7 +465,10 @@ def family_comparison(family, quick, before):
             subprocess.run(f'git -C {ROOT} archive {before} src/throwmap | tar -x -C {old}',
                            shell=True, check=True)
             np.savez(old / 'data.npz', **data)
-            old_configs = [c for c in configs if c.get('flight_method') != 'picard']
+            # a revision before the series flight has no flight_method picard
+            has_picard = (old / 'src' / 'throwmap' / 'throwmap' / 'picard.py').exists()
+            old_configs = [c for c in configs
+                           if has_picard or c.get('flight_method') != 'picard']
             (old / 'configs.json').write_text(json.dumps(old_configs))
             env = dict(os.environ, PYTHONPATH=str(old / 'src' / 'throwmap'))
             subprocess.run([sys.executable, __file__, '--child', family, str(old),
@@ -497,6 +504,64 @@ def family_child(family, folder, quick, before):
     for r in rows:
         r['orbit'] = int(r['orbit'])
     (folder / 'rows.json').write_text(json.dumps(rows))
+
+
+# ----------------------------------------------------------------------------------- overhead
+AIR = {'drag_coefficient': 1.2, 'frontal_area_cm2': 4, 'mass_g': 20}
+AIR_REF_KNOBS = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'contact_root_tol': 1e-13,
+                 'roll_method': 'rk4', 'flight_method': 'rk4'}
+# the experiment scene with the air instead of the plate: its in-plane gravity (-9.81 sin 80
+# deg) and its arm
+AIR_ON_EXPERIMENT = {'effects': ['air_drag', 'finite_arm'], 'air': AIR, 'plate': None,
+                     'gravity': -9.81 * math.sin(math.radians(80.0))}
+
+
+def dr_stats(res, ref):
+    """Median and max |dR| (m) of the throws that end on the reference's edge, and their count."""
+    same = (res['status'] == 0) & (ref['status'] == 0) & (res['edge'] == ref['edge'])
+    d = np.abs(res['R'] - ref['R'])[same]
+    return float(np.median(d)), float(d.max()), int(same.sum())
+
+
+def overhead(quick):
+    """Print the plate's flight methods at mu_p 0.1 and 0, and air_drag on the experiment."""
+    n = 100 if quick else 250
+    tri = load('triangle').model
+    _, _, (seed, r_hi), _ = PLATE_SCENES['experiment']
+    states = random_states(tri, n, seed, r_hi)
+    _, base_us = timed_best(tri, *states, repeats=7)
+    print(f'base model (triangle, the same {n} states): {base_us:.2f} us per throw; time: best '
+          'of 7 runs')
+    ref = load('experiment', accuracy=PLATE_REF_KNOBS).model.f_batch(*states)
+    print('\n#### backplate_friction (experiment scene): each flight method with the drag '
+          '(mu_p 0.1) and with a drag that costs nothing (mu_p 0, the same steps, kink '
+          'searches and contact scans)\n')
+    print('| config | mu_p 0.1 (us) | x base | mu_p 0 (us) | x base | median / max abs dR at '
+          'mu_p 0.1 (m) |')
+    print('|---|---:|---:|---:|---:|---|')
+    configs = [{}, dict(PICARD_FLIGHT), dict(PICARD_FLIGHT, flight_step=0.04, flight_tol=1e-7),
+               dict(PICARD_FLIGHT, flight_step=0.02, flight_tol=1e-9), RK8_FLIGHT]
+    for cfg in configs:
+        res, us = timed_best(load('experiment', accuracy=cfg).model, *states, repeats=7)
+        _, us0 = timed_best(load('experiment', accuracy=cfg, plate={'mu': 0.0}).model, *states,
+                            repeats=7)
+        med, mx, _ = dr_stats(res, ref)
+        label = ', '.join(f'{k}={knob_text(v)}' for k, v in cfg.items()) or 'defaults'
+        print(f'| {label} | {us:.1f} | {us / base_us:.0f}x | {us0:.1f} | {us0 / base_us:.1f}x '
+              f'| {med:.2e} / {mx:.2e} |')
+    ref = load('experiment', accuracy=AIR_REF_KNOBS,
+               **copy.deepcopy(AIR_ON_EXPERIMENT)).model.f_batch(*states)
+    print('\n#### air_drag on the experiment scene (its gravity and arm, the air instead of the '
+          'plate) against the reference (rk4 steps 5e-5 s, roots 1e-13 s)\n')
+    print('| config | time/throw (us) | x base | median / max abs dR (m) | same edge |')
+    print('|---|---:|---:|---|---:|')
+    for cfg in ({}, {'integrator_step': 5e-3}, PICARD_FLIGHT):
+        res, us = timed_best(load('experiment', accuracy=cfg,
+                                  **copy.deepcopy(AIR_ON_EXPERIMENT)).model, *states, repeats=7)
+        med, mx, same = dr_stats(res, ref)
+        label = ', '.join(f'{k}={knob_text(v)}' for k, v in cfg.items()) or 'defaults'
+        print(f'| {label} | {us:.1f} | {us / base_us:.1f}x | {med:.2e} / {mx:.2e} | '
+              f'{same}/{n} |')
 
 
 # ----------------------------------------------------------------------------------- main
@@ -571,11 +636,17 @@ def main():
     parser.add_argument('--before', metavar='REV',
                         help='with --plate or --contact: also measure the code of git revision '
                         'REV')
+    parser.add_argument('--overhead', action='store_true',
+                        help="only the plate's flight methods with and without the drag, and "
+                        "air_drag on the experiment scene")
     parser.add_argument('--child', nargs=2, metavar=('FAMILY', 'FOLDER'),
                         help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
         family_child(args.child[0], args.child[1], args.quick, args.before)
+        return
+    if args.overhead:
+        overhead(args.quick)
         return
     for family in ('plate', 'contact'):
         if getattr(args, family):
@@ -620,7 +691,7 @@ def main():
     # --- effects: what each one costs at the default knobs (triangle; no effect = base), and
     # the same set with the effect at zero strength (its limit case)
     plate = {'inclination_deg': 80, 'g0': 9.81}
-    air = {'drag_coefficient': 1.2, 'frontal_area_cm2': 4, 'mass_g': 20}
+    air = AIR
     all_on = {'effects': ['backplate_friction', 'air_drag', 'impact_restitution',
                           'finite_carry', 'finite_arm', 'release_noise', 'sensor_noise'],
               'gravity': None, 'plate': dict(plate, mu=0.1), 'air': air,
@@ -756,8 +827,7 @@ def main():
     rows += fr_rows
 
     # --- air_drag knobs (triangle scene), before and after issue 24
-    air_ref_knobs = {'integrator_step': 5e-5, 'roll_step': 5e-5, 'contact_root_tol': 1e-13,
-                     'roll_method': 'rk4', 'flight_method': 'rk4'}
+    air_ref_knobs = AIR_REF_KNOBS
     air_scene = {'effects': ['air_drag'], 'air': air}
     ref_a = reference(load('triangle', accuracy=air_ref_knobs, **air_scene).model, states,
                       start, orbit_throws, band_throws)
