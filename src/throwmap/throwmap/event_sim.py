@@ -1382,7 +1382,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 _, _, _, n, ok = contact_accel(st.xp, phi, 0.0, om, False, 0.0, bu[p], bv[p], g,
                                                part.rho2, law.mu, env.edge, env.prm)
                 code = PAINLEVE if not ok else (LIFTOFF if n <= 0.0 else STICK_TO_SLIP)
-            # an event found above: the roll stopped where the unilateral pivot lets go
+            # unless the unilateral pivot let go above: the turning point, else the landing
             if code == NO_EVENT and psi_t >= 0.0:
                 phi += sd * psi_t
                 om = 0.0
