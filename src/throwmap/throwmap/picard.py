@@ -68,6 +68,7 @@ KINK_REACH = 0.25   # how far about the predicted kink the first sweep's motion 
 KINK_TOL = 1e-5     # s, how exactly a kink is located (a piece's end off it by dt costs ~dt^3)
 EPS = 2.220446049250313e-16
 Q_SAFETY = 2.0      # a piece's first sweep: its contraction taken as this times the last piece's
+Q_FLOOR = 0.01      # ... and at least this (a lucky small ratio must not pass a first sweep)
 
 
 def tables(n=NODES):
@@ -420,7 +421,7 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES):
                     prev = math.inf
                     continue
             measured = prev < math.inf and prev > 0.0
-            q = inc / prev if measured else Q_SAFETY * q_prev
+            q = inc / prev if measured else max(Q_SAFETY * q_prev, Q_FLOOR)
             rem = inc * q / (1.0 - q) if q < 1.0 else (0.0 if inc == 0.0 else math.inf)
             if rem <= tol:
                 return True, h, cx, cy, cp, evals, rem, q if measured else q_prev
