@@ -22,15 +22,15 @@ each piece the accelerations are sought at NODES Gauss-Legendre nodes: positions
 velocities are the start's plus the twice (once) integrated interpolant of the node
 accelerations, exact for the ballistic part. Each sweep evaluates the force along the current
 motion: a Picard iteration, the perturbation series about the ballistic flight term by term,
-from a predictor (the force at the piece's start and its rate at the previous piece's end). It
+from a predictor (the acceleration and its rate at the previous piece's end). It
 contracts by about L h (L the force's Lipschitz constant in the velocities, h the piece). The
 last sweep's increment at the piece's end (positions and velocities times h in m, phi times
 the part's size), times q / (1 - q) with q its ratio to the increment before, is the series'
 remainder: sweeps stop when it is at most ``flight_tol``, and ``fly`` reports the largest over
-the pieces. On a piece's first sweep q is not measured yet: Q_SAFETY times the last piece's
-(the contraction changes slowly along a flight; the flight's first piece always takes two
-sweeps). Stopping on the increment itself would take one sweep more for an iterate already
-q times closer. A piece whose sweeps do not contract is quartered.
+the pieces. On a piece's first sweep q is not measured yet: Q_SAFETY times the last piece's,
+and at least Q_FLOOR (the contraction changes slowly along a flight; the flight's first piece
+always takes two sweeps). Stopping on the increment itself would take one sweep more for an
+iterate already q times closer. A piece whose sweeps do not contract is quartered.
 
 Converged, a piece is Gauss collocation, of order 2 NODES at its end and NODES + 2 inside it
 (positions). The quadrature needs a smooth force: the plate's drag has a kink where the
@@ -364,9 +364,10 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES):
         """
         Solve one piece from its start state, from the predictor a0 + da t of the accelerations.
 
-        Returns (ok, h, cx, cy, cp, evaluations, remainder): the piece, ended at the first
+        Returns (ok, h, cx, cy, cp, evaluations, remainder, q): the piece, ended at the first
         kink of the force (found on the predicted motion, then located on the first sweep's);
-        ok False when the sweeps did not converge.
+        ok False when the sweeps did not converge; q the sweeps' contraction measured on this
+        piece (q_prev, the last piece's, when it took one sweep).
         """
         ax = linear(a0x, dax, h)
         ay = linear(a0y, day, h)
