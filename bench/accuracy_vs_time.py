@@ -105,6 +105,11 @@ def knob_text(v):
     return v if isinstance(v, str) else format(v, 'g')
 
 
+def config_label(knobs):
+    """Return 'k=v, ...' of a configuration's knobs, 'defaults' for none."""
+    return ', '.join(f'{k}={knob_text(v)}' for k, v in knobs.items()) or 'defaults'
+
+
 def load(name, **changes):
     data = read_yaml(ROOT / 'scenes' / f'{name}.yaml')
     if name == 'triangle':
@@ -424,9 +429,7 @@ def family_rows(family, configs, data, orbit_throws, band_throws, label):
         for knobs in configs:
             model = load(scene_name, accuracy=knobs, **copy.deepcopy(changes)).model
             res, us = timed_best(model, *states)
-            row = {'scene': name, 'config': ', '.join(
-                f'{k}={knob_text(v)}' for k, v in knobs.items()) or 'defaults',
-                'code': label, 'us': us}
+            row = {'scene': name, 'config': config_label(knobs), 'code': label, 'us': us}
             row.update(compare(res, ref['throws']))
             row['orbit'] = orbit_agreement(orbit_of(model, start, orbit_throws), ref['orbit'])
             row['band'] = band_error(orbit_of(model, start, band_throws), ref['ls'])
@@ -549,8 +552,7 @@ def overhead(quick):
         _, us0 = timed_best(load('experiment', accuracy=cfg, plate={'mu': 0.0}).model, *states,
                             repeats=7)
         med, mx, _ = dr_stats(res, ref)
-        label = ', '.join(f'{k}={knob_text(v)}' for k, v in cfg.items()) or 'defaults'
-        print(f'| {label} | {us:.1f} | {us / base_us:.0f}x | {us0:.1f} | {us0 / base_us:.1f}x '
+        print(f'| {config_label(cfg)} | {us:.1f} | {us / base_us:.0f}x | {us0:.1f} | {us0 / base_us:.1f}x '
               f'| {med:.2e} / {mx:.2e} |')
     ref = load('experiment', accuracy=AIR_REF_KNOBS,
                **copy.deepcopy(AIR_ON_EXPERIMENT)).model.f_batch(*states)
@@ -562,8 +564,7 @@ def overhead(quick):
         res, us = timed_best(load('experiment', accuracy=cfg,
                                   **copy.deepcopy(AIR_ON_EXPERIMENT)).model, *states, repeats=7)
         med, mx, same = dr_stats(res, ref)
-        label = ', '.join(f'{k}={knob_text(v)}' for k, v in cfg.items()) or 'defaults'
-        print(f'| {label} | {us:.1f} | {us / base_us:.1f}x | {med:.2e} / {mx:.2e} | '
+        print(f'| {config_label(cfg)} | {us:.1f} | {us / base_us:.1f}x | {med:.2e} / {mx:.2e} | '
               f'{same}/{n} |')
 
 
