@@ -254,6 +254,10 @@ def run_node(make_node, prog, args=None):
     ``exit_reason`` attribute gets the reason it stops in it (``interrupted (SIGINT)``, or
     what its own ``finished()`` returned).
     """
+    # A start-up error's exit has died of SIGSEGV or hung (about 1 in 12 runs of
+    # test_graph_ros_user's bad-parameter test, 2026-11-27): a fatal signal prints every
+    # thread's stack, so the next one says where.
+    faulthandler.enable(all_threads=True)
     stop = {}
 
     def on_signal(signum, frame):
