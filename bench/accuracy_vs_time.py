@@ -552,8 +552,8 @@ def overhead(quick):
         _, us0 = timed_best(load('experiment', accuracy=cfg, plate={'mu': 0.0}).model, *states,
                             repeats=7)
         med, mx, _ = dr_stats(res, ref)
-        print(f'| {config_label(cfg)} | {us:.1f} | {us / base_us:.0f}x | {us0:.1f} | {us0 / base_us:.1f}x '
-              f'| {med:.2e} / {mx:.2e} |')
+        print(f'| {config_label(cfg)} | {us:.1f} | {us / base_us:.0f}x | {us0:.1f} '
+              f'| {us0 / base_us:.1f}x | {med:.2e} / {mx:.2e} |')
     ref = load('experiment', accuracy=AIR_REF_KNOBS,
                **copy.deepcopy(AIR_ON_EXPERIMENT)).model.f_batch(*states)
     print('\n#### air_drag on the experiment scene (its gravity and arm, the air instead of the '
@@ -796,7 +796,7 @@ def main():
                             exp_start, orbit_throws, band_throws))
     for knobs in FAST_CONFIGS:
         s = load('experiment', accuracy=knobs)
-        fr_rows.append(evaluate(', '.join(f'{k}={knob_text(v)}' for k, v in knobs.items()),
+        fr_rows.append(evaluate(config_label(knobs),
                                 'backplate_friction', s.model, ref_e, exp_states, exp_start,
                                 orbit_throws, band_throws))
     # All knobs together, coarse to fine: the operating points a user would pick (the plot).
@@ -842,7 +842,7 @@ def main():
                                 ('defaults before issue 24 (roll_method=rk4, '
                                  'integrator_step=0.001)', 'air_drag, before issue 24',
                                  {'roll_method': 'rk4', 'integrator_step': 1e-3})] + [
-            (', '.join(f'{k}={knob_text(v)}' for k, v in kn.items()), 'air_drag', kn)
+            (config_label(kn), 'air_drag', kn)
             for kn in [{'integrator_step': 1e-3}] + FAST_CONFIGS]:
         s = load('triangle', accuracy=knobs, **air_scene)
         ad_rows.append(evaluate(label, group, s.model, ref_a, states, start, orbit_throws,
