@@ -360,6 +360,54 @@ def test_plate_drag_is_the_exact_drag_of_a_uniform_lamina(vertices):
     assert np.all(np.isfinite(got)) and got == pytest.approx(ref, abs=1e-9)
 
 
+@pytest.mark.parametrize('vertices', [
+    [[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]],
+    [[0.0, 0.0], [0.05, 0.0], [0.05, 0.02], [0.02, 0.02], [0.02, 0.05], [0.0, 0.05]],
+])
+def test_plate_drag_bends_as_d2_log_d_where_the_centre_crosses_an_edge(vertices):
+    """
+    Check the drag's kink where the instantaneous centre crosses an outline edge.
+
+    The drag is the gradient, turned by 90 degrees, of the potential int |r - c| dA / A (c the
+    centre): at distance d from an edge the gradient's normal part bends as d^2 log|d| / A, so
+    the force along the edge has the second derivative 2 log|d| / A + smooth (it changes by
+    2 ln(10) / A per decade of d) and the force across it is smooth. This is why the series
+    flight's error falls as the cube of its pieces' length (docs/accuracy.md).
+    """
+    from throwmap import Part
+    from throwmap.internal import plate_drag_exact, plate_moments
+    part = Part(np.array(vertices, dtype=float))
+    ou, ov, cu, cv = part.outline_frames()
+    size = float(part.vertex_radius.max())
+    mom = plate_moments(ou, ov, size)
+    om = 5.0
+    per_decade = 2.0 * math.log(10.0) / part.area
+    for j in range(len(ou[0])):
+        jn = (j + 1) % len(ou[0])
+        t = np.array([ou[0][jn] - ou[0][j], ov[0][jn] - ov[0][j]])
+        t /= np.hypot(*t)
+        n = np.array([-t[1], t[0]])
+        mid = 0.5 * np.array([ou[0][j] + ou[0][jn], ov[0][j] + ov[0][jn]])
+
+        def force(d, mid=mid, n=n):
+            # the centre p0 = z x v / om at mid + d n: v = om (p0y, -p0x)
+            p0 = mid + d * n
+            gx, gy, _ = plate_drag_exact(om * p0[1], -om * p0[0], om, 0.0, ou[0], ov[0], cu[0],
+                                         cv[0], size, mom[0], 1.0, 0.0)
+            return np.array([gx, gy])
+
+        for side in (1.0, -1.0):
+            bend = []
+            for d in (1e-4 * size, 1e-5 * size):
+                h = d / 20.0
+                f2 = (force(side * (d + h)) - 2.0 * force(side * d)
+                      + force(side * (d - h))) / (h * h)
+                bend.append(f2)
+            change = bend[1] - bend[0]
+            assert abs(change @ t) == pytest.approx(per_decade, rel=0.01), (j, side)
+            assert abs(change @ n) < 0.01 * per_decade, (j, side)
+
+
 def test_the_experiment_scene_uses_the_exact_drag():
     with open(SCENES / 'experiment.yaml', encoding='utf-8') as fh:
         data = yaml.safe_load(fh)
