@@ -22,9 +22,10 @@ node until a signal, a lifecycle shutdown or the node's own :meth:`finished`, th
 node down in order - lifecycle shutdown transition (a driver aborts its cycle and reports it),
 ``destroy_node`` (the node leaves the graph at once), context shutdown - and returns 0. A bad
 start-up parameter or a :class:`StartupError` prints one line ``<prog>: error: <reason>`` and
-returns 2.
+ends the process with status 2 itself (``os._exit``: see :func:`run_node`).
 """
 
+import ctypes
 import faulthandler
 import gc
 import os
@@ -244,19 +245,18 @@ def autostart(node):
         raise StartupError('activate failed (see the log above)')
 
 
-def run_node(make_node, prog, args=None):
+def run_node(make_node, prog, args=None, before_exit=None):
     """
     Run ``make_node(context=...)`` until SIGINT, SIGTERM or its end; the executable's status.
 
-    0 after a clean stop; 2 (one line on stderr) for a bad start-up parameter, a
-    :class:`StartupError` or a failed autostart. An exception from a callback tears the node
-    down and propagates (a bug: exit 1 with its traceback). A node that has an
-    ``exit_reason`` attribute gets the reason it stops in it (``interrupted (SIGINT)``, or
-    what its own ``finished()`` returned).
+    0 after a clean stop. A bad start-up parameter, a :class:`StartupError` or a failed
+    autostart prints one line on stderr and ends the process with status 2 here: this call
+    does not return then (the caller's clean-up goes in ``before_exit``, called first). An
+    exception from a callback tears the node down and propagates (a bug: exit 1 with its
+    traceback). A node that has an ``exit_reason`` attribute gets the reason it stops in it
+    (``interrupted (SIGINT)``, or what its own ``finished()`` returned).
     """
-    # A start-up error's exit has died of SIGSEGV or hung (about 1 in 12 runs of
-    # test_graph_ros_user's bad-parameter test, 2026-11-27): a fatal signal prints every
-    # thread's stack, so the next one says where.
+    # A fatal signal prints every thread's stack.
     faulthandler.enable(all_threads=True)
     stop = {}
 
@@ -273,8 +273,13 @@ def run_node(make_node, prog, args=None):
         with rclpy.init(args=args, context=context,
                         signal_handler_options=SignalHandlerOptions.NO):
             status = _run(make_node, prog, stop, context)
-            exit_after(TEARDOWN_TIMEOUT, status, prog)
-            return status
+            if status == 0:
+                exit_after(TEARDOWN_TIMEOUT, status, prog)
+            else:
+                # The half-built node of a failed start lives on in reference cycles: collect
+                # it while its context is alive (its rcl handles go first; alive, they would
+                # keep the context's DDS participant, and this process, on the graph).
+                gc.collect()
     finally:
         # Destroying the context ends the DDS participant, which tells every peer at once
         # that this process left (else they wait for its lease, 20 s, to run out).
@@ -283,6 +288,19 @@ def run_node(make_node, prog, args=None):
         # resets handlers it runs to the default, which would end the process by the signal).
         for s in (signal.SIGINT, signal.SIGTERM):
             signal.signal(s, signal.SIG_IGN)
+    if status == 0:
+        return status
+    # A failed start leaves without the interpreter's exit: after the error line that exit
+    # died of SIGSEGV or hung in 2 of 25 runs of test_graph_ros_user's bad-parameter test (7
+    # nodes failing at once); the hangs showed no Python frame or outlived both watchdogs,
+    # which the interpreter's finalization stops: the middleware's teardown at exit. Nothing
+    # is lost: the node never ran and its context is gone.
+    if before_exit is not None:
+        before_exit()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    ctypes.CDLL(None).fflush(None)     # the C streams (rcutils' log lines) too
+    os._exit(status)
 
 
 def exit_after(seconds, status, prog):
@@ -314,23 +332,20 @@ def _linger(executor, seconds):
         executor.spin_once(timeout_sec=min(0.05, max(0.0, end - time.monotonic())))
 
 
+def _startup_failed(prog, exc):
+    """Print the start-up error's line; 2. The process ends within TEARDOWN_TIMEOUT from now."""
+    print(f'{prog}: error: {exc}', file=sys.stderr, flush=True)
+    # Armed before any clean-up (the node's destruction, the context's): if that hangs, the
+    # process still ends, with status 2.
+    exit_after(TEARDOWN_TIMEOUT, 2, prog)
+    return 2
+
+
 def _run(make_node, prog, stop, context):
     try:
         node = make_node(context=context)
     except (ParameterError, StartupError) as exc:
-        print(f'{prog}: error: {exc}', file=sys.stderr)
-        failed = True
-    else:
-        failed = False
-    if failed:
-        # The half-built node (its rcl handles) lives on in reference cycles through the
-        # exception's frames: collect it now, while its context is alive; left to the
-        # interpreter's exit it is destroyed after the context. Twice (an earlier session's
-        # runs at 1e5da99, and a CI run at 9955477) such a process hung after its error line
-        # in the exit, with no Python frame and the GIL held (status 1 after 20 s); this is the
-        # suspected cause, not a proven one (it is rare).
-        gc.collect()
-        return 2
+        return _startup_failed(prog, exc)
     wake = None
     executor = None
     try:
@@ -339,8 +354,7 @@ def _run(make_node, prog, stop, context):
                 set_realtime_priority(node.get_parameter('realtime_priority').value)
             autostart(node)
         except (StartupError, RealtimeError) as exc:
-            print(f'{prog}: error: {exc}', file=sys.stderr)
-            return 2
+            return _startup_failed(prog, exc)
         executor = make_executor(getattr(node, 'executor_kind', None), context)
         executor.add_node(node)
         wake = _SignalWake(executor)

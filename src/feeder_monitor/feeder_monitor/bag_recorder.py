@@ -348,7 +348,8 @@ def main(argv=None):
         return made[-1]
 
     try:
-        status = run_node(make_node, 'bag_recorder', argv)
+        # A start-up failure ends the process in run_node: the bag is closed first.
+        status = run_node(make_node, 'bag_recorder', argv, before_exit=writer.close)
     finally:
         writer.close()
     if writer.fault is not None:
