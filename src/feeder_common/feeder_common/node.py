@@ -272,14 +272,9 @@ def run_node(make_node, prog, args=None, before_exit=None):
     try:
         with rclpy.init(args=args, context=context,
                         signal_handler_options=SignalHandlerOptions.NO):
-            status = _run(make_node, prog, stop, context)
-            if status == 0:
-                exit_after(TEARDOWN_TIMEOUT, status, prog)
-            else:
-                # The half-built node of a failed start lives on in reference cycles: collect
-                # it while its context is alive (its rcl handles go first; alive, they would
-                # keep the context's DDS participant, and this process, on the graph).
-                gc.collect()
+            status = _run(make_node, prog, stop, context, before_exit)
+            exit_after(TEARDOWN_TIMEOUT, status, prog)
+            return status
     finally:
         # Destroying the context ends the DDS participant, which tells every peer at once
         # that this process left (else they wait for its lease, 20 s, to run out).
@@ -288,19 +283,6 @@ def run_node(make_node, prog, args=None, before_exit=None):
         # resets handlers it runs to the default, which would end the process by the signal).
         for s in (signal.SIGINT, signal.SIGTERM):
             signal.signal(s, signal.SIG_IGN)
-    if status == 0:
-        return status
-    # A failed start leaves without the interpreter's exit: after the error line that exit
-    # died of SIGSEGV or hung in 2 of 25 runs of test_graph_ros_user's bad-parameter test (7
-    # nodes failing at once); the hangs showed no Python frame or outlived both watchdogs,
-    # which the interpreter's finalization stops: the middleware's teardown at exit. Nothing
-    # is lost: the node never ran and its context is gone.
-    if before_exit is not None:
-        before_exit()
-    sys.stdout.flush()
-    sys.stderr.flush()
-    ctypes.CDLL(None).fflush(None)     # the C streams (rcutils' log lines) too
-    os._exit(status)
 
 
 def exit_after(seconds, status, prog):
@@ -332,20 +314,28 @@ def _linger(executor, seconds):
         executor.spin_once(timeout_sec=min(0.05, max(0.0, end - time.monotonic())))
 
 
-def _startup_failed(prog, exc):
-    """Print the start-up error's line; 2. The process ends within TEARDOWN_TIMEOUT from now."""
+def _startup_failed(prog, exc, before_exit):
+    """Print the start-up error's line and end the process with status 2 at once."""
     print(f'{prog}: error: {exc}', file=sys.stderr, flush=True)
-    # Armed before any clean-up (the node's destruction, the context's): if that hangs, the
-    # process still ends, with status 2.
-    exit_after(TEARDOWN_TIMEOUT, 2, prog)
-    return 2
+    # Nothing of the half-built node is torn down. That teardown (the middleware's entities
+    # and participant, destroyed with the GIL held) hung or died of SIGSEGV in about 1 of 20
+    # runs of test_graph_ros_user's bad-parameter test (7 nodes failing at once): in the
+    # interpreter's exit, and, once that was skipped, in gc.collect() of the half-built node
+    # (faulthandler's stack, 2026-11-27). Peers drop its participant when its lease runs out.
+    exit_after(TEARDOWN_TIMEOUT, 2, prog)     # (before_exit is the caller's file I/O)
+    if before_exit is not None:
+        before_exit()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    ctypes.CDLL(None).fflush(None)     # the C streams (rcutils' log lines) too
+    os._exit(2)
 
 
-def _run(make_node, prog, stop, context):
+def _run(make_node, prog, stop, context, before_exit):
     try:
         node = make_node(context=context)
     except (ParameterError, StartupError) as exc:
-        return _startup_failed(prog, exc)
+        _startup_failed(prog, exc, before_exit)
     wake = None
     executor = None
     try:
@@ -354,7 +344,7 @@ def _run(make_node, prog, stop, context):
                 set_realtime_priority(node.get_parameter('realtime_priority').value)
             autostart(node)
         except (StartupError, RealtimeError) as exc:
-            return _startup_failed(prog, exc)
+            _startup_failed(prog, exc, before_exit)
         executor = make_executor(getattr(node, 'executor_kind', None), context)
         executor.add_node(node)
         wake = _SignalWake(executor)
