@@ -38,6 +38,7 @@ as who hears whom.
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
 from . import qos
+from .node import publish
 
 LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN,
           'error': DiagnosticStatus.ERROR, 'stale': DiagnosticStatus.STALE}
@@ -162,7 +163,7 @@ class Updater:
         msg = DiagnosticArray()
         msg.header.stamp = self.node.get_clock().now().to_msg()
         msg.status = self.statuses()
-        self.pub.publish(msg)
+        publish(self.pub, msg, self.node.get_logger())
 
     force_update = update
 

@@ -39,6 +39,7 @@ import rclpy
 from rclpy.clock import Clock, ClockType
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
 from rclpy.signals import SignalHandlerOptions
 
@@ -201,6 +202,26 @@ class RateTimer:
         if self._timer is not None:
             self._node.destroy_timer(self._timer)
             self._timer = None
+
+
+def publish(publisher, msg, logger):
+    """
+    Publish ``msg``; True if the middleware took it, else log why (throttled) and return False.
+
+    A reliable writer may refuse a write: rclpy raises RCLError ("cannot publish data") when
+    its history stays full of samples a stalled or slow reader has not acknowledged for the
+    writer's max_blocking_time (100 ms); a write after the context's shutdown raises too. That
+    is no bug of this node, so it must not end the node (a callback's exception does). What is
+    lost shows to the readers: a gap in the cycle reports' seq, an edge1_ready that grows
+    older than its deadline.
+    """
+    try:
+        publisher.publish(msg)
+        return True
+    except (_rclpy.RCLError, _rclpy.InvalidHandle) as exc:
+        logger.error(f'could not publish on {publisher.topic_name}: {exc}',
+                     throttle_duration_sec=5.0)
+        return False
 
 
 def flush(publisher, timeout=FLUSH_TIMEOUT_S):

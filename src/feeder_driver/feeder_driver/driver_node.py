@@ -33,8 +33,8 @@ from feeder_common import auth, qos
 from feeder_common.arm import ArmMotion
 from feeder_common.diagnostics import Updater
 from feeder_common.messages import CycleSigner, joint_state, proximity
-from feeder_common.node import (clock_note, FeederLifecycleNode, flush, RateTimer, run_node,
-                                StartupError)
+from feeder_common.node import (clock_note, FeederLifecycleNode, flush, publish, RateTimer,
+                                run_node, StartupError)
 from feeder_common.parameters import ParameterGate
 from feeder_common.setpoints import SetpointInbox
 from feeder_interfaces.msg import CycleStatus, SpeedSetpoint
@@ -363,11 +363,7 @@ class DriverNode(FeederLifecycleNode):
             self._publish_joint(result.stamp, 0.0)
 
     def _publish(self, pub, msg):
-        try:
-            pub.publish(msg)
-        except Exception as exc:    # noqa: B902 - e.g. the context is already shut down
-            print(f'driver_node: could not publish on {pub.topic_name}: {exc}',
-                  file=sys.stderr)
+        publish(pub, msg, self.get_logger())
 
     def _publish_joint(self, stamp, velocity):
         if self._pub_joint is not None:

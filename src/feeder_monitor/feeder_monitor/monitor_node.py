@@ -30,7 +30,7 @@ from feeder_common import auth, qos
 from feeder_common.diagnostics import Updater
 from feeder_common.messages import (parse_cycle_fired, parse_cycle_status, proximity_detected,
                                     signed_setpoint, signed_verdict, time_ns)
-from feeder_common.node import FeederLifecycleNode, flush, run_node
+from feeder_common.node import FeederLifecycleNode, flush, publish, run_node
 from feeder_common.parameters import ParameterGate
 from feeder_common.params import check_scene
 from feeder_interfaces.msg import CycleStatus, SpeedSetpoint, Verdict
@@ -489,7 +489,7 @@ class MonitorNode(FeederLifecycleNode):
         self._statement = (int(seq), stamp_ns, bool(ready), state, anomaly)
         msg = self._publish_statement()
         if verdict and msg is not None:
-            self._verdict_pub.publish(msg)
+            publish(self._verdict_pub, msg, self.get_logger())
 
     def _publish_statement(self):
         """Sign and publish the statement (a lifecycle publisher: sent only while active)."""
@@ -498,8 +498,9 @@ class MonitorNode(FeederLifecycleNode):
         seq, stamp_ns, ready, state, anomaly = self._statement
         msg = signed_verdict(self._key, self._fqn, self._session, seq, stamp_ns, ready, state,
                              anomaly, self._now_ns())
-        self._ready_pub.publish(msg)
-        self._last_sent = time.monotonic()
+        if publish(self._ready_pub, msg, self.get_logger()):
+            # (a refused statement leaves _last_sent: the heartbeat sends it again soon)
+            self._last_sent = time.monotonic()
         return msg
 
     def _on_heartbeat(self):
@@ -579,9 +580,9 @@ class MonitorNode(FeederLifecycleNode):
             return
         last = self._last_driver_cycle
         seq, session = (last[1] + 1, last[0]) if last is not None else (0, '')
-        self._setpoint_pub.publish(signed_setpoint(
+        publish(self._setpoint_pub, signed_setpoint(
             self._key, self._fqn, self._session, seq, session, self._monitor.next_speed,
-            self._now_ns()))
+            self._now_ns()), self.get_logger())
 
     def _driver_cycle(self, session, seq):
         """Note a cycle the driver signed (a report refused as stale too: it fired)."""

@@ -199,3 +199,37 @@ def test_the_monitor_counted_every_refusal_and_still_judges_cycles(harness):
     assert harness.bad_input() == harness.refused
     verdict = harness.valid_cycle()
     assert verdict is not None, 'a valid cycle got no verdict after the hostile messages'
+
+
+def test_a_write_the_middleware_refuses_does_not_end_the_monitor(harness):
+    """
+    A reliable writer refuses a write when a stalled reader leaves its history full.
+
+    rclpy raises RCLError ("cannot publish data", seen in CI from a test's own writer); the
+    monitor publishes from its callbacks and timers, so before this raised out of the
+    cycle_status callback and ended the node. Now the refusal is logged, the cycle's verdict
+    is lost to the readers (edge1_ready ages past its deadline), and the next cycle is judged.
+    """
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+    topics = (f'{NS}/edge1_ready', f'{NS}/edge1_verdict', '/diagnostics')
+    pubs = [p for p in harness.node.publishers if p.topic_name in topics]
+    assert len(pubs) == len(topics), [p.topic_name for p in harness.node.publishers]
+    refused = []
+
+    def refuse(msg):
+        refused.append(msg)
+        raise _rclpy.RCLError('cannot publish data')
+
+    saved = [p.publish for p in pubs]
+    try:
+        for p in pubs:
+            p.publish = refuse
+        assert harness.valid_cycle() is None      # judged, but nothing reached the readers
+        harness.spin_until(lambda: False, 0.3)    # the heartbeat and /diagnostics refused too
+    finally:
+        for p, publish in zip(pubs, saved):
+            p.publish = publish
+    kinds = {type(m).__name__ for m in refused}
+    assert kinds == {'Verdict', 'DiagnosticArray'}, kinds
+    verdict = harness.valid_cycle()
+    assert verdict is not None, 'no verdict for the cycle after the refused writes'

@@ -30,7 +30,7 @@ import functools
 import math
 
 from feeder_common.diagnostics import Updater
-from feeder_common.node import FeederLifecycleNode
+from feeder_common.node import FeederLifecycleNode, publish
 from feeder_common.parameters import ParameterGate
 from rclpy.lifecycle import TransitionCallbackReturn
 from throwmap import analyse, load_scene, PartOnArm, scene_analysis, ThrowmapError
@@ -205,6 +205,10 @@ class PartNode(FeederLifecycleNode):
         self._active = False
         self._release()
         return TransitionCallbackReturn.SUCCESS
+
+    def _send(self, name, msg):
+        """Publish ``msg`` on publisher ``name`` (a refusal is logged: node.publish)."""
+        return publish(self._pubs[name], msg, self.get_logger())
 
     def _release(self):
         self._release_own()

@@ -180,8 +180,8 @@ class PredictorNode(PartNode):
             p.x, p.y, p.z = plane_point(x, y)
             q = pose.pose.orientation
             q.x, q.y, q.z, q.w = plane_quaternion(angle)
-            self._pubs['pose'].publish(pose)
-        self._pubs['state'].publish(predicted_state(
+            self._send('pose', pose)
+        self._send('state', predicted_state(
             seq, stamp_ns, throw.edge, throw.R if throw.on_arm else None, throw.kind))
         self._publish_markers(stamp)
 
@@ -219,7 +219,7 @@ class PredictorNode(PartNode):
             self._predictor.sees(edge, R)
         state = marker_array(state_markers(self._scene, self._analysis, radius, edge, R,
                                            detected), BASE_FRAME, stamp)
-        self._pubs['markers'].publish(MarkerArray(markers=self._static_markers + state.markers))
+        self._send('markers', MarkerArray(markers=self._static_markers + state.markers))
 
     def _flush_markers(self):
         self._markers_timer.cancel()
@@ -232,8 +232,8 @@ class PredictorNode(PartNode):
         if not self._active:
             return
         analysis = analysis_msg(self._analysis.as_dict(), self._scene.name, self._scene_hash())
-        self._pubs['limit_set'].publish(analysis.limit_set)
-        self._pubs['analysis'].publish(analysis)
+        self._send('limit_set', analysis.limit_set)
+        self._send('analysis', analysis)
         self._publish_markers(force=True)
 
     def _scene_hash(self):

@@ -215,16 +215,15 @@ class StandInNode(PartNode):
             self._inbox.used()
         self._seq += 1
         stamp = self.get_clock().now().nanoseconds
-        pubs = self._pubs
-        pubs['cycle_fired'].publish(self._signer.cycle_fired(self._seq, stamp, HARDWARE_ID))
+        self._send('cycle_fired', self._signer.cycle_fired(self._seq, stamp, HARDWARE_ID))
         commanded = self._scene.release_speed if speed is None else speed
         try:
             throw = self._predictor.throw(release_speed=speed)
         except ThrowmapError as exc:
             self._counts['failed'] += 1
             self._released(stamp, commanded)
-            pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
-            pubs['cycle_status'].publish(self._signer.cycle_status(
+            self._send('joint_states', joint_state(stamp, 0.0, 0.0))
+            self._send('cycle_status', self._signer.cycle_status(
                 self._seq, False, str(exc), None, stamp, HARDWARE_ID, speed))
             if self._truth is not None:
                 self._truth.cycle(self._seq, stamp, error=exc, setpoint=speed)
@@ -240,24 +239,23 @@ class StandInNode(PartNode):
         if self._truth is not None:
             self._truth.cycle(self._seq, stamp, throw, self._predictor.sees(), setpoint=speed)
         # proximity and cycle_status back to back: the monitor decides on both.
-        pubs['proximity'].publish(proximity(stamp, throw.detected,
-                                            self._param('sensor_range_m'),
-                                            self._param('frame_id')))
-        pubs['cycle_status'].publish(self._signer.cycle_status(
+        self._send('proximity', proximity(stamp, throw.detected, self._param('sensor_range_m'),
+                                          self._param('frame_id')))
+        self._send('cycle_status', self._signer.cycle_status(
             self._seq, True, '', throw.detected, stamp, HARDWARE_ID, speed))
-        pubs['joint_states'].publish(joint_state(stamp, 0.0, 0.0))
+        self._send('joint_states', joint_state(stamp, 0.0, 0.0))
         return self._seq, None
 
     def _released(self, stamp, speed):
         """Say the arm released at ``speed`` (joint_states), and swing it from there."""
-        self._pubs['joint_states'].publish(joint_state(stamp, 0.0, speed))
+        self._send('joint_states', joint_state(stamp, 0.0, speed))
         self._motion.released(stamp, speed, follow=stand_in_follow(self._param('cycle_period')))
 
     def _joint_tick(self):
         """Publish the arm's angle now (the follow-through after a cycle), while active."""
         if self._active and 'joint_states' in self._pubs:
             stamp = self.get_clock().now().nanoseconds
-            self._pubs['joint_states'].publish(joint_state(stamp, *self._motion.at(stamp)))
+            self._send('joint_states', joint_state(stamp, *self._motion.at(stamp)))
 
     # ------------------------------------------------------------------ diagnostics
     def _diag_actuator(self, stat):
