@@ -41,7 +41,8 @@ import pytest
 from scipy.integrate import solve_ivp
 from throwmap import Scene
 from throwmap.catch import first_cone_exit, roll_cone_forces, roll_force_rates
-from throwmap.event_sim import roll_turn, roll_u
+from throwmap.ballistic import vertex_first_contact
+from throwmap.event_sim import ballistic_to_contact, roll_turn, roll_u
 from throwmap.jit import njit
 from throwmap.rk8 import A8, B8, C8, make_step
 from throwmap.scene import read_yaml
@@ -355,6 +356,53 @@ def test_the_free_flight_is_the_stepped_flight_of_a_zero_force(scene):
     if scene == 'rectangle slipping':
         assert any(i.kind == 'liftoff' for k in range(20)
                    for i in a.throw(int(e[k]), float(r[k])).impacts)
+
+
+def every_vertex_in_turn(y, phi, vy, om, sep, g, bu, bv, knobs):
+    """The flight's first contact with every vertex searched in index order (before issue 24)."""
+    c, s = math.cos(phi), math.sin(phi)
+    t_best, k_best = math.inf, -1
+    for k in range(len(bu)):
+        rx, ry = c * bu[k] - s * bv[k], s * bu[k] + c * bv[k]
+        f0, vy_k = max(y + ry, 0.0), vy
+        if k == sep:
+            f0, vy_k = 0.0, vy - min(vy + om * rx, 0.0)
+        tk = vertex_first_contact(f0, vy_k, g, om, rx, ry, math.sqrt(rx * rx + ry * ry), t_best,
+                                  knobs)
+        if tk < t_best:
+            t_best, k_best = tk, k
+    return t_best, k_best
+
+
+@pytest.mark.parametrize('part', ['rectangle', 'triangle', 'hexagon'])
+def test_the_flights_vertex_search_skips_only_vertices_that_cannot_be_first(part):
+    # The earliest lower bound is searched first and a vertex whose bound is past the contact
+    # found is skipped: the same vertex and time as searching all in turn, ties (a flat drop
+    # without spin) to the lowest index as before.
+    angles = np.linspace(0, 2 * np.pi, {'rectangle': 4, 'triangle': 3, 'hexagon': 6}[part],
+                         endpoint=False) + 0.3
+    bu, bv = 0.03 * np.cos(angles), 0.02 * np.sin(angles)
+    if part == 'rectangle':
+        bu, bv = np.array([-0.025, 0.025, 0.025, -0.025]), np.array([-0.01, -0.01, 0.01, 0.01])
+    knobs = Scene(copy.deepcopy(RECTANGLE)).model.ctx.knobs
+    g = -9.66
+    rng = np.random.default_rng(11)
+    checked = ties = 0
+    for trial in range(3000):
+        flat = trial % 10 == 0
+        phi = 0.0 if flat else rng.uniform(-np.pi, np.pi)
+        om = 0.0 if flat else rng.uniform(-40, 40) * rng.choice([1.0, 1e-3])
+        lowest = min(math.sin(phi) * u + math.cos(phi) * v for u, v in zip(bu, bv))
+        y = -lowest + rng.uniform(0, 0.05) * rng.choice([1.0, 0.0])
+        vy = rng.uniform(-1.5, 2.0)
+        sep = int(rng.integers(-1, len(bu))) if not flat else -1
+        status, k, *_, t, _ = ballistic_to_contact(0.0, y, phi, 0.0, vy, om, 0.0, sep, g, bu, bv,
+                                                   knobs, 0)
+        t_ref, k_ref = every_vertex_in_turn(y, phi, vy, om, sep, g, bu, bv, knobs)
+        assert status == 0 and (k, t) == (k_ref, t_ref), (trial, k, t, k_ref, t_ref)
+        checked += 1
+        ties += flat
+    assert checked == 3000 and ties == 300
 
 
 # ------------------------------------------------------------------------ the order-8 flight
