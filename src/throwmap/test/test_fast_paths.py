@@ -40,8 +40,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from throwmap import Scene
-from throwmap.catch import first_cone_exit, roll_cone_forces, roll_force_rates
 from throwmap.ballistic import vertex_first_contact
+from throwmap.catch import first_cone_exit, roll_cone_forces, roll_force_rates
 from throwmap.event_sim import ballistic_to_contact, roll_turn, roll_u
 from throwmap.jit import njit
 from throwmap.rk8 import A8, B8, C8, make_step
@@ -359,7 +359,7 @@ def test_the_free_flight_is_the_stepped_flight_of_a_zero_force(scene):
 
 
 def every_vertex_in_turn(y, phi, vy, om, sep, g, bu, bv, knobs):
-    """The flight's first contact with every vertex searched in index order (before issue 24)."""
+    """Return a flight's first contact with every vertex searched in index order (as before)."""
     c, s = math.cos(phi), math.sin(phi)
     t_best, k_best = math.inf, -1
     for k in range(len(bu)):

@@ -387,10 +387,10 @@ SimEnv = namedtuple('SimEnv', ['edge', 'g', 'part', 'knobs', 'law', 'prm', 'rec'
 @njit(inline=True)
 def vertex_offset(c, s, bu_k, bv_k, y, vy, om, sep, k):
     """
-    Return (f0, vy_k, rx, ry) of vertex k at a flight's start: its height, the CM's vertical
-    speed its search starts from, its offset from the CM.
+    Return (f0, vy_k, rx, ry) of vertex k at a flight's start.
 
-    The vertex that just left (sep) is found when it comes back down: it left rising (a
+    Its height, the CM's vertical speed its search starts from, its offset from the CM. The
+    vertex that just left (sep) is found when it comes back down: it left rising (a
     bounce) or with zero normal speed (a liftoff: its free normal acceleration >= 0); a
     rounding-sized approach would be found at t = 0.
     """
@@ -404,7 +404,7 @@ def vertex_offset(c, s, bu_k, bv_k, y, vy, om, sep, k):
 @njit(inline=True)
 def first_step(f0, vy_k, g, om, rx, ry):
     """
-    A lower bound of vertex k's first contact: the first step of conservative advancement.
+    Return a lower bound of vertex k's first contact: conservative advancement's first step.
 
     The root of F(0) + F'(0) t - M t^2 / 2 (M = |g| + w^2 s bounds |F''|), below F till then.
     """
