@@ -72,6 +72,19 @@ def flight_height_rate(t, vy, g, om, u0, v0):
     return vy + g * t + om * (u0 * math.cos(wt) - v0 * math.sin(wt))
 
 
+@njit(inline=True)
+def advancement_step(f, fp, m):
+    """
+    Return the first root tau > 0 of f + fp tau - m tau^2 / 2, a lower bound of F(a + tau).
+
+    f = F(a) >= 0, fp = F'(a), m >= |F''|: no root of F lies in (a, a + tau).
+    """
+    sq = math.sqrt(fp * fp + 2.0 * m * f)
+    if fp >= 0.0:
+        return (fp + sq) / m
+    return 2.0 * f / (sq - fp)
+
+
 @njit
 def vertex_contact(f0, vy, g, om, u0, v0, s, t_limit, tol_t, max_steps):
     """
@@ -96,11 +109,7 @@ def vertex_contact(f0, vy, g, om, u0, v0, s, t_limit, tol_t, max_steps):
             a += t_min   # touching while not approaching: a graze, not an impact
             f = flight_height(a, f0, vy, g, om, u0, v0)
             continue
-        sq = math.sqrt(fp * fp + 2.0 * m * f)
-        if fp >= 0.0:
-            tau = (fp + sq) / m
-        else:
-            tau = 2.0 * f / (sq - fp)
+        tau = advancement_step(f, fp, m)
         if tau <= t_min:
             if fp < 0.0:
                 return a + tau

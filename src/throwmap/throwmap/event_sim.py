@@ -77,7 +77,7 @@ from collections import namedtuple
 import math
 
 from .accuracy import FLIGHT_PICARD, FLIGHT_RK8, ROLL_ENERGY
-from .ballistic import vertex_first_contact
+from .ballistic import advancement_step, vertex_first_contact
 from .bracket import make_crossing, make_first_event
 from .catch import (cone_margin, first_cone_exit, flat_landing_edge, record, roll_force_rates,
                     stays_on_edge, sticking_impact, tip_pivot)
@@ -402,16 +402,13 @@ def vertex_offset(c, s, bu_k, bv_k, y, vy, om, sep, k):
 
 
 @njit(inline=True)
-def first_step(f0, vy_k, g, om, rx, ry):
+def first_step(f0, vy_k, g, om, rx, s):
     """
     Return a lower bound of vertex k's first contact: conservative advancement's first step.
 
-    The root of F(0) + F'(0) t - M t^2 / 2 (M = |g| + w^2 s bounds |F''|), below F till then.
+    s = |(rx, ry)|, so that |F''| <= |g| + w^2 s (ballistic.advancement_step).
     """
-    m = abs(g) + om * om * math.sqrt(rx * rx + ry * ry)
-    fp = vy_k + om * rx
-    sq = math.sqrt(fp * fp + 2.0 * m * f0)
-    return (fp + sq) / m if fp >= 0.0 else 2.0 * f0 / (sq - fp)
+    return advancement_step(f0, vy_k + om * rx, abs(g) + om * om * s)
 
 
 @njit
@@ -433,7 +430,7 @@ def ballistic_to_contact(x, y, phi, vx, vy, om, t, sep, g, bu, bv, knobs, steps)
     tau_first = math.inf
     for k in range(n):
         f0, vy_k, rx, ry = vertex_offset(c, s, bu[k], bv[k], y, vy, om, sep, k)
-        tau = first_step(f0, vy_k, g, om, rx, ry)
+        tau = first_step(f0, vy_k, g, om, rx, math.sqrt(rx * rx + ry * ry))
         if tau < tau_first:
             tau_first = tau
             k_first = k
@@ -442,12 +439,12 @@ def ballistic_to_contact(x, y, phi, vx, vy, om, t, sep, g, bu, bv, knobs, steps)
     for j in range(n):
         k = k_first if j == 0 else (j - 1 if j <= k_first else j)
         f0, vy_k, rx, ry = vertex_offset(c, s, bu[k], bv[k], y, vy, om, sep, k)
+        size = math.sqrt(rx * rx + ry * ry)
         if j > 0:
-            tau = first_step(f0, vy_k, g, om, rx, ry)
+            tau = first_step(f0, vy_k, g, om, rx, size)
             if tau > t_best or (tau == t_best and k > k_best):
                 continue
-        tk = vertex_first_contact(f0, vy_k, g, om, rx, ry, math.sqrt(rx * rx + ry * ry), t_best,
-                                  knobs)
+        tk = vertex_first_contact(f0, vy_k, g, om, rx, ry, size, t_best, knobs)
         if tk < 0.0:
             return ERR_SIM_CAP, -1, x, y, phi, vx, vy, om, t, steps + knobs.max_flight_steps
         if tk < t_best or (tk == t_best and k < k_best):
