@@ -21,6 +21,7 @@ code), writes the address and size of each compiled function, attaches ``perf re
 throws alone (not the compilation) and counts the samples per function and per libm routine.
 
     python bench/jit_profile.py rectangle [--batches 400] [--states 2000]
+    python bench/jit_profile.py experiment --knobs '{"flight_method": "picard"}'
 
 Needs Linux perf (``apt install linux-perf``). Session 38 used it to find that the
 rectangle's flights spent a third of its time in the contact finder, and that two rewrites
@@ -31,6 +32,7 @@ import argparse
 import bisect
 import collections
 import copy
+import json
 import os
 import subprocess
 import sys
@@ -88,13 +90,16 @@ def function_table(library):
     return sorted(set(rows))
 
 
-def child(scene, batches, states, table_path):
+def child(scene, batches, states, table_path, knobs):
     """Compile the scene's kernel, write its function table, say 'ready', run the throws."""
     sys.path.insert(0, HERE)
     from accuracy_vs_time import CONTACT_SCENES, load, PLATE_SCENES, random_states
     name, changes, (seed, r_hi), _ = {**PLATE_SCENES, **CONTACT_SCENES}.get(
         scene, (scene, {}, (0, 0.3), None))
-    model = load(name, **copy.deepcopy(changes)).model
+    changes = copy.deepcopy(changes)
+    if knobs:
+        changes['accuracy'] = json.loads(knobs)
+    model = load(name, **changes).model
     edges, radii = random_states(model, states, seed, r_hi)
     model.f_batch(edges[:2], radii[:2])
     kernel = list(model.composed.throw_many.overloads.values())[0]
@@ -114,16 +119,17 @@ def main():
     parser.add_argument('scene', help="a scene of scenes/ or a bench name ('rectangle', ...)")
     parser.add_argument('--batches', type=int, default=400)
     parser.add_argument('--states', type=int, default=2000)
+    parser.add_argument('--knobs', default='', help="the scene's accuracy knobs, as JSON")
     parser.add_argument('--child', metavar='TABLE', help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
-        return child(args.scene, args.batches, args.states, args.child)
+        return child(args.scene, args.batches, args.states, args.child, args.knobs)
     with tempfile.TemporaryDirectory() as tmp:
         table, data = os.path.join(tmp, 'functions.txt'), os.path.join(tmp, 'perf.data')
         env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(tmp, 'numba'))
         proc = subprocess.Popen([sys.executable, __file__, args.scene, '--batches',
                                  str(args.batches), '--states', str(args.states),
-                                 '--child', table], env=env, stdout=subprocess.PIPE, text=True)
+                                 '--knobs', args.knobs, '--child', table], env=env, stdout=subprocess.PIPE, text=True)
         if proc.stdout.readline().strip() != 'ready':
             sys.exit('jit_profile: the kernel did not compile')
         subprocess.run(['perf', 'record', '-q', '-F', '2000', '-p', str(proc.pid), '-o', data],

@@ -215,8 +215,9 @@ def test_graded_pieces_resolve_where_the_plate_drag_is_singular(case):
     flight_grade 2 at 0.08 s pieces: within 3e-9 m on every state, 10x closer than without.
 
     The plate drag goes as d^2 ln|d| in the instantaneous centre's distance d from an edge
-    (checked below), so a piece that reaches such a crossing, ends at it, or passes near it
-    is only third order, whatever its nodes; graded pieces shrink with their distance to it.
+    (test_effect_physics.py), so a piece that ends at such a crossing, or passes near it or
+    near a corner, is only third order whatever its nodes; graded pieces shrink with their
+    distance to it.
     The air's drag is smooth: there grading only has to stay as accurate.
     """
     name, (e, r), ref = case
@@ -228,32 +229,6 @@ def test_graded_pieces_resolve_where_the_plate_drag_is_singular(case):
         assert graded[1] < plain[1] / 10, (name, graded, plain)
 
 
-def test_plate_drag_goes_as_d2_log_d_across_an_edge():
-    """
-    The second derivative of the drag's area integral across an edge grows as 2 ln(1 / |d|).
-
-    The integral of (r - p) / |r - p| over the area is the gradient of the integral of
-    |r - p|, whose Laplacian (the integral of 1 / |r - p|) has a d ln|d| term at the
-    outline: so its normal part goes as d^2 ln|d| (coefficient 1), the same on both sides.
-    polar_moments gives it turned by z x: the normal part of edge 0 (along u) is gy.
-    Why flight_grade exists.
-    """
-    from throwmap.effects.backplate_friction import polar_moments
-    u = np.array([0.02, 0.02, -0.04])
-    v = np.array([-0.0267, 0.0533, -0.0267])
-    mid = np.array([0.02, 0.0133])          # the middle of edge 0 (u = 0.02), normal +u
-
-    def second(d, step):
-        g = [polar_moments(mid[0] + x, mid[1], u, v)[1] for x in (d - step, d, d + step)]
-        return (g[0] - 2.0 * g[1] + g[2]) / step ** 2
-
-    for side in (-1.0, 1.0):
-        a = second(side * 1e-4, 2.5e-5)
-        b = second(side * 1e-5, 2.5e-6)
-        assert abs(b - a) == pytest.approx(2.0 * math.log(10.0), rel=0.02), (side, a, b)
-    assert abs(second(1e-5, 2.5e-6) - second(-1e-5, 2.5e-6)) < 0.01
-
-
 def test_flight_grade_is_a_knob_at_least_zero():
     from throwmap import InputError
     assert force_scene('plate', flight_grade=2).model.knobs.flight_grade == 2
@@ -261,6 +236,22 @@ def test_flight_grade_is_a_knob_at_least_zero():
         force_scene('plate', flight_grade=-1)
     with pytest.raises(InputError, match=r'flight_step.*> 0'):
         force_scene('plate', flight_step=0)
+
+
+def test_the_plate_takes_the_graded_series_flight_unless_a_scene_names_a_flight_knob():
+    """backplate_friction's FLIGHT_KNOBS are its scenes' defaults, as a whole or not at all."""
+    from throwmap.accuracy import SimulatorAccuracy
+    from throwmap.effects.backplate_friction import FLIGHT_KNOBS
+    for name in ('plate', 'plate and air'):
+        knobs = force_scene(name).model.knobs
+        assert {k: getattr(knobs, k) for k in FLIGHT_KNOBS} == FLIGHT_KNOBS, name
+        assert knobs.integrator_step == 1e-3          # its FLIGHT_STEP: the contact search's
+    for named in ({'integrator_step': 5e-3}, {'flight_tol': 1e-9}, {'flight_method': 'rk8'},
+                  {'flight_grade': 0}):
+        knobs = force_scene('plate', **named).model.knobs
+        for k, v in FLIGHT_KNOBS.items():
+            assert getattr(knobs, k) == named.get(k, getattr(SimulatorAccuracy, k)), (named, k)
+    assert force_scene('air').model.knobs.flight_method == 'rk4'
 
 
 def test_picard_flight_finds_the_same_first_contacts():

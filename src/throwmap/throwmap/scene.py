@@ -411,6 +411,9 @@ class Scene:
         step = self.effects.flight_step()
         if step is not None and 'integrator_step' not in acc:
             simulator = dataclasses.replace(simulator, integrator_step=step)
+        flight = self.effects.flight_knobs()
+        if flight and not set(acc) & (set(flight) | {'integrator_step'}):
+            simulator = dataclasses.replace(simulator, **flight)
         self.seed = _seed(data, seed)
         self.cycle = _cycle(data)
         with warnings.catch_warnings(record=True) as caught:

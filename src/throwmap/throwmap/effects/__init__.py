@@ -41,9 +41,11 @@ effect is one module of this package that owns its scene keys, its parsing and i
 
 Optional, at the Python level: ``FLIGHT_STEP`` (s: the rk4 flight step its body force needs;
 a scene whose body forces all declare one takes the smallest as ``integrator_step`` unless it
-sets that knob), ``contact_law(params)`` (friction, pivot model and whether the
-impact law is sticking, for the event simulator), ``STOCHASTIC = True`` (noise: nominal models
-leave it out), ``read_sensor(seen, rng, params)``, ``domain(model, params)`` /
+sets that knob), ``FLIGHT_KNOBS`` (a dict of the flight knobs its body force is best
+integrated with: a scene that names none of them nor integrator_step takes them; the first
+such effect in REGISTRY's order wins), ``contact_law(params)`` (friction, pivot model and
+whether the impact law is sticking, for the event simulator), ``STOCHASTIC = True`` (noise:
+nominal models leave it out), ``read_sensor(seen, rng, params)``, ``domain(model, params)`` /
 ``domain_error(model, params, edge, R)`` / ``domain_note(model, params)`` (an effect that moves
 the lower end of the domain of f), ``lost_reason(rows, R, params)``.
 
@@ -180,6 +182,13 @@ class EffectSet:
         if not steps or None in steps:
             return None
         return min(steps)
+
+    def flight_knobs(self):
+        """Return the flight knobs the first body force that declares FLIGHT_KNOBS needs, or {}."""
+        for name, filled in self.slots().items():
+            if 'body_force' in filled and hasattr(MODULES[name], 'FLIGHT_KNOBS'):
+                return dict(MODULES[name].FLIGHT_KNOBS)
+        return {}
 
     @property
     def stochastic(self):
