@@ -564,6 +564,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
 
     rk8_step = make_step(flight_rhs)
     picard_flight = make_flight(flight_rhs, lowest_approaching, arm_contact)
+    graded_flight = make_flight(flight_rhs, lowest_approaching, arm_contact, graded=True)
     centre_crossing_in = make_first_event(hermite_centre_event)
     contact_in_step = make_first_event(hermite_contact_event)
 
@@ -971,6 +972,10 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 knobs, st.steps)
         elif knobs.flight_method == FLIGHT_RK8:
             code, k, x, y, phi, vx, vy, om, t, steps = flight_to_contact(
+                st.x, st.y, st.phi, st.vx, st.vy, st.om, st.t, st.sep, st.sep_rising, env.g,
+                rho2, env.bu, env.bv, env.size, env.edge, env.prm, knobs, st.steps)
+        elif knobs.flight_method == FLIGHT_PICARD and knobs.flight_grade > 0.0:
+            code, k, x, y, phi, vx, vy, om, t, steps, _, _ = graded_flight(
                 st.x, st.y, st.phi, st.vx, st.vy, st.om, st.t, st.sep, st.sep_rising, env.g,
                 rho2, env.bu, env.bv, env.size, env.edge, env.prm, knobs, st.steps)
         elif knobs.flight_method == FLIGHT_PICARD:
