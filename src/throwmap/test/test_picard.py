@@ -238,18 +238,25 @@ def test_flight_grade_is_a_knob_at_least_zero():
         force_scene('plate', flight_step=0)
 
 
-def test_the_plate_takes_the_graded_series_flight_unless_a_scene_names_a_flight_knob():
-    """backplate_friction's FLIGHT_KNOBS are its scenes' defaults, as a whole or not at all."""
+def test_the_plate_takes_the_graded_series_flight_unless_a_scene_names_its_method():
+    """
+    backplate_friction's FLIGHT_KNOBS are its scenes' defaults, knob by knob.
+
+    Unless the scene names flight_method or integrator_step: then the knobs' own defaults.
+    """
     from throwmap.accuracy import SimulatorAccuracy
     from throwmap.effects.backplate_friction import FLIGHT_KNOBS
     for name in ('plate', 'plate and air'):
         knobs = force_scene(name).model.knobs
         assert {k: getattr(knobs, k) for k in FLIGHT_KNOBS} == FLIGHT_KNOBS, name
         assert knobs.integrator_step == 1e-3          # its FLIGHT_STEP: the contact search's
-    for named in ({'integrator_step': 5e-3}, {'flight_tol': 1e-9}, {'flight_method': 'rk8'},
-                  {'flight_grade': 0}):
+    for named in ({'flight_tol': 1e-9}, {'flight_grade': 0}, {'flight_step': 0.04}):
         knobs = force_scene('plate', **named).model.knobs
-        for k, v in FLIGHT_KNOBS.items():
+        assert {k: getattr(knobs, k) for k in FLIGHT_KNOBS} == dict(FLIGHT_KNOBS, **named)
+    for named in ({'integrator_step': 5e-3}, {'flight_method': 'rk8'},
+                  {'flight_method': 'picard'}):
+        knobs = force_scene('plate', **named).model.knobs
+        for k in FLIGHT_KNOBS:
             assert getattr(knobs, k) == named.get(k, getattr(SimulatorAccuracy, k)), (named, k)
     assert force_scene('air').model.knobs.flight_method == 'rk4'
 

@@ -135,7 +135,8 @@ class SimulatorAccuracy:
         plate drag has a kink, each solved by Picard sweeps at Gauss-Legendre nodes until a
         sweep moves its end by less than flight_tol; throwmap.picard). A scene whose body
         force declares FLIGHT_KNOBS (backplate_friction: picard, 0.08 s, 1e-10, grade 3) takes
-        them when it names none of them nor integrator_step (throwmap.scene).
+        those it does not name when it names neither flight_method nor integrator_step
+        (throwmap.scene).
     flight_step : s, the largest step of flight_method 'rk8', the largest piece of 'picard'.
     flight_tol : the error allowed per step of flight_method 'rk8' (DOP853's estimate, in m,
         rad, m/s and rad/s alike); steps shrink and grow to meet it. For 'picard': the last

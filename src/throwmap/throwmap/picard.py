@@ -42,11 +42,12 @@ long. The error that remains is measured against the rk4 reference (docs/accurac
 drag is not kinked but goes as d^2 ln|d| in the centre's distance d from an edge, so a piece
 that ends at a crossing, or passes close to the outline, is only third order whatever its
 nodes. With ``flight_grade`` > 0 the pieces are graded: at most flight_grade times the time
-the centre would take to reach the outline at its speed (sampled with the kinks), not split
-at a kink until within flight_step / GRADE of it, each at most 4x the last; and the piece in
-which a contact falls is solved again to end at it (inside a piece collocation is of order 7
-in positions and 6 in velocities, at its end of order 10: the impact's spin at the contact was
-1.8e-6 rad/s off, 2.3e-7 after).
+the centre would take to reach the outline at its speed (at KINK_SAMPLES points of the
+predicted motion, :func:`graded_end`), not split at a kink until within flight_step / GRADE
+of it, each at most 4x the last; and the piece in which a contact falls is solved again to
+end at it (inside a piece collocation is of order 7 in positions and 6 in velocities, at its
+end of order 10: on the plate the spin at the impact was 1.8e-6 rad/s off the reference's,
+3.2e-7 after at grade 3).
 
 Contacts are looked for on the piece's polynomial motion: at points at least
 ``integrator_step`` apart, farther where every vertex's height, normal velocity and a bound on

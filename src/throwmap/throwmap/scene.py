@@ -412,8 +412,9 @@ class Scene:
         if step is not None and 'integrator_step' not in acc:
             simulator = dataclasses.replace(simulator, integrator_step=step)
         flight = self.effects.flight_knobs()
-        if flight and not set(acc) & (set(flight) | {'integrator_step'}):
-            simulator = dataclasses.replace(simulator, **flight)
+        if flight and not {'flight_method', 'integrator_step'} & set(acc):
+            simulator = dataclasses.replace(
+                simulator, **{k: v for k, v in flight.items() if k not in acc})
         self.seed = _seed(data, seed)
         self.cycle = _cycle(data)
         with warnings.catch_warnings(record=True) as caught:

@@ -42,8 +42,9 @@ effect is one module of this package that owns its scene keys, its parsing and i
 Optional, at the Python level: ``FLIGHT_STEP`` (s: the rk4 flight step its body force needs;
 a scene whose body forces all declare one takes the smallest as ``integrator_step`` unless it
 sets that knob), ``FLIGHT_KNOBS`` (a dict of the flight knobs its body force is best
-integrated with: a scene that names none of them nor integrator_step takes them; the first
-such effect in REGISTRY's order wins), ``contact_law(params)`` (friction, pivot model and
+integrated with, flight_method among them: a scene that names neither flight_method nor
+integrator_step takes those of them it does not name; the first such effect in REGISTRY's
+order wins), ``contact_law(params)`` (friction, pivot model and
 whether the impact law is sticking, for the event simulator), ``STOCHASTIC = True`` (noise:
 nominal models leave it out), ``read_sensor(seen, rng, params)``, ``domain(model, params)`` /
 ``domain_error(model, params, edge, R)`` / ``domain_note(model, params)`` (an effect that moves

@@ -63,10 +63,10 @@ KNOBS = {'plate_quadrature': 0, 'plate_v_reg': 1e-4}
 # The rk4 flight step (integrator_step's default): the exact drag has kinks, and 2 ms is 7x
 # less accurate than 1 ms (docs/accuracy.md). Under picard, the contact search's least step.
 FLIGHT_STEP = 1e-3
-# The flight a scene with the plate takes unless it names a flight knob or integrator_step
-# (session 39): the series flight with pieces graded about the drag's singularities, within
-# 0.8-0.9e-9 m of the reference where rk4 at 1 ms is within 1.5-1.9e-9 m, in a third of its
-# time (docs/accuracy.md, "graded pieces").
+# The flight a scene with the plate takes unless it names flight_method or integrator_step
+# (it keeps those of these knobs it names; session 39): the series flight with pieces graded
+# about the drag's singularities, within 0.8-0.9e-9 m of the reference where rk4 at 1 ms is
+# within 1.5-1.9e-9 m, in a third of its time (docs/accuracy.md, "graded pieces").
 FLIGHT_KNOBS = {'flight_method': 'picard', 'flight_step': 0.08, 'flight_tol': 1e-10,
                 'flight_grade': 3.0}
 
