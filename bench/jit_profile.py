@@ -129,7 +129,8 @@ def main():
         env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(tmp, 'numba'))
         proc = subprocess.Popen([sys.executable, __file__, args.scene, '--batches',
                                  str(args.batches), '--states', str(args.states),
-                                 '--knobs', args.knobs, '--child', table], env=env, stdout=subprocess.PIPE, text=True)
+                                 '--knobs', args.knobs, '--child', table],
+                                env=env, stdout=subprocess.PIPE, text=True)
         if proc.stdout.readline().strip() != 'ready':
             sys.exit('jit_profile: the kernel did not compile')
         subprocess.run(['perf', 'record', '-q', '-F', '2000', '-p', str(proc.pid), '-o', data],

@@ -147,7 +147,8 @@ class SimulatorAccuracy:
         centre on the outline: the drag goes as d^2 ln|d| in the centre's distance d from an
         edge), that distance estimated as the centre's distance from the outline over its
         speed, and a piece is not split at a kink until it is within flight_step / 16 of it
-        (graded pieces: the 5 nodes of a piece that reaches the singularity lose their order).
+        (graded pieces: the 5 nodes of a piece that reaches the singularity lose their order);
+        the piece in which the contact falls is solved again to end at it.
     roll_method : how the event simulator rolls about a sticking pivot: 'energy' (default:
         closed form, the work-energy equation in the roll angle, exact when the body force's
         torque about the pivot is -sign(omega) (a0 + a2 omega^2), as the plate's and the
