@@ -735,9 +735,9 @@ def main():
                                                    'contact': {'restitution': 0.0}}),
         ('backplate_friction', {'effects': ['backplate_friction'], 'gravity': None,
                                 'plate': dict(plate, mu=0.1)}),
-        ('backplate_friction, before issue 24 (roll_method rk4)',
+        ('backplate_friction, before issue 24 (roll_method rk4, flight_method rk4)',
          {'effects': ['backplate_friction'], 'gravity': None, 'plate': dict(plate, mu=0.1),
-          'accuracy': {'roll_method': 'rk4'}}),
+          'accuracy': {'roll_method': 'rk4', 'flight_method': 'rk4'}}),
         ('backplate_friction, flight rk8 (flight_tol 1e-9)',
          {'effects': ['backplate_friction'], 'gravity': None, 'plate': dict(plate, mu=0.1),
           'accuracy': RK8_FLIGHT}),
@@ -794,10 +794,12 @@ def main():
                          ref_e, exp_start, orbit_throws, band_throws)]
     s = load('experiment')
     fr_rows.append(evaluate('defaults (' + ', '.join(
-        f'{k}={knob_text(getattr(s.model.knobs, k))}' for k in exp_ref_knobs) + ')',
+        f'{k}={knob_text(getattr(s.model.knobs, k))}'
+        for k in list(exp_ref_knobs) + ['flight_step', 'flight_tol', 'flight_grade']) + ')',
         'backplate_friction', s.model, ref_e, exp_states, exp_start, orbit_throws, band_throws))
-    s = load('experiment', accuracy={'roll_method': 'rk4'})
-    fr_rows.append(evaluate('defaults before issue 24 (roll_method=rk4)',
+    # the plate's defaults before issue 24: rk4 rolls and rk4 flights at 1 ms
+    s = load('experiment', accuracy={'roll_method': 'rk4', 'flight_method': 'rk4'})
+    fr_rows.append(evaluate('defaults before issue 24 (roll_method=rk4, flight_method=rk4)',
                             'backplate_friction, before issue 24', s.model, ref_e, exp_states,
                             exp_start, orbit_throws, band_throws))
     for knobs in FAST_CONFIGS:

@@ -360,6 +360,39 @@ def test_plate_drag_is_the_exact_drag_of_a_uniform_lamina(vertices):
     assert np.all(np.isfinite(got)) and got == pytest.approx(ref, abs=1e-9)
 
 
+def test_plate_drag_creeps_while_the_fastest_point_is_slower_than_v_reg():
+    """
+    Check the exact drag's creep near rest, state by state.
+
+    The drag is scaled by (the fastest outline point's speed) / v_reg while that is below 1,
+    and only then: the scale checked against the outline's speeds at slow states.
+    """
+    from throwmap import Part
+    from throwmap.internal import plate_drag_exact, plate_moments
+    part = Part(np.array([[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]]))
+    ou, ov, cu, cv = part.outline_frames()
+    size = float(part.vertex_radius.max())
+    mom = plate_moments(ou, ov, size)
+    v_reg = 1e-4
+    rng = np.random.default_rng(11)
+    scaled = 0
+    for _ in range(400):
+        phi = rng.uniform(-3, 3)
+        vx, vy = rng.uniform(-1e-4, 1e-4, 2)
+        om = rng.uniform(-2e-3, 2e-3) if rng.uniform() < 0.8 else 0.0
+        c, s = math.cos(phi), math.sin(phi)
+        bx, by = c * vx + s * vy, -s * vx + c * vy
+        fastest = np.max(np.hypot(bx - om * ov[0], by + om * ou[0]))
+        got = plate_drag_exact(vx, vy, om, phi, ou[0], ov[0], cu[0], cv[0], size, mom[0], 1.0,
+                               v_reg)
+        whole = plate_drag_exact(vx, vy, om, phi, ou[0], ov[0], cu[0], cv[0], size, mom[0],
+                                 1.0, 0.0)
+        scale = min(1.0, fastest / v_reg)
+        scaled += scale < 1.0
+        assert got == pytest.approx(tuple(scale * w for w in whole), rel=1e-9, abs=1e-15)
+    assert 50 < scaled < 350
+
+
 @pytest.mark.parametrize('vertices', [
     [[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]],
     [[0.0, 0.0], [0.05, 0.0], [0.05, 0.02], [0.02, 0.02], [0.02, 0.05], [0.0, 0.05]],

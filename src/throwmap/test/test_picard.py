@@ -91,6 +91,20 @@ def test_dense_motion_is_exact_for_polynomial_accelerations(n):
         assert dq / h == pytest.approx(dexact, abs=1e-13)
 
 
+@pytest.mark.parametrize('n', [3, NODES, 8])
+def test_increment_is_the_dense_motions_end(n):
+    """increment(new, old, h^2): the end value and d/ds of dense(0, 0, h, new - old)."""
+    space = generated(n)
+    rng = np.random.default_rng(10 + n)
+    h = 0.013
+    new, old = tuple(rng.normal(size=n)), tuple(rng.normal(size=n))
+    q, dq = poly_at(space['dense'](0.0, 0.0, h, tuple(a - b for a, b in zip(new, old))), 1.0)
+    got = space['increment'](new, old, h * h)
+    # dense's monomial route loses digits at 8 nodes (a Vandermonde inverse): 1e-10 relative
+    assert got[0] == pytest.approx(q, rel=1e-10, abs=1e-18)
+    assert got[1] == pytest.approx(dq, rel=1e-10, abs=1e-18)
+
+
 K_DRAG = 0.8
 G = -9.66
 
@@ -185,6 +199,56 @@ def test_kink_finder_finds_the_centre_crossing_an_edge():
             if -0.1 <= along <= 1.1:
                 first = min(first, tt)
     assert t == pytest.approx(first, abs=h / 8000)
+
+
+@pytest.mark.parametrize('turn', [0.0, 0.03, 0.09, 0.4])
+def test_sampled_body_velocity_turns_as_the_whole_cosine(turn):
+    """
+    Check the kink finder's samples of the body velocity against cos(phi) and sin(phi).
+
+    The phase's linear part is turned by a fixed rotation, the rest by its series (the whole
+    cosine and sine past 0.1 rad).
+    """
+    from throwmap.picard import turned_velocity
+    space = generated()
+    dense = space['dense']
+    h = 0.06
+    alpha = 2.0 * turn / (h * h)        # the phase's departure from linear reaches ``turn``
+    cx = dense(0.0, 0.8, h, tuple([0.1] * NODES))
+    cy = dense(0.0, 1.5, h, tuple([G] * NODES))
+    cp = dense(0.7, 19.0, h, tuple([alpha] * NODES))
+    for s in np.linspace(0.0, 1.0, 17):
+        lin = cp[0] + cp[1] * s
+        got = turned_velocity(cx, cy, cp, s, h, math.cos(lin), math.sin(lin))
+        _, _, p, u, v, o = dense_state(cx, cy, cp, s, h)
+        want = (*body(u, v, p), o)
+        # the series' truncation: below 0.1^7 / 5040 = 2e-11 of the speed (1.7 m/s)
+        assert got == pytest.approx(want, rel=1e-13, abs=4e-11)
+
+
+def test_graded_end_stops_short_of_the_outline():
+    """
+    Check the graded end of a piece (flight_grade).
+
+    With reach r < 1 the piece ends before the centre reaches the outline, not before h_min;
+    with a large reach it ends at the kink, as without grading.
+    """
+    space = generated()
+    dense = space['dense']
+    bu = np.array([0.02, 0.02, -0.04])
+    bv = np.array([-0.0267, 0.0533, -0.0267])
+    h = 0.04
+    zero = tuple([0.0] * NODES)
+    cx = dense(0.0, 0.05, h, zero)
+    cy = dense(0.0, -G * 0.02, h, tuple([G] * NODES))
+    cp = dense(0.3, 5.0, h, zero)
+    t, k = first_kink(cx, cy, cp, h, bu, bv, 1e-9, 1e-5, False)
+    assert k >= 0
+    assert first_kink(cx, cy, cp, h, bu, bv, 1e-9, 1e-5, False, 1e9, 1e-4) == (t, k)
+    end, k2 = first_kink(cx, cy, cp, h, bu, bv, 1e-9, 1e-5, False, 0.5, 1e-4)
+    assert k2 == -1 and 1e-4 <= end < t
+    end, k2 = first_kink(cx, cy, cp, h, bu, bv, 1e-9, 1e-5, False, 1e-6, 2e-3)
+    assert (end, k2) == (2e-3, -1)
 
 
 def dense_state(cx, cy, cp, s, h):

@@ -43,7 +43,7 @@ drag is not kinked but goes as d^2 ln|d| in the centre's distance d from an edge
 that ends at a crossing, or passes close to the outline, is only third order whatever its
 nodes. With ``flight_grade`` > 0 the pieces are graded: at most flight_grade times the time
 the centre would take to reach the outline at its speed (at KINK_SAMPLES points of the
-predicted motion, :func:`graded_end`), not split at a kink until within flight_step / GRADE
+predicted motion, :func:`first_kink`), not split at a kink until within flight_step / GRADE
 of it, each at most 4x the last; and the piece in which a contact falls is solved again to
 end at it (inside a piece collocation is of order 7 in positions and 6 in velocities, at its
 end of order 10: on the plate the spin at the impact was 1.8e-6 rad/s off the reference's,
@@ -103,7 +103,8 @@ def sweep_source(n=NODES):
     sweep(phi, vx, vy, om, h, ax, ay, ao, g, rho2, edge, prm) -> (ax, ay, ao): the
     accelerations at the nodes of the motion whose node accelerations are (ax, ay, ao) (tuples
     of n). dense(q, v, h, a) -> the coefficients (n + 2) of the position in s = t / h.
-    sub(a, b): a - b, node by node; linear(a, b, h): a + b t at the nodes of a piece of h.
+    linear(a, b, h): a + b t at the nodes of a piece of h.
+    increment(new, old, hh): the end value and d/ds of dense(0, 0, h, new - old), hh = h^2.
     """
     c, a1, a2, vinv = tables(n)
     r = repr
@@ -132,8 +133,15 @@ def sweep_source(n=NODES):
     nodes = ', '.join(f'a + b * h * {float(c[i])!r}' for i in range(n))
     lines.append(f'    return ({nodes},)')
     lines.append('')
-    lines.append('def sub(a, b):')
-    lines.append('    return (' + ', '.join(f'a[{j}] - b[{j}]' for j in range(n)) + ',)')
+    # the end values of dense(0, 0, h, new - old) and of its d/ds: the Gauss weights w_j and
+    # w_j (1 - c_j), exact as the interpolant's integrals are
+    w = 0.5 * np.polynomial.legendre.leggauss(n)[1]
+    lines.append('def increment(new, old, hh):')
+    for j in range(n):
+        lines.append(f'    d{j} = new[{j}] - old[{j}]')
+    pos = ' + '.join(f'{r(float(w[j] * (1.0 - c[j])))} * d{j}' for j in range(n))
+    vel = ' + '.join(f'{r(float(w[j]))} * d{j}' for j in range(n))
+    lines.append(f'    return hh * ({pos}), hh * ({vel})')
     return '\n'.join(lines) + '\n'
 
 
@@ -183,6 +191,13 @@ def centre_edge(bx, by, om, bu, bv, k):
     return ex * qy - ey * qx, (ex * qx + ey * qy) / (ex * ex + ey * ey)
 
 
+@njit(inline=True)
+def centre_side(bx, by, om, bu, bv, k):
+    """Return om times the centre's side of edge k's line (:func:`centre_edge`'s first value)."""
+    kn = (k + 1) % bu.shape[0]
+    return (bu[kn] - bu[k]) * (bx - om * bv[k]) - (bv[kn] - bv[k]) * (-by - om * bu[k])
+
+
 @njit
 def centre_side_at(cx, cy, cp, tau, h, bu, bv, k):
     """Return om times (side, position along edge k) of the centre at time tau of a piece."""
@@ -216,80 +231,105 @@ def side_root(cx, cy, cp, h, bu, bv, k, a, b, fa, fb, tol):
                                 (cx, cy, cp, h, bu, bv, k, sign))
 
 
+@njit(inline=True)
+def turned_velocity(cx, cy, cp, s, h, cl, sl):
+    """
+    Return the CM's velocity in the body frame, and om, at s = t / h of a piece's polynomials.
+
+    (cl, sl): cos and sin of the phase's linear part cp[0] + cp[1] s. The rest (the body
+    force's turn, small over a piece) turns them by its series to the 7th order; beyond 0.1
+    rad the cosine and sine are taken whole.
+    """
+    _, _, p, u, v, o = dense_state(cx, cy, cp, s, h)
+    d = p - (cp[0] + cp[1] * s)
+    if abs(d) <= 0.1:
+        d2 = d * d
+        cd = 1.0 - d2 * (0.5 - d2 * (1.0 / 24.0 - d2 / 720.0))
+        sd = d * (1.0 - d2 * (1.0 / 6.0 - d2 / 120.0))
+        c = cl * cd - sl * sd
+        sn = sl * cd + cl * sd
+    else:
+        c = math.cos(p)
+        sn = math.sin(p)
+    return c * u + sn * v, -sn * u + c * v, o
+
+
 @njit
-def first_kink(cx, cy, cp, h, bu, bv, t_min, tol, exact=True):
+def first_kink(cx, cy, cp, h, bu, bv, t_min, tol, exact=True, reach=0.0, h_min=0.0):
     """
     Return (time, edge) of the centre's first crossing of an edge in (t_min, h), else (h, -1).
 
     Sampled at KINK_SAMPLES points; a sign change of an edge's side counts where the crossing
     (interpolated linearly between the samples, then, if ``exact``, located to ``tol`` by
-    regula falsi) lies on the edge, within KINK_MARGIN of its length.
+    regula falsi) lies on the edge, within KINK_MARGIN of its length. The samples' phases
+    turn by a fixed rotation from one to the next (:func:`turned_velocity`).
+
+    ``reach`` > 0 (flight_grade): the time returned is also at most max(h_min, reach r), r
+    the least time the centre takes to reach the outline at its speed between two samples so
+    far (edge -1 when it ends there).
     """
     n = bu.shape[0]
-    _, _, pa, ua, va, oa = dense_state(cx, cy, cp, 0.0, h)
-    bxa, bya = body_velocity(ua, va, pa)
+    p0 = cp[0]
+    cl = math.cos(p0)
+    sl = math.sin(p0)
+    turn = cp[1] / KINK_SAMPLES
+    ct = math.cos(turn)
+    st = math.sin(turn)
+    bxa, bya, oa = turned_velocity(cx, cy, cp, 0.0, h, cl, sl)
+    if reach > 0.0:
+        pxa, pya, da = centre_distance(bxa, bya, oa, bu, bv)
+    r_min = math.inf
     lo = 0.0
     for i in range(1, KINK_SAMPLES + 1):
         hi = h * i / KINK_SAMPLES
-        _, _, pb, ub, vb, ob = dense_state(cx, cy, cp, hi / h, h)
-        bxb, byb = body_velocity(ub, vb, pb)
-        best = h
+        cl, sl = cl * ct - sl * st, sl * ct + cl * st
+        bxb, byb, ob = turned_velocity(cx, cy, cp, i / KINK_SAMPLES, h, cl, sl)
+        end = hi
+        if reach > 0.0:
+            pxb, pyb, db = centre_distance(bxb, byb, ob, bu, bv)
+            moved = math.sqrt((pxb - pxa) ** 2 + (pyb - pya) ** 2)
+            if moved > 0.0:
+                r_min = min(r_min, min(da, db) * (hi - lo) / moved)
+            end = max(h_min, reach * r_min)
+            if end <= lo:
+                return end, -1
+            if end < hi:
+                # the graded end: the crossings looked for up to it
+                _, _, pe, ue, ve, ob = dense_state(cx, cy, cp, end / h, h)
+                bxb, byb = body_velocity(ue, ve, pe)
+            else:
+                end = hi
+            pxa, pya, da = pxb, pyb, db
+        best = end
         best_k = -1
         for k in range(n):
-            sa, la = centre_edge(bxa, bya, oa, bu, bv, k)
-            sb, lb = centre_edge(bxb, byb, ob, bu, bv, k)
+            sa = centre_side(bxa, bya, oa, bu, bv, k)
+            sb = centre_side(bxb, byb, ob, bu, bv, k)
             if not ((sa > 0.0 and sb <= 0.0) or (sa < 0.0 and sb >= 0.0)):
                 continue
+            _, la = centre_edge(bxa, bya, oa, bu, bv, k)
+            _, lb = centre_edge(bxb, byb, ob, bu, bv, k)
             w = sa / (sa - sb)
             along = ((1.0 - w) * la + w * lb) / ((1.0 - w) * oa + w * ob)
             if not (-0.5 <= along <= 1.5):
                 continue        # clearly off the edge: the force is smooth there
             if exact:
-                b = side_root(cx, cy, cp, h, bu, bv, k, lo, hi, sa, sb, tol)
+                b = side_root(cx, cy, cp, h, bu, bv, k, lo, end, sa, sb, tol)
                 _, _, p, u, v, o = dense_state(cx, cy, cp, b / h, h)
                 bx, by = body_velocity(u, v, p)
                 _, along = centre_edge(bx, by, o, bu, bv, k)
                 along /= o if o != 0.0 else 1.0
             else:
-                b = lo + w * (hi - lo)
+                b = lo + w * (end - lo)
             if b > t_min and -KINK_MARGIN <= along <= 1.0 + KINK_MARGIN and b < best:
                 best = b
                 best_k = k
-        if best_k >= 0:
+        if best_k >= 0 or end < hi:
             return best, best_k
         lo = hi
-        pa, ua, va, oa = pb, ub, vb, ob
+        oa = ob
         bxa, bya = bxb, byb
     return h, -1
-
-
-@njit
-def graded_end(cx, cy, cp, h, bu, bv, reach, h_min):
-    """
-    Return the end of a graded piece of the motion (cx, cy, cp) on [0, h]: h or less.
-
-    The first of KINK_SAMPLES points past max(h_min, reach r), r the least time the centre
-    takes to reach the outline at its speed between two points so far (flight_grade).
-    """
-    _, _, p, u, v, o = dense_state(cx, cy, cp, 0.0, h)
-    bx, by = body_velocity(u, v, p)
-    pxa, pya, da = centre_distance(bx, by, o, bu, bv)
-    r_min = math.inf
-    lo = 0.0
-    for i in range(1, KINK_SAMPLES + 1):
-        hi = h * i / KINK_SAMPLES
-        _, _, p, u, v, o = dense_state(cx, cy, cp, hi / h, h)
-        bx, by = body_velocity(u, v, p)
-        pxb, pyb, db = centre_distance(bx, by, o, bu, bv)
-        moved = math.sqrt((pxb - pxa) ** 2 + (pyb - pya) ** 2)
-        if moved > 0.0:
-            r_min = min(r_min, min(da, db) * (hi - lo) / moved)
-        lim = max(h_min, reach * r_min)
-        if lim < hi:
-            return lim
-        pxa, pya, da = pxb, pyb, db
-        lo = hi
-    return h
 
 
 @njit
@@ -425,7 +465,7 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES, graded=False):
     exec(compile(sweep_source(n), '<picard sweep>', 'exec'), space)  # noqa: S102
     sweep = njit(cache=False)(space['sweep'])
     dense = njit(cache=False)(space['dense'])
-    sub = njit(cache=False)(space['sub'])
+    increment = njit(cache=False)(space['increment'])
     linear = njit(cache=False)(space['linear'])
 
     @njit(cache=False, inline=True)
@@ -455,26 +495,22 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES, graded=False):
         t_min = max(64.0 * root, KINK_SKIP * h)
         kink_tol = max(root, KINK_TOL)
         h_max = h
-        kink = -1
         cx = dense(x, vx, h, ax)
         cy = dense(y, vy, h, ay)
         cp = dense(phi, om, h, ao)
-        if graded and reach > 0.0:
-            h_graded = graded_end(cx, cy, cp, h, bu, bv, reach, h_min)
-            if h_graded < h:
-                # the predicted motion of the shorter piece (the polynomials are in t / h)
-                h = h_graded
-                ax = linear(a0x, dax, h)
-                ay = linear(a0y, day, h)
-                ao = linear(a0o, dao, h)
-                cx = dense(x, vx, h, ax)
-                cy = dense(y, vy, h, ay)
-                cp = dense(phi, om, h, ao)
-        h, kink = first_kink(cx, cy, cp, h, bu, bv, t_min, kink_tol, False)
-        if graded and reach > 0.0 and kink >= 0 and h > (1.0 + 1.0 / reach) * h_min:
+        # the predicted motion's end: a kink, or (graded) the graded end
+        h_end, kink = first_kink(cx, cy, cp, h, bu, bv, t_min, kink_tol, False,
+                                 reach if graded else 0.0, h_min)
+        if graded and reach > 0.0 and kink >= 0 and h_end > (1.0 + 1.0 / reach) * h_min:
             # graded towards the kink: end where the rest is 1 / reach of the piece
-            h = h * reach / (1.0 + reach)
+            h_end = h_end * reach / (1.0 + reach)
             kink = -1
+        if h_end < h:
+            # the predicted accelerations at the shorter piece's nodes
+            h = h_end
+            ax = linear(a0x, dax, h)
+            ay = linear(a0y, day, h)
+            ao = linear(a0o, dao, h)
         evals = 0
         prev = math.inf
         rem = math.inf
@@ -482,16 +518,15 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES, graded=False):
             nx, ny, no = sweep(phi, vx, vy, om, h, ax, ay, ao, g, rho2, edge, prm)
             evals += n
             # the sweep's increment at the piece's end: positions, and velocities times h
-            ex, evx = poly_at(dense(0.0, 0.0, h, sub(nx, ax)), 1.0)
-            ey, evy = poly_at(dense(0.0, 0.0, h, sub(ny, ay)), 1.0)
-            ep, evp = poly_at(dense(0.0, 0.0, h, sub(no, ao)), 1.0)
+            hh = h * h
+            ex, evx = increment(nx, ax, hh)
+            ey, evy = increment(ny, ay, hh)
+            ep, evp = increment(no, ao, hh)
             inc = abs(ex) + abs(ey) + abs(evx) + abs(evy) + size * (abs(ep) + abs(evp))
             ax, ay, ao = nx, ny, no
-            cx = dense(x, vx, h, ax)
-            cy = dense(y, vy, h, ay)
-            cp = dense(phi, om, h, ao)
             if not (math.isfinite(inc)):
-                return False, h, cx, cy, cp, evals, inc, q_prev
+                return (False, h, dense(x, vx, h, ax), dense(y, vy, h, ay),
+                        dense(phi, om, h, ao), evals, inc, q_prev)
             if it == 0 and kink >= 0:
                 # the predicted kink, located again on the first sweep's motion (near it; the
                 # motion's polynomials reach a little past the piece)
@@ -520,11 +555,14 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES, graded=False):
             q = inc / prev if measured else max(Q_SAFETY * q_prev, Q_FLOOR)
             rem = inc * q / (1.0 - q) if q < 1.0 else (0.0 if inc == 0.0 else math.inf)
             if rem <= tol:
-                return True, h, cx, cy, cp, evals, rem, q if measured else q_prev
+                return (True, h, dense(x, vx, h, ax), dense(y, vy, h, ay),
+                        dense(phi, om, h, ao), evals, rem, q if measured else q_prev)
             if it >= 3 and inc > 0.5 * prev:
-                return False, h, cx, cy, cp, evals, inc, q_prev
+                return (False, h, dense(x, vx, h, ax), dense(y, vy, h, ay),
+                        dense(phi, om, h, ao), evals, inc, q_prev)
             prev = inc
-        return False, h, cx, cy, cp, evals, rem, q_prev
+        return (False, h, dense(x, vx, h, ax), dense(y, vy, h, ay), dense(phi, om, h, ao),
+                evals, rem, q_prev)
 
     @njit(cache=False)
     def fly(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge, prm, knobs,

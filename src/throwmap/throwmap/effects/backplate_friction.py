@@ -208,19 +208,6 @@ def plate_drag(vx, vy, om, phi, qu, qv, qw, coef, vreg):
 
 
 @njit
-def _sec_plus_tan(r, t, p):
-    """
-    Return sec + tan at a point of an edge's line, without cancellation.
-
-    r: the point's distance, t: its signed position along the line from the foot, p: the
-    line's distance (sec = r / p, tan = t / p; for t < 0, (r + t) / p = p / (r - t)).
-    """
-    if t >= 0.0:
-        return (r + t) / p
-    return p / (r - t)
-
-
-@njit
 def polar_moments(p0x, p0y, xs, ys):
     """
     Area integrals over an outline in polar coordinates about p0, by signed triangles.
@@ -231,6 +218,9 @@ def polar_moments(p0x, p0y, xs, ys):
     normal's direction), int rho_max^2 / 2 (-sin t, cos t) dt and int rho_max^3 / 3 dt take
     sec, ln(sec + tan) and sec tan, which are algebraic in the ends' distances and positions
     along the line (no trigonometry). A triangle turning clockwise counts negatively.
+    Positions and distances times the edge's length: one logarithm of the ratio of sec + tan
+    at the ends, one square root (the next vertex's distance) and two divisions an edge (sec +
+    tan at t < 0 as 1 / (sec - tan), without cancellation).
     """
     gx = 0.0
     gy = 0.0
@@ -240,37 +230,48 @@ def polar_moments(p0x, p0y, xs, ys):
     by = ys[0] - p0y
     rb = math.sqrt(bx * bx + by * by)
     for k in range(m):
-        # the edge from a (vertex k) to b (vertex k + 1); distances carried from one to the next
         ax = bx
         ay = by
         ra = rb
-        bx = xs[(k + 1) % m] - p0x
-        by = ys[(k + 1) % m] - p0y
+        kn = (k + 1) % m
+        bx = xs[kn] - p0x
+        by = ys[kn] - p0y
         rb = math.sqrt(bx * bx + by * by)
+        ex = xs[kn] - xs[k]
+        ey = ys[kn] - ys[k]
+        l2 = ex * ex + ey * ey
         cross = ax * by - ay * bx
-        length = math.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
-        if length == 0.0 or abs(cross) <= 1e-13 * (ra * ra + rb * rb):
-            # p0 on the edge's line (a pivot's own edges): no area, and sec would overflow
+        if l2 == 0.0 or abs(cross) <= 1e-13 * (ra * ra + rb * rb):
             continue
-        p = abs(cross) / length
-        inv = 1.0 / length
-        ex = (bx - ax) * inv
-        ey = (by - ay) * inv
-        ta = ax * ex + ay * ey
-        tb = bx * ex + by * ey
-        inv = 1.0 / p
-        nx = (ax - ta * ex) * inv       # unit normal from p0 to the line (the foot)
-        ny = (ay - ta * ey) * inv
-        if ex * -ny + ey * nx < 0.0:    # angle t grows against e: positions count negatively
+        length = math.sqrt(l2)
+        ae = ax * ex + ay * ey
+        w = ae / l2
+        fx = ax - w * ex            # the foot of p0 on the line, from p0: p times the normal
+        fy = ay - w * ey
+        ta = ae
+        tb = ae + l2                # positions along the line times the edge's length
+        if cross < 0.0:
             ta = -ta
             tb = -tb
-        # ln(sec + tan) at b minus at a, in one logarithm
-        s1 = math.log(_sec_plus_tan(rb, tb, p) / _sec_plus_tan(ra, ta, p))
-        half_s0 = 0.5 * p * (rb - ra)    # p^2 / 2 (sec b - sec a)
-        half_s1 = 0.5 * p * p * s1
-        gx += -nx * half_s0 - ny * half_s1
-        gy += -ny * half_s0 + nx * half_s1
-        m3 += p * (tb * rb - ta * ra) / 6.0 + p * p * p / 6.0 * s1
+        pl = abs(cross)             # p times the length
+        la = ra * length
+        lb = rb * length
+        if ta >= 0.0:
+            if tb >= 0.0:
+                ratio = (lb + tb) / (la + ta)
+            else:
+                ratio = pl * pl / ((la + ta) * (lb - tb))
+        elif tb >= 0.0:
+            ratio = (lb + tb) * (la - ta) / (pl * pl)
+        else:
+            ratio = (la - ta) / (lb - tb)
+        s1 = math.log(ratio)
+        p = pl / length
+        ps1 = p * s1
+        dr = rb - ra
+        gx -= 0.5 * (fx * dr + fy * ps1)
+        gy += 0.5 * (fx * ps1 - fy * dr)
+        m3 += p * ((tb * rb - ta * ra) / length + p * ps1) / 6.0
     return gx, gy, m3
 
 
@@ -344,30 +345,34 @@ def plate_drag_exact(vx, vy, om, phi, ou, ov, cu, cv, size, mom, coef, vreg):
     bx = c * vx + s * vy
     by = -s * vx + c * vy
     m = ou.shape[0]
-    vmax2 = 0.0
-    area2 = 0.0
-    for k in range(m):
-        wx = bx - om * ov[k]
-        wy = by + om * ou[k]
-        vmax2 = max(vmax2, wx * wx + wy * wy)
-        kn = (k + 1) % m
-        area2 += ou[k] * ov[kn] - ou[kn] * ov[k]
-    if vmax2 == 0.0:
-        return 0.0, 0.0, 0.0
+    speed = math.sqrt(bx * bx + by * by)
     scale = coef
-    if vmax2 < vreg * vreg:
-        scale = coef * math.sqrt(vmax2) / vreg
-    speed = math.hypot(bx, by)
+    if speed < vreg + abs(om) * size:
+        # the fastest point may be slower than vreg (elsewhere it is at least speed - |om| size)
+        vmax2 = 0.0
+        for k in range(m):
+            wx = bx - om * ov[k]
+            wy = by + om * ou[k]
+            vmax2 = max(vmax2, wx * wx + wy * wy)
+        if vmax2 == 0.0:
+            return 0.0, 0.0, 0.0
+        if vmax2 < vreg * vreg:
+            scale = coef * math.sqrt(vmax2) / vreg
     if abs(om) * size < SERIES_EPS * speed:
         ux, uy, tu = plate_drag_series(bx, by, om, size, mom)
         gx = -scale * ux
         gy = -scale * uy
         tq = -scale * tu
     else:
-        p0x = -by / om
-        p0y = bx / om
+        inv = 1.0 / om
+        p0x = -by * inv
+        p0y = bx * inv
+        area2 = 0.0
+        for k in range(m):
+            kn = (k + 1) % m
+            area2 += ou[k] * ov[kn] - ou[kn] * ov[k]
         mx, my, m3 = polar_moments(p0x, p0y, ou, ov)
-        sgn = scale * math.copysign(1.0, om) / (0.5 * area2)
+        sgn = scale * math.copysign(2.0, om) / area2
         gx = -sgn * mx
         gy = -sgn * my
         tq = -sgn * (m3 + p0x * my - p0y * mx)
