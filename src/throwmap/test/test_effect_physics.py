@@ -391,6 +391,10 @@ def test_plate_drag_creeps_while_the_fastest_point_is_slower_than_v_reg():
         scaled += scale < 1.0
         assert got == pytest.approx(tuple(scale * w for w in whole), rel=1e-9, abs=1e-15)
     assert 50 < scaled < 350
+    # at rest, with and without the creep: no drag (not 0 / 0)
+    for v_reg in (1e-4, 0.0):
+        assert plate_drag_exact(0.0, 0.0, 0.0, 0.3, ou[0], ov[0], cu[0], cv[0], size, mom[0],
+                                1.0, v_reg) == (0.0, 0.0, 0.0)
 
 
 @pytest.mark.parametrize('vertices', [

@@ -218,9 +218,9 @@ def polar_moments(p0x, p0y, xs, ys):
     normal's direction), int rho_max^2 / 2 (-sin t, cos t) dt and int rho_max^3 / 3 dt take
     sec, ln(sec + tan) and sec tan, which are algebraic in the ends' distances and positions
     along the line (no trigonometry). A triangle turning clockwise counts negatively.
-    Positions and distances times the edge's length: one logarithm of the ratio of sec + tan
-    at the ends, one square root (the next vertex's distance) and two divisions an edge (sec +
-    tan at t < 0 as 1 / (sec - tan), without cancellation).
+    Positions along the line times the edge's length: an edge takes one logarithm (of the
+    ratio of sec + tan at its ends; at t < 0 as 1 / (sec - tan), without cancellation), two
+    square roots (the next vertex's distance, the edge's length) and four divisions.
     """
     gx = 0.0
     gy = 0.0
@@ -230,6 +230,7 @@ def polar_moments(p0x, p0y, xs, ys):
     by = ys[0] - p0y
     rb = math.sqrt(bx * bx + by * by)
     for k in range(m):
+        # the edge from a (vertex k) to b (vertex k + 1); distances carried from one to the next
         ax = bx
         ay = by
         ra = rb
@@ -242,6 +243,7 @@ def polar_moments(p0x, p0y, xs, ys):
         l2 = ex * ex + ey * ey
         cross = ax * by - ay * bx
         if l2 == 0.0 or abs(cross) <= 1e-13 * (ra * ra + rb * rb):
+            # p0 on the edge's line (a pivot's own edges): no area, and sec would overflow
             continue
         length = math.sqrt(l2)
         ae = ax * ex + ay * ey
@@ -250,7 +252,7 @@ def polar_moments(p0x, p0y, xs, ys):
         fy = ay - w * ey
         ta = ae
         tb = ae + l2                # positions along the line times the edge's length
-        if cross < 0.0:
+        if cross < 0.0:             # the triangle turns clockwise: positions count negatively
             ta = -ta
             tb = -tb
         pl = abs(cross)             # p times the length
@@ -347,8 +349,9 @@ def plate_drag_exact(vx, vy, om, phi, ou, ov, cu, cv, size, mom, coef, vreg):
     m = ou.shape[0]
     speed = math.sqrt(bx * bx + by * by)
     scale = coef
-    if speed < vreg + abs(om) * size:
-        # the fastest point may be slower than vreg (elsewhere it is at least speed - |om| size)
+    if speed <= vreg + abs(om) * size:
+        # the fastest point may be slower than vreg (elsewhere it is at least speed - |om| size),
+        # or the part at rest (<=: with vreg 0 too)
         vmax2 = 0.0
         for k in range(m):
             wx = bx - om * ov[k]
