@@ -82,7 +82,7 @@ from .bracket import make_crossing, make_first_event
 from .catch import (cone_margin, first_cone_exit, flat_landing_edge, record, roll_force_rates,
                     stays_on_edge, sticking_impact, tip_pivot)
 from .jit import njit
-from .picard import make_flight
+from .picard import body_centre_side, body_velocity, make_flight
 from .rk8 import make_step
 from .status import (ERR_NONFINITE, ERR_PAINLEVE, ERR_SETTLE_CAP, ERR_SIM_CAP, EV_BOUNCE,
                      EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_HELD, EV_LANDING, EV_LIFTOFF,
@@ -260,14 +260,8 @@ def centre_side(vx, vy, om, phi, bu, bv, k):
     state and changes sign where the centre crosses the line (or om changes sign). Distributed
     friction-like forces (the plate's drag) are not smooth there.
     """
-    c = math.cos(phi)
-    s = math.sin(phi)
-    bx = c * vx + s * vy
-    by = -s * vx + c * vy
-    kn = (k + 1) % bu.shape[0]
-    ex = bu[kn] - bu[k]
-    ey = bv[kn] - bv[k]
-    return ex * (bx - om * bv[k]) - ey * (-by - om * bu[k])
+    bx, by = body_velocity(vx, vy, phi)
+    return body_centre_side(bx, by, om, bu, bv, k)
 
 
 @njit
@@ -569,8 +563,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
     contact_in_step = make_first_event(hermite_contact_event)
 
     @njit(cache=False)
-    def flight_to_contact(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size,
-                          edge, prm, knobs, steps):
+    def flight_to_contact(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, ou, ov,
+                          size, edge, prm, knobs, steps):
         """
         Fly with order-8 steps until a vertex meets the arm moving down (flight_method 'rk8').
 
@@ -580,7 +574,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         integrator_step apart, farther only where the lowest vertex (but the one that just
         left) is higher than a bound on every vertex's downward speed over the step times the
         gap. The crossing is bisected on the interpolant to contact_root_tol and its state is
-        then integrated from the step's start in one order-8 sub-step.
+        then integrated from the step's start in one order-8 sub-step. Vertices: the hull's (bu,
+        bv); the body force's kinks: where the centre crosses an edge of the outline (ou, ov).
         """
         nan = math.nan
         H = knobs.flight_step
@@ -612,7 +607,7 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
             for i in range(1, CENTRE_SAMPLES + 1):
                 hi = h_try * i / CENTRE_SAMPLES
                 _, _, pb, ub, vb_, ob = hermite_at(cx, cy, cp, hi, h_try)
-                kc = centre_crossing(ua, va, oa, pa, ub, vb_, ob, pb, bu, bv)
+                kc = centre_crossing(ua, va, oa, pa, ub, vb_, ob, pb, ou, ov)
                 if kc >= 0:
                     break
                 lo = hi
@@ -622,9 +617,9 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 # The body force may have a kink there (distributed friction): the solution's
                 # higher derivatives blow up on either side. Approach it in steps that shrink
                 # geometrically (GRADE), end a step just past it, and leave it likewise.
-                side0 = centre_side(ua, va, oa, pa, bu, bv, kc)
+                side0 = centre_side(ua, va, oa, pa, ou, ov, kc)
                 hi, _, _ = centre_crossing_in(lo, hi, root, 1, 0,
-                                              (cx, cy, cp, h_try, bu, bv, kc, side0))
+                                              (cx, cy, cp, h_try, ou, ov, kc, side0))
                 passed = hi <= h_fine
                 h_step = hi if passed else (1.0 - 1.0 / GRADE) * hi
                 x1, y1, p1, vx1, vy1, om1, ax1, ay1, ao1, err = rk8_step(
@@ -973,15 +968,18 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         elif knobs.flight_method == FLIGHT_RK8:
             code, k, x, y, phi, vx, vy, om, t, steps = flight_to_contact(
                 st.x, st.y, st.phi, st.vx, st.vy, st.om, st.t, st.sep, st.sep_rising, env.g,
-                rho2, env.bu, env.bv, env.size, env.edge, env.prm, knobs, st.steps)
+                rho2, env.bu, env.bv, env.part.OU[env.edge], env.part.OV[env.edge], env.size,
+                env.edge, env.prm, knobs, st.steps)
         elif knobs.flight_method == FLIGHT_PICARD and knobs.flight_grade > 0.0:
             code, k, x, y, phi, vx, vy, om, t, steps, _, _ = graded_flight(
                 st.x, st.y, st.phi, st.vx, st.vy, st.om, st.t, st.sep, st.sep_rising, env.g,
-                rho2, env.bu, env.bv, env.size, env.edge, env.prm, knobs, st.steps)
+                rho2, env.bu, env.bv, env.part.OU[env.edge], env.part.OV[env.edge], env.size,
+                env.edge, env.prm, knobs, st.steps)
         elif knobs.flight_method == FLIGHT_PICARD:
             code, k, x, y, phi, vx, vy, om, t, steps, _, _ = picard_flight(
                 st.x, st.y, st.phi, st.vx, st.vy, st.om, st.t, st.sep, st.sep_rising, env.g,
-                rho2, env.bu, env.bv, env.size, env.edge, env.prm, knobs, st.steps)
+                rho2, env.bu, env.bv, env.part.OU[env.edge], env.part.OV[env.edge], env.size,
+                env.edge, env.prm, knobs, st.steps)
         else:
             code, k, x, y, phi, vx, vy, om, t, steps = rk4_flight_to_contact(
                 st.x, st.y, st.phi, st.vx, st.vy, st.om, st.t, st.sep, st.sep_rising, env.g,

@@ -140,10 +140,12 @@ def _hull_indices(pts):
 # Per edge i: d (CM height over E^i), u_l, u_r, stable, edge_len; per vertex k: vrad (distance from
 # the CM), acw / accw (angle of CM - V^k from the arm at the two ends of its rolling range),
 # kcw / kccw (omega ratio of a landing at the next vertex clockwise / counterclockwise);
-# U[i, k], V[i, k]: vertex k in frame F^i; rest_angle[i]: rotation of the resting pose on E^i.
+# U[i, k], V[i, k]: vertex k in frame F^i; rest_angle[i]: rotation of the resting pose on E^i;
+# OU[i, j], OV[i, j]: outline point j in frame F^i (the hull's vertices for a convex part; where
+# a distributed force has its kinks, throwmap.picard).
 PartArrays = namedtuple('PartArrays', ['n', 'rho2', 'd', 'u_l', 'u_r', 'stable', 'edge_len',
                                        'vrad', 'acw', 'accw', 'kcw', 'kccw', 'U', 'V',
-                                       'rest_angle'])
+                                       'rest_angle', 'OU', 'OV'])
 
 
 def triangulate(outline):
@@ -345,10 +347,11 @@ class Part:
     def arrays(self):
         """Return the part's per-edge and per-vertex arrays as one bundle for compiled code."""
         if self._arrays is None:
+            ou, ov, _, _ = self.outline_frames()
             self._arrays = PartArrays(self.n, self.rho2, self.d, self.u_l, self.u_r, self.stable,
                                       self.edge_length, self.vertex_radius, self.alpha_cw_end,
                                       self.alpha_ccw_end, self.k_cw, self.k_ccw, self.U, self.V,
-                                      self.rest_angle)
+                                      self.rest_angle, ou, ov)
         return self._arrays
 
     def area_quadrature(self, level):

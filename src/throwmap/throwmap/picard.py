@@ -173,6 +173,19 @@ def body_velocity(vx, vy, phi):
     return c * vx + s * vy, -s * vx + c * vy
 
 
+@njit(inline=True)
+def body_centre_side(bx, by, om, bu, bv, k):
+    """
+    Return om times the side of edge k's line (k to k + 1) on which the instantaneous centre lies.
+
+    (bx, by): the CM's velocity in the body frame of the start edge (where bu, bv are); the
+    centre is z x v / om from the CM. Times om the value is smooth in the state and changes
+    sign where the centre crosses the line (or om changes sign).
+    """
+    kn = (k + 1) % bu.shape[0]
+    return (bu[kn] - bu[k]) * (bx - om * bv[k]) - (bv[kn] - bv[k]) * (-by - om * bu[k])
+
+
 @njit
 def centre_edge(bx, by, om, bu, bv, k):
     """
@@ -188,14 +201,7 @@ def centre_edge(bx, by, om, bu, bv, k):
     ey = bv[kn] - bv[k]
     qx = -by - om * bu[k]
     qy = bx - om * bv[k]
-    return ex * qy - ey * qx, (ex * qx + ey * qy) / (ex * ex + ey * ey)
-
-
-@njit(inline=True)
-def centre_side(bx, by, om, bu, bv, k):
-    """Return om times the centre's side of edge k's line (:func:`centre_edge`'s first value)."""
-    kn = (k + 1) % bu.shape[0]
-    return (bu[kn] - bu[k]) * (bx - om * bv[k]) - (bv[kn] - bv[k]) * (-by - om * bu[k])
+    return body_centre_side(bx, by, om, bu, bv, k), (ex * qx + ey * qy) / (ex * ex + ey * ey)
 
 
 @njit
@@ -303,8 +309,8 @@ def first_kink(cx, cy, cp, h, bu, bv, t_min, tol, exact=True, reach=0.0, h_min=0
         best = end
         best_k = -1
         for k in range(n):
-            sa = centre_side(bxa, bya, oa, bu, bv, k)
-            sb = centre_side(bxb, byb, ob, bu, bv, k)
+            sa = body_centre_side(bxa, bya, oa, bu, bv, k)
+            sb = body_centre_side(bxb, byb, ob, bu, bv, k)
             if not ((sa > 0.0 and sb <= 0.0) or (sa < 0.0 and sb >= 0.0)):
                 continue
             _, la = centre_edge(bxa, bya, oa, bu, bv, k)
@@ -455,9 +461,11 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES, graded=False):
     piece solved again), else flight_grade is not read. Two flights, not one with a branch on
     the knob: the graded code in the ungraded flight's loop made it 7-9 % slower (session 39).
 
-    ``fly(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge, prm, knobs,
-    steps)`` flies until a vertex meets the arm moving
-    down; returns (status, vertex, x, y, phi, vx, vy, om, t, steps, evaluations, remainder):
+    ``fly(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, ou, ov, size, edge, prm,
+    knobs, steps)`` flies until a vertex (bu, bv: the hull's, in the start edge's frame) meets
+    the arm moving down; its pieces end where the instantaneous centre crosses an edge of the
+    outline (ou, ov: the part's outline, whose notches the hull skips) and, graded, where it
+    nears one. Returns (status, vertex, x, y, phi, vx, vy, om, t, steps, evaluations, remainder):
     the state at the crossing, the force evaluations made and the largest remainder estimate
     of a piece's series (m).
     """
@@ -479,13 +487,14 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES, graded=False):
     contact_in_piece = make_first_event(contact_at)
 
     @njit(cache=False)
-    def piece(x, y, phi, vx, vy, om, h, a0x, a0y, a0o, dax, day, dao, g, rho2, bu, bv, size,
+    def piece(x, y, phi, vx, vy, om, h, a0x, a0y, a0o, dax, day, dao, g, rho2, ou, ov, size,
               edge, prm, tol, root, q_prev, reach, h_min):
         """
         Solve one piece from its start state, from the predictor a0 + da t of the accelerations.
 
         Returns (ok, h, cx, cy, cp, evaluations, remainder, q): the piece, ended at the first
-        kink of the force (found on the predicted motion, then located on the first sweep's);
+        kink of the force, where the centre crosses an edge of the outline (ou, ov; found on
+        the predicted motion, then located on the first sweep's);
         ok False when the sweeps did not converge; q the sweeps' contraction measured on this
         piece (q_prev, the last piece's, when it took one sweep).
         """
@@ -499,7 +508,7 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES, graded=False):
         cy = dense(y, vy, h, ay)
         cp = dense(phi, om, h, ao)
         # the predicted motion's end: a kink, or (graded) the graded end
-        h_end, kink = first_kink(cx, cy, cp, h, bu, bv, t_min, kink_tol, False,
+        h_end, kink = first_kink(cx, cy, cp, h, ou, ov, t_min, kink_tol, False,
                                  reach if graded else 0.0, h_min)
         if graded and reach > 0.0 and kink >= 0 and h_end > (1.0 + 1.0 / reach) * h_min:
             # graded towards the kink: end where the rest is 1 / reach of the piece
@@ -535,18 +544,18 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES, graded=False):
                 ex_y = dense(y, vy, h_ext, ay)
                 ex_p = dense(phi, om, h_ext, ao)
                 a = (1.0 - KINK_REACH) * h
-                fa, _ = centre_side_at(ex_x, ex_y, ex_p, a, h_ext, bu, bv, kink)
-                fb, _ = centre_side_at(ex_x, ex_y, ex_p, h_ext, h_ext, bu, bv, kink)
-                hk = side_root(ex_x, ex_y, ex_p, h_ext, bu, bv, kink, a, h_ext, fa, fb, kink_tol)
+                fa, _ = centre_side_at(ex_x, ex_y, ex_p, a, h_ext, ou, ov, kink)
+                fb, _ = centre_side_at(ex_x, ex_y, ex_p, h_ext, h_ext, ou, ov, kink)
+                hk = side_root(ex_x, ex_y, ex_p, h_ext, ou, ov, kink, a, h_ext, fa, fb, kink_tol)
                 if hk >= 0.0:
                     _, _, p, u, v, o = dense_state(ex_x, ex_y, ex_p, hk / h_ext, h_ext)
                     bx, by = body_velocity(u, v, p)
-                    _, along = centre_edge(bx, by, o, bu, bv, kink)
+                    _, along = centre_edge(bx, by, o, ou, ov, kink)
                     along /= o if o != 0.0 else 1.0
                     if not -KINK_MARGIN <= along <= 1.0 + KINK_MARGIN:
                         hk = -1.0
                 if hk < 0.0:
-                    hk, kink = first_kink(ex_x, ex_y, ex_p, h_ext, bu, bv, t_min, kink_tol)
+                    hk, kink = first_kink(ex_x, ex_y, ex_p, h_ext, ou, ov, t_min, kink_tol)
                 if abs(hk - h) > kink_tol:
                     h = hk
                     prev = math.inf
@@ -565,8 +574,8 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES, graded=False):
                 evals, rem, q_prev)
 
     @njit(cache=False)
-    def fly(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, size, edge, prm, knobs,
-            steps):
+    def fly(x, y, phi, vx, vy, om, t, sep, sep_rising, g, rho2, bu, bv, ou, ov, size, edge, prm,
+            knobs, steps):
         H = knobs.flight_step
         dts = knobs.integrator_step
         root = knobs.contact_root_tol
@@ -594,7 +603,7 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES, graded=False):
             if steps > knobs.max_sim_steps:
                 return ERR_SIM_CAP, -1, x, y, phi, vx, vy, om, t, steps, evals, worst
             ok, h, cx, cy, cp, ne, rem, q_prev = piece(
-                x, y, phi, vx, vy, om, h_try, a0x, a0y, a0o, dax, day, dao, g, rho2, bu, bv, size,
+                x, y, phi, vx, vy, om, h_try, a0x, a0y, a0o, dax, day, dao, g, rho2, ou, ov, size,
                 edge, prm, tol, root, q_prev, reach if to_contact < 0.0 else 0.0, h_min)
             evals += ne
             if graded and to_contact >= 0.0:
