@@ -178,7 +178,19 @@ class StandInNode(PartNode):
         return response
 
     def _start_cycling(self):
-        self._cycle_timer = self.create_timer(self._param('cycle_period'), self._fire)
+        timer = self.create_timer(self._param('cycle_period'), lambda: self._tick(timer))
+        self._cycle_timer = timer
+
+    def _tick(self, timer):
+        """
+        Fire a cycle for ``timer`` if it is still the cycling timer.
+
+        The events executor may run a tick queued just before ``~/enable false`` (or a new
+        period) destroyed its timer: that cycle would fire after the answer said which cycle
+        was the last, and throw a part the caller has since replaced.
+        """
+        if timer is self._cycle_timer:
+            self._fire()
 
     def _stop_cycling(self):
         if self._cycle_timer is not None:
