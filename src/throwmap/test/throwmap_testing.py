@@ -58,6 +58,18 @@ def force_scene(effects, plate=None, **accuracy):
     return Scene(data)
 
 
+def hard_part_on_the_plate(name, **accuracy):
+    """Return scenes/hard/NAME.yaml with the back plate (and its drag) instead of gravity."""
+    from throwmap.scene import read_yaml
+    data = read_yaml(SCENES / 'hard' / f'{name}.yaml')
+    data.pop('gravity', None)
+    data['plate'] = dict(PLATE)
+    data['effects'] = ['backplate_friction']
+    if accuracy:
+        data['accuracy'] = dict(data.get('accuracy') or {}, **accuracy)
+    return Scene(data)
+
+
 def random_convex_vertices(rng, n_max=8, scale=0.05):
     """Return a random convex polygon (CCW) of 3..n_max corners around the origin."""
     while True:

@@ -134,7 +134,7 @@ class SimulatorAccuracy:
         series about the ballistic flight: pieces of at most flight_step, ended where the
         plate drag has a kink, each solved by Picard sweeps at Gauss-Legendre nodes until a
         sweep moves its end by less than flight_tol; throwmap.picard). A scene whose body
-        force declares FLIGHT_KNOBS (backplate_friction: picard, 0.08 s, 1e-10, grade 3) takes
+        force declares FLIGHT_KNOBS (backplate_friction: picard, 0.08 s, 1e-10, grade 1.5) takes
         those it does not name when it names neither flight_method nor integrator_step
         (throwmap.scene).
     flight_step : s, the largest step of flight_method 'rk8', the largest piece of 'picard'.
