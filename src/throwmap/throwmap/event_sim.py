@@ -82,7 +82,7 @@ from .bracket import make_crossing, make_first_event
 from .catch import (cone_margin, first_cone_exit, flat_landing_edge, record, roll_force_rates,
                     stays_on_edge, sticking_impact, tip_pivot)
 from .jit import njit
-from .picard import body_centre_side, body_velocity, make_flight
+from .picard import body_centre_side, body_velocity, KINK_SKIP, make_flight
 from .rk8 import make_step
 from .status import (ERR_NONFINITE, ERR_PAINLEVE, ERR_SETTLE_CAP, ERR_SIM_CAP, EV_BOUNCE,
                      EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_HELD, EV_LANDING, EV_LIFTOFF,
@@ -575,7 +575,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         left) is higher than a bound on every vertex's downward speed over the step times the
         gap. The crossing is bisected on the interpolant to contact_root_tol and its state is
         then integrated from the step's start in one order-8 sub-step. Vertices: the hull's (bu,
-        bv); the body force's kinks: where the centre crosses an edge of the outline (ou, ov).
+        bv); the body force's kinks: where the centre crosses an edge of the outline (ou, ov),
+        but not within KINK_SKIP h_fine of a step's start (a centre the drag holds on a line).
         """
         nan = math.nan
         H = knobs.flight_step
@@ -584,6 +585,8 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
         ax0, ay0, ao0 = flight_rhs(vx, vy, om, phi, g, rho2, edge, prm)
         tol = knobs.flight_tol
         h_fine = H / (GRADE * GRADE * GRADE)
+        # a crossing this soon after a step's start is not split at (picard's KINK_SKIP)
+        t_skip = max(64.0 * root, KINK_SKIP * h_fine)
         h_next = H
         while True:
             steps += 1
@@ -609,7 +612,16 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 _, _, pb, ub, vb_, ob = hermite_at(cx, cy, cp, hi, h_try)
                 kc = centre_crossing(ua, va, oa, pa, ub, vb_, ob, pb, ou, ov)
                 if kc >= 0:
-                    break
+                    side0 = centre_side(ua, va, oa, pa, ou, ov, kc)
+                    hk, _, _ = centre_crossing_in(lo, hi, root, 1, 0,
+                                                  (cx, cy, cp, h_try, ou, ov, kc, side0))
+                    if hk >= t_skip:
+                        hi = hk
+                        break
+                    # At the step's start: the centre rides the line (the drag can hold it
+                    # there, as on a 1 mm plate's long edge), where d^2 ln|d| is ~0 and the
+                    # force smooth. Split there and steps shrink to rounding (no progress).
+                    kc = -1
                 lo = hi
                 pa, ua, va, oa = pb, ub, vb_, ob
             passed = False
@@ -617,9 +629,6 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 # The body force may have a kink there (distributed friction): the solution's
                 # higher derivatives blow up on either side. Approach it in steps that shrink
                 # geometrically (GRADE), end a step just past it, and leave it likewise.
-                side0 = centre_side(ua, va, oa, pa, ou, ov, kc)
-                hi, _, _ = centre_crossing_in(lo, hi, root, 1, 0,
-                                              (cx, cy, cp, h_try, ou, ov, kc, side0))
                 passed = hi <= h_fine
                 h_step = hi if passed else (1.0 - 1.0 / GRADE) * hi
                 x1, y1, p1, vx1, vy1, om1, ax1, ay1, ao1, err = rk8_step(
@@ -633,7 +642,9 @@ def build(body_force=no_force, contact_load=no_contact_load, static_hold=no_hold
                 continue
             h_next = h_step * (5.0 if err == 0.0 else min(5.0, 0.9 * (tol / err) ** 0.125))
             if passed:
-                h_next = min(h_next, h_fine)
+                # leave the kink from h_fine (a step cut short at it says little of the next;
+                # error control rejects a step too long)
+                h_next = h_fine
             elif kc >= 0:
                 h_next = min(h_next, h_step)
             vb = 1.05 * (max(abs(vy), abs(vy1)) + max(abs(om), abs(om1)) * size) + 1e-12
