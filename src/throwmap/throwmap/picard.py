@@ -419,16 +419,18 @@ vertex_height_crossing = make_crossing(vertex_height_of)
 
 
 @njit
-def vertex_crossing(cx, cy, cp, h, lo, hi, bu_k, bv_k, root):
+def vertex_crossing(cx, cy, cp, h, lo, hi, bu_k, bv_k, root, floor=0.0):
     """
     Return a time in (lo, hi] within ``root`` after the vertex's height crosses zero, or -1.
 
-    The height is above zero at lo and at or below it at hi (else -1: the caller bisects);
-    Illinois regula falsi (throwmap.bracket) keeps the crossing bracketed.
+    The height is above ``floor`` at lo and at or below zero at hi (else -1: the caller
+    bisects); Illinois regula falsi (throwmap.bracket) keeps the crossing bracketed. A height
+    within rounding of zero at lo (a vertex that has just bounced off the arm) is no bracket:
+    its rounding noise holds crossings of its own, where regula falsi would stop.
     """
     fa = vertex_height(cx, cy, cp, lo, h, bu_k, bv_k)
     fb = vertex_height(cx, cy, cp, hi, h, bu_k, bv_k)
-    if not (fa > 0.0 and fb <= 0.0):
+    if not (fa > floor and fb <= 0.0):
         return -1.0
     return vertex_height_crossing(lo, hi, fa, fb, root, 100, (cx, cy, cp, h, bu_k, bv_k))
 
@@ -661,10 +663,11 @@ def make_flight(rhs, lowest_approaching, arm_contact, n=NODES, graded=False):
             # one sample interval: a nearly flat landing)
             hi = -1.0
             first = -1
+            noise = 16.0 * EPS * (abs(y) + size)     # a height's rounding
             for kv in range(bu.shape[0]):
                 if kv == sep or vertex_height(cx, cy, cp, tau, h, bu[kv], bv[kv]) > 0.0:
                     continue
-                tk = vertex_crossing(cx, cy, cp, h, lo, tau, bu[kv], bv[kv], root)
+                tk = vertex_crossing(cx, cy, cp, h, lo, tau, bu[kv], bv[kv], root, noise)
                 if tk < 0.0:
                     hi = -1.0
                     break
