@@ -47,14 +47,7 @@ def policy(speeds):
 
 
 def starts(d, parts, seed):
-    tracker = F.Tracker(d)
-    rng = np.random.default_rng(seed)
-    cells = np.nonzero(tracker.start)[0]
-    out = []
-    for _ in range(parts):
-        edge, lo, hi = tracker.system.bounds(rng.choice(cells))
-        out.append((int(edge), float(rng.uniform(lo, hi))))
-    return out
+    return F.Tracker(d).random_starts(parts, np.random.default_rng(seed))
 
 
 def feed(arm, res, d, parts, rng):

@@ -81,13 +81,7 @@ def policy_file(tmp_path_factory):
 def starts(policy_file, parts, seed=25):
     """Random states of the policy's start set: a start cell, R uniform in it."""
     tracker = F.Tracker(json.loads(policy_file.read_text()))
-    rng = np.random.default_rng(seed)
-    cells = np.nonzero(tracker.start)[0]
-    out = []
-    for _ in range(parts):
-        edge, lo, hi = tracker.system.bounds(rng.choice(cells))
-        out.append((int(edge), float(rng.uniform(lo, hi))))
-    return out
+    return tracker.random_starts(parts, np.random.default_rng(seed))
 
 
 def place(ros, edge, R):

@@ -226,6 +226,17 @@ def test_the_policy_file_round_trips_and_its_tracker_chooses_the_same(planned, t
         F.Tracker(dict(policy, format='something else'))
 
 
+def test_random_starts_lie_in_the_start_set_and_cover_it(planned):
+    tracker = F.Tracker(json.loads(json.dumps(F.policy_dict(planned, TRIANGLE))))
+    start_cells = np.nonzero(tracker.start)[0]
+    draws = 20 * start_cells.size       # a cell missed with chance e^-20 if uniform
+    starts = tracker.random_starts(draws, np.random.default_rng(3))
+    cells = [planned.system.cell(e, r) for e, r in starts]
+    assert all(c >= 0 and tracker.start[c] for c in cells)
+    assert set(cells) == set(start_cells.tolist())
+    assert starts == tracker.random_starts(draws, np.random.default_rng(3))
+
+
 def test_the_tracker_follows_the_speed_used_and_forgets_what_it_cannot_follow(planned):
     policy = json.loads(json.dumps(F.policy_dict(planned, TRIANGLE)))
     tracker = F.Tracker(policy)

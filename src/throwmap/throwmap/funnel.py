@@ -768,6 +768,15 @@ class Tracker:
         self.know = s.can_see.copy() if bit else s.can_miss.copy()
         self.last = -1
 
+    def random_starts(self, parts, rng):
+        """Return ``parts`` random states (edge, R) of the start set: a cell, R uniform in it."""
+        cells = np.nonzero(self.start)[0]
+        out = []
+        for _ in range(parts):
+            edge, lo, hi = self.system.bounds(rng.choice(cells))
+            out.append((int(edge), float(rng.uniform(lo, hi))))
+        return out
+
     @property
     def home_speed(self):
         """Return the scene's own release speed, rad/s (the fixed design's)."""
