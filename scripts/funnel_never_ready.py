@@ -28,6 +28,7 @@ ready or MAX_THROWS throws. Prints one JSON line per policy. No ROS.
 
 import json
 import math
+import pathlib
 import sys
 import time
 
@@ -36,7 +37,7 @@ from throwmap import funnel as F
 from throwmap import load_scene
 from throwmap.sensor import sees
 
-TRIANGLE = 'scenes/triangle.yaml'
+TRIANGLE = str(pathlib.Path(__file__).resolve().parents[1] / 'scenes' / 'triangle.yaml')
 ROBUST, MAX_THROWS = 0.005, 400
 
 
@@ -76,10 +77,10 @@ def feed(arm, res, d, parts, rng):
 
 def main(parts=5000, seed=1):
     t0 = time.process_time()
-    _, _, multi = policy('120:600:20')
-    for name, speeds in (('sensor-based 120:600:20', '120:600:20'), ('one speed 320', '320')):
-        arm, res, d = policy(speeds)
-        th, false, lost = feed(arm, res, d, starts(multi, parts, seed),
+    multi = policy('120:600:20')       # its start set is the parts' for both policies
+    for name, planned in (('sensor-based 120:600:20', multi), ('one speed 320', policy('320'))):
+        arm, res, d = planned
+        th, false, lost = feed(arm, res, d, starts(multi[2], parts, seed),
                                np.random.default_rng(seed + 1000))
         done = th[np.isfinite(th)]
         print(json.dumps({'policy': name, 'parts': parts, 'seed': seed,
