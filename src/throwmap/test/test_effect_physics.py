@@ -445,6 +445,59 @@ def test_plate_drag_bends_as_d2_log_d_where_the_centre_crosses_an_edge(vertices)
             assert abs(change @ n) < 0.01 * per_decade, (j, side)
 
 
+@pytest.mark.parametrize('vertices', [
+    [[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]],
+    [[0.0, 0.0], [0.05, 0.0], [0.05, 0.02], [0.02, 0.02], [0.02, 0.05], [0.0, 0.05]],
+])
+def test_the_drag_less_its_log_part_is_smooth_where_the_centre_crosses_an_edge(vertices):
+    """
+    Check crossing_log_coefficient: the drag less B ln|d| does not bend as d^2 ln|d|.
+
+    The test above measures the bend of the force along the edge: 2 ln(10) / A per decade of
+    d. With B ln|d| subtracted (B at the same centre) the second derivative of the force and
+    of the torque changes by under 1 % of that between d = 1e-4 and 1e-5 of the part's size,
+    on both sides of every edge, at its middle and a quarter along; it fails if B is halved.
+    """
+    from throwmap import Part
+    from throwmap.internal import crossing_log_coefficient, plate_drag_exact, plate_moments
+    part = Part(np.array(vertices, dtype=float))
+    ou, ov, cu, cv = part.outline_frames()
+    size = float(part.vertex_radius.max())
+    mom = plate_moments(ou, ov, size)
+    om = 5.0
+    per_decade = 2.0 * math.log(10.0) / part.area
+    n_edges = len(ou[0])
+
+    def smooth_part(p0, k, d, share):
+        # the centre p0 = z x v / om: v = om (p0y, -p0x)
+        v = (om * p0[1], -om * p0[0])
+        f = np.array(plate_drag_exact(*v, om, 0.0, ou[0], ov[0], cu[0], cv[0], size, mom[0],
+                                      1.0, 0.0))
+        b = np.array(crossing_log_coefficient(*v, om, 0.0, ou[0], ov[0], 1.0, k))
+        return f - share * b * math.log(abs(d))
+
+    for share, bends in ((1.0, False), (0.5, True)):
+        for k in range(n_edges):
+            kn = (k + 1) % n_edges
+            a = np.array([ou[0][k], ov[0][k]])
+            e = np.array([ou[0][kn], ov[0][kn]]) - a
+            n = np.array([-e[1], e[0]]) / np.hypot(*e)
+            for along in (0.5, 0.25):
+                for side in (1.0, -1.0):
+                    change = []
+                    for d in (1e-4 * size, 1e-5 * size):
+                        h = d / 20.0
+                        at = [smooth_part(a + along * e + side * x * n, k, side * x, share)
+                              for x in (d + h, d, d - h)]
+                        change.append((at[0] - 2.0 * at[1] + at[2]) / (h * h))
+                    step = np.abs(change[1] - change[0])
+                    scale = np.array([1.0, 1.0, 1.0 / size])    # the torque per unit length
+                    if bends:
+                        assert np.hypot(*step[:2]) > 0.4 * per_decade, (k, along, side)
+                    else:
+                        assert np.all(step * scale < 0.01 * per_decade), (k, along, side, step)
+
+
 def test_the_experiment_scene_uses_the_exact_drag():
     with open(SCENES / 'experiment.yaml', encoding='utf-8') as fh:
         data = yaml.safe_load(fh)

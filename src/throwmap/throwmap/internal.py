@@ -21,7 +21,8 @@ names what it reaches into, and a refactor sees it.
 * :func:`sticking_impact` (throwmap.catch): eqs 7-9.
 * :func:`routh_stronge_impact` (effect impact_restitution): the frictional impact law.
 * :func:`plate_drag` (effect backplate_friction): the plate's drag at one state, with the
-  quadrature of ``Part.area_quadrature``; :func:`plate_drag_exact`: the same in closed form.
+  quadrature of ``Part.area_quadrature``; :func:`plate_drag_exact`: the same in closed form;
+  :func:`crossing_log_coefficient`: its ln|d| part where the instantaneous centre crosses an edge.
 * :func:`carry_release_state`, :func:`carry_margin`, :func:`carry_holds`,
   :func:`carry_interval` (effect finite_carry): the state at release, the wrench-cone margin
   along the carry, the release hook's grasp test (tables instead of trigonometry) and the
@@ -31,11 +32,12 @@ names what it reaches into, and a refactor sees it.
 
 from .catch import sticking_impact
 from .compose import source as composed_source
-from .effects.backplate_friction import plate_drag, plate_drag_exact, plate_moments
+from .effects.backplate_friction import (crossing_log_coefficient, plate_drag, plate_drag_exact,
+                                         plate_moments)
 from .effects.finite_carry import (carry_holds, carry_interval, carry_margin,
                                    release_state as carry_release_state)
 from .effects.impact_restitution import routh_stronge_impact
 
 __all__ = ['carry_holds', 'carry_interval', 'carry_margin', 'carry_release_state',
-           'composed_source', 'plate_drag', 'plate_drag_exact', 'plate_moments',
-           'routh_stronge_impact', 'sticking_impact']
+           'composed_source', 'crossing_log_coefficient', 'plate_drag', 'plate_drag_exact',
+           'plate_moments', 'routh_stronge_impact', 'sticking_impact']

@@ -385,6 +385,51 @@ def plate_drag_exact(vx, vy, om, phi, ou, ov, cu, cv, size, mom, coef, vreg):
 
 
 @njit
+def crossing_log_coefficient(vx, vy, om, phi, ou, ov, coef, k):
+    """
+    Return B = (fx, fy, tq): the drag is B ln|delta| plus a part smooth across edge k.
+
+    delta: the instantaneous centre's signed distance from outline edge k's line, where the
+    centre crosses the edge between its ends (at a vertex this does not hold). There
+    :func:`polar_moments`' logarithm of edge k holds -2 ln|delta| (ln(p^2) on one side, its
+    inverse on the other); times its factors (p, the foot, p^3) B is a polynomial in the
+    centre, of order delta^2 (the d^2 ln|d| bend). Along a flight that crosses at t_k,
+    ln|delta(t)| = ln|t - t_k| + a smooth function, so B is also the coefficient of
+    ln|t - t_k|: subtracted, the drag is smooth through the crossing, and B ln|t - t_k|
+    integrates in closed form. The Coulomb drag's (neither the creep's scale nor the slow-spin
+    series applies where the centre is on the outline).
+    """
+    c = math.cos(phi)
+    s = math.sin(phi)
+    inv = 1.0 / om
+    p0x = -(-s * vx + c * vy) * inv
+    p0y = (c * vx + s * vy) * inv
+    m = ou.shape[0]
+    area2 = 0.0
+    for j in range(m):
+        jn = (j + 1) % m
+        area2 += ou[j] * ov[jn] - ou[jn] * ov[j]
+    kn = (k + 1) % m
+    ax = ou[k] - p0x
+    ay = ov[k] - p0y
+    ex = ou[kn] - ou[k]
+    ey = ov[kn] - ov[k]
+    l2 = ex * ex + ey * ey
+    d = (ax * ey - ay * ex) / math.sqrt(l2)     # signed distance: the cross product a x b
+    w = (ax * ex + ay * ey) / l2
+    fx = ax - w * ex                            # the foot of p0 on the line, from p0
+    fy = ay - w * ey
+    mx = fy * d
+    my = -fx * d
+    m3 = -d * d * d / 3.0
+    sgn = coef * math.copysign(2.0, om) / area2
+    gx = -sgn * mx
+    gy = -sgn * my
+    tq = -sgn * (m3 + p0x * my - p0y * mx)
+    return c * gx - s * gy, s * gx + c * gy, tq
+
+
+@njit
 def body_force(vx, vy, om, phi, edge, prm):
     """Return the drag on the part moving at (vx, vy, om), at phi from rest on ``edge`` (hook)."""
     if prm.exact:
