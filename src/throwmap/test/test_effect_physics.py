@@ -397,10 +397,42 @@ def test_plate_drag_creeps_while_the_fastest_point_is_slower_than_v_reg():
                                 1.0, v_reg) == (0.0, 0.0, 0.0)
 
 
-@pytest.mark.parametrize('vertices', [
+# a triangle and an L (non-convex): the parts on which the drag's bend at an edge is measured
+CROSSING_PARTS = [
     [[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]],
     [[0.0, 0.0], [0.05, 0.0], [0.05, 0.02], [0.02, 0.02], [0.02, 0.05], [0.0, 0.05]],
-])
+]
+
+
+def drag_about_centre(vertices, om=5.0):
+    """
+    Return the outline (edge frame 0), size, 2 ln(10) / A, and the drag and log part at a centre.
+
+    drag(p0): plate_drag_exact (coef 1, no creep) of the part turning at om about the
+    instantaneous centre p0; log_part(p0, k): crossing_log_coefficient of edge k there.
+    """
+    from throwmap import Part
+    from throwmap.internal import crossing_log_coefficient, plate_drag_exact, plate_moments
+    part = Part(np.array(vertices, dtype=float))
+    ou, ov, cu, cv = part.outline_frames()
+    size = float(part.vertex_radius.max())
+    mom = plate_moments(ou, ov, size)
+
+    def velocity(p0):
+        # the centre p0 = z x v / om: v = om (p0y, -p0x)
+        return om * p0[1], -om * p0[0], om, 0.0
+
+    def drag(p0):
+        return np.array(plate_drag_exact(*velocity(p0), ou[0], ov[0], cu[0], cv[0], size,
+                                         mom[0], 1.0, 0.0))
+
+    def log_part(p0, k):
+        return np.array(crossing_log_coefficient(*velocity(p0), ou[0], ov[0], 1.0, k))
+
+    return ou[0], ov[0], size, 2.0 * math.log(10.0) / part.area, drag, log_part
+
+
+@pytest.mark.parametrize('vertices', CROSSING_PARTS)
 def test_plate_drag_bends_as_d2_log_d_where_the_centre_crosses_an_edge(vertices):
     """
     Check the drag's kink where the instantaneous centre crosses an outline edge.
@@ -411,44 +443,26 @@ def test_plate_drag_bends_as_d2_log_d_where_the_centre_crosses_an_edge(vertices)
     2 ln(10) / A per decade of d) and the force across it is smooth. This is why the series
     flight's error falls as the cube of its pieces' length (docs/accuracy.md).
     """
-    from throwmap import Part
-    from throwmap.internal import plate_drag_exact, plate_moments
-    part = Part(np.array(vertices, dtype=float))
-    ou, ov, cu, cv = part.outline_frames()
-    size = float(part.vertex_radius.max())
-    mom = plate_moments(ou, ov, size)
-    om = 5.0
-    per_decade = 2.0 * math.log(10.0) / part.area
-    for j in range(len(ou[0])):
-        jn = (j + 1) % len(ou[0])
-        t = np.array([ou[0][jn] - ou[0][j], ov[0][jn] - ov[0][j]])
+    ou, ov, size, per_decade, drag, _ = drag_about_centre(vertices)
+    for j in range(len(ou)):
+        jn = (j + 1) % len(ou)
+        t = np.array([ou[jn] - ou[j], ov[jn] - ov[j]])
         t /= np.hypot(*t)
         n = np.array([-t[1], t[0]])
-        mid = 0.5 * np.array([ou[0][j] + ou[0][jn], ov[0][j] + ov[0][jn]])
-
-        def force(d, mid=mid, n=n):
-            # the centre p0 = z x v / om at mid + d n: v = om (p0y, -p0x)
-            p0 = mid + d * n
-            gx, gy, _ = plate_drag_exact(om * p0[1], -om * p0[0], om, 0.0, ou[0], ov[0], cu[0],
-                                         cv[0], size, mom[0], 1.0, 0.0)
-            return np.array([gx, gy])
-
+        mid = 0.5 * np.array([ou[j] + ou[jn], ov[j] + ov[jn]])
         for side in (1.0, -1.0):
             bend = []
             for d in (1e-4 * size, 1e-5 * size):
                 h = d / 20.0
-                f2 = (force(side * (d + h)) - 2.0 * force(side * d)
-                      + force(side * (d - h))) / (h * h)
+                f2 = (drag(mid + side * (d + h) * n) - 2.0 * drag(mid + side * d * n)
+                      + drag(mid + side * (d - h) * n))[:2] / (h * h)
                 bend.append(f2)
             change = bend[1] - bend[0]
             assert abs(change @ t) == pytest.approx(per_decade, rel=0.01), (j, side)
             assert abs(change @ n) < 0.01 * per_decade, (j, side)
 
 
-@pytest.mark.parametrize('vertices', [
-    [[0.06, 0.0], [0.06, 0.08], [0.0, 0.0]],
-    [[0.0, 0.0], [0.05, 0.0], [0.05, 0.02], [0.02, 0.02], [0.02, 0.05], [0.0, 0.05]],
-])
+@pytest.mark.parametrize('vertices', CROSSING_PARTS)
 def test_the_drag_less_its_log_part_is_smooth_where_the_centre_crosses_an_edge(vertices):
     """
     Check crossing_log_coefficient: the drag less B ln|d| does not bend as d^2 ln|d|.
@@ -456,42 +470,29 @@ def test_the_drag_less_its_log_part_is_smooth_where_the_centre_crosses_an_edge(v
     The test above measures the bend of the force along the edge: 2 ln(10) / A per decade of
     d. With B ln|d| subtracted (B at the same centre) the second derivative of the force and
     of the torque changes by under 1 % of that between d = 1e-4 and 1e-5 of the part's size,
-    on both sides of every edge, at its middle and a quarter along; it fails if B is halved.
+    on both sides of every edge, at its middle and a quarter along; with half of B subtracted
+    half the bend is left (so the check can fail).
     """
-    from throwmap import Part
-    from throwmap.internal import crossing_log_coefficient, plate_drag_exact, plate_moments
-    part = Part(np.array(vertices, dtype=float))
-    ou, ov, cu, cv = part.outline_frames()
-    size = float(part.vertex_radius.max())
-    mom = plate_moments(ou, ov, size)
-    om = 5.0
-    per_decade = 2.0 * math.log(10.0) / part.area
-    n_edges = len(ou[0])
-
-    def smooth_part(p0, k, d, share):
-        # the centre p0 = z x v / om: v = om (p0y, -p0x)
-        v = (om * p0[1], -om * p0[0])
-        f = np.array(plate_drag_exact(*v, om, 0.0, ou[0], ov[0], cu[0], cv[0], size, mom[0],
-                                      1.0, 0.0))
-        b = np.array(crossing_log_coefficient(*v, om, 0.0, ou[0], ov[0], 1.0, k))
-        return f - share * b * math.log(abs(d))
-
+    ou, ov, size, per_decade, drag, log_part = drag_about_centre(vertices)
+    n_edges = len(ou)
+    scale = np.array([1.0, 1.0, 1.0 / size])        # the torque per unit length
     for share, bends in ((1.0, False), (0.5, True)):
         for k in range(n_edges):
             kn = (k + 1) % n_edges
-            a = np.array([ou[0][k], ov[0][k]])
-            e = np.array([ou[0][kn], ov[0][kn]]) - a
+            a = np.array([ou[k], ov[k]])
+            e = np.array([ou[kn], ov[kn]]) - a
             n = np.array([-e[1], e[0]]) / np.hypot(*e)
             for along in (0.5, 0.25):
                 for side in (1.0, -1.0):
                     change = []
                     for d in (1e-4 * size, 1e-5 * size):
                         h = d / 20.0
-                        at = [smooth_part(a + along * e + side * x * n, k, side * x, share)
-                              for x in (d + h, d, d - h)]
+                        at = []
+                        for x in (d + h, d, d - h):
+                            p0 = a + along * e + side * x * n
+                            at.append(drag(p0) - share * log_part(p0, k) * math.log(x))
                         change.append((at[0] - 2.0 * at[1] + at[2]) / (h * h))
                     step = np.abs(change[1] - change[0])
-                    scale = np.array([1.0, 1.0, 1.0 / size])    # the torque per unit length
                     if bends:
                         assert np.hypot(*step[:2]) > 0.4 * per_decade, (k, along, side)
                     else:
