@@ -47,7 +47,7 @@ from throwmap.jit import njit
 from throwmap.rk8 import A8, B8, C8, make_step
 from throwmap.scene import read_yaml
 from throwmap_testing import (force_scene, FORCE_SETS, hard_part_on_the_plate, PLATE,
-                              REFERENCE_KNOBS, TRIANGLE_SCENE)
+                              REFERENCE_KNOBS, TRIANGLE_SCENE, worst)
 
 
 def states(model, count, seed):
@@ -62,13 +62,6 @@ def case(request):
     model = force_scene(request.param, **REFERENCE_KNOBS).model
     e, r = states(model, 120, 5)
     return request.param, (e, r), model.f_batch(e, r)
-
-
-def worst(got, ref):
-    """Return (edges that differ, max abs dR over the rest) of two f_batch results."""
-    assert np.all(got['status'] == 0) and np.all(ref['status'] == 0)
-    same = got['edge'] == ref['edge']
-    return int(np.sum(~same)), float(np.max(np.abs(got['R'] - ref['R'])[same]))
 
 
 # ------------------------------------------------------------------------ the closed-form roll

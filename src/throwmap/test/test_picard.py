@@ -38,7 +38,7 @@ from throwmap.event_sim import arm_contact, lowest_approaching
 from throwmap.jit import njit
 from throwmap.picard import centre_edge, first_kink, make_flight, NODES, poly_at, sweep_source
 from throwmap_testing import (force_scene, FORCE_SETS, hard_part_on_the_plate, PLATE,
-                              REFERENCE_KNOBS)
+                              REFERENCE_KNOBS, worst)
 
 PICARD = {'flight_method': 'picard', 'flight_step': 0.08, 'flight_tol': 1e-6}
 
@@ -48,13 +48,6 @@ def states(model, count, seed):
     edges = rng.choice(model.part.stable_edges, count)
     lo = np.array([model.r_min(e) * 1.01 for e in edges])
     return edges, lo + rng.uniform(0, 1, count) * (0.28 - lo)
-
-
-def worst(got, ref):
-    """Return (edges that differ, max abs dR over the rest) of two f_batch results."""
-    assert np.all(got['status'] == 0) and np.all(ref['status'] == 0)
-    same = got['edge'] == ref['edge']
-    return int(np.sum(~same)), float(np.max(np.abs(got['R'] - ref['R'])[same]))
 
 
 @pytest.fixture(scope='module', params=sorted(FORCE_SETS))
@@ -82,6 +75,9 @@ def test_dense_motion_is_exact_for_polynomial_accelerations(n):
     h, q0, v0 = 0.07, 0.3, -1.2
     acc = tuple(float(np.polyval(coef[::-1], ci * h)) for ci in c)
     poly = dense(q0, v0, h, acc)
+    # the interpolant's Vandermonde inverse (condition 1.5e5 at 8 nodes) rounds the rate to
+    # about 1e-13 on some CPUs (AVX-512 BLAS kernels: 1.02e-13 seen); a wrong table is 1e-3 off
+    rate_tol = 1e-13 * max(1.0, np.linalg.cond(np.vander(c, n, increasing=True)) / 1e4)
     for s in (0.0, 0.13, 0.5, 0.87, 1.0, 1.2):
         t = s * h
         exact = q0 + v0 * t + sum(coef[k] * t ** (k + 2) / ((k + 1) * (k + 2))
@@ -89,7 +85,7 @@ def test_dense_motion_is_exact_for_polynomial_accelerations(n):
         dexact = v0 + sum(coef[k] * t ** (k + 1) / (k + 1) for k in range(n))
         q, dq = poly_at(poly, s)
         assert q == pytest.approx(exact, abs=1e-14)
-        assert dq / h == pytest.approx(dexact, abs=1e-13)
+        assert dq / h == pytest.approx(dexact, abs=rate_tol)
 
 
 @pytest.mark.parametrize('n', [3, NODES, 8])

@@ -70,6 +70,13 @@ def hard_part_on_the_plate(name, **accuracy):
     return Scene(data)
 
 
+def worst(got, ref):
+    """Return (edges that differ, max abs dR over the rest) of two f_batch results."""
+    assert np.all(got['status'] == 0) and np.all(ref['status'] == 0)
+    same = got['edge'] == ref['edge']
+    return int(np.sum(~same)), float(np.max(np.abs(got['R'] - ref['R'])[same]))
+
+
 def random_convex_vertices(rng, n_max=8, scale=0.05):
     """Return a random convex polygon (CCW) of 3..n_max corners around the origin."""
     while True:
