@@ -89,6 +89,48 @@ def test_dense_motion_is_exact_for_polynomial_accelerations(n):
 
 
 @pytest.mark.parametrize('n', [3, NODES, 8])
+@pytest.mark.parametrize('at_end', [False, True])
+def test_log_tables_integrate_a_log_term_exactly(n, at_end):
+    """
+    a(t) = P + Q ln|t - t_k| (P, Q polynomials of degree n - 1 in s = t / h, t_k a piece end).
+
+    The node values of a and of Q, through A1, A2 and log_tables' corrections, give the
+    integrals of a at the nodes and at the piece's end as 40-digit quadrature does, for two h
+    (ln h cancels); without the corrections they are off by about 1e-3 of a's scale.
+    """
+    import mpmath
+    from throwmap.picard import log_tables, tables
+    c, a1, a2, _ = tables(n)
+    w = 0.5 * np.polynomial.legendre.leggauss(n)[1]
+    d1, d2, e1, e2 = log_tables(n, at_end)
+    rng = np.random.default_rng(10 * n + at_end)
+    p, q = rng.normal(size=n), rng.normal(size=n)
+    mpmath.mp.dps = 40
+    # rounding: the interpolant's Vandermonde inverse (condition 1.5e5 at 8 nodes)
+    tol = 1e-13 * max(1.0, np.linalg.cond(np.vander(c, n, increasing=True)) / 1e4)
+    for h in (0.013, 0.4):
+        def acc(t, h=h):
+            s = t / h
+            log = mpmath.log(abs(t - (h if at_end else 0)))
+            return (sum(p[k] * s ** k for k in range(n))
+                    + sum(q[k] * s ** k for k in range(n)) * log)
+
+        nodes = c * h
+        a = np.array([float(acc(mpmath.mpf(float(t)))) for t in nodes])
+        b = np.array([sum(q[k] * ci ** k for k in range(n)) for ci in c])
+        for x, vel, pos in [(nodes[i], h * (a1[i] @ a + d1[i] @ b),
+                             h * h * (a2[i] @ a + d2[i] @ b)) for i in range(n)] + [
+                (h, h * (w @ a + e1 @ b), h * h * (w * (1 - c) @ a + e2 @ b))]:
+            x = mpmath.mpf(float(x))
+            exact_v = mpmath.quad(acc, [0, x])
+            exact_q = mpmath.quad(lambda t, x=x: (x - t) * acc(t), [0, x])
+            assert vel == pytest.approx(float(exact_v), abs=tol * h)
+            assert pos == pytest.approx(float(exact_q), abs=tol * h * h)
+        plain = h * (w @ a)
+        assert abs(plain - float(mpmath.quad(acc, [0, h]))) > 1e-6 * h
+
+
+@pytest.mark.parametrize('n', [3, NODES, 8])
 def test_increment_is_the_dense_motions_end(n):
     """increment(new, old, h^2): the end value and d/ds of dense(0, 0, h, new - old)."""
     space = generated(n)

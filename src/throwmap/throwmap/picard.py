@@ -96,6 +96,52 @@ def tables(n=NODES):
     return c, a1, a2, vinv
 
 
+def _log_moment(k, x):
+    """int_0^x s^k ln s ds (x > 0)."""
+    return x ** (k + 1) / (k + 1) * (math.log(x) - 1.0 / (k + 1))
+
+
+def _log_moment_end(k, x):
+    """int_0^x s^k ln(1 - s) ds (0 < x <= 1): (1 - u)^k expanded in u = 1 - s."""
+    total = 0.0
+    for m in range(k + 1):
+        coef = math.comb(k, m) * (-1.0) ** m
+        # int_{1-x}^{1} u^m ln u du
+        lo = 1.0 - x
+        f_lo = 0.0 if lo == 0.0 else _log_moment(m, lo)
+        total += coef * (_log_moment(m, 1.0) - f_lo)
+    return total
+
+
+def log_tables(n=NODES, at_end=False):
+    """
+    Return (D1, D2, E1, E2): a piece's corrections for a logarithmic acceleration term.
+
+    On a piece [0, h] with a(t) = G(t) + B(t) ln|t - t_k|, t_k at its start (``at_end``: at
+    its end), G and B smooth: interpolating G and B at the nodes (G_j = a_j - B_j ln|t_j -
+    t_k|) and integrating B's interpolant against the logarithm exactly gives, at node i,
+    int_0^{c_i h} a = h (A1 a + D1 B)_i and int_0^{c_i h} (c_i h - t) a = h^2 (A2 a + D2 B)_i,
+    and at the piece's end h (w . a + E1 . B), h^2 (w (1 - c) . a + E2 . B) (A1, A2, w:
+    :func:`tables`' and the Gauss weights). ln h cancels: the tables do not depend on h.
+    (The drag's B: throwmap.effects.backplate_friction.crossing_log_coefficient.)
+    """
+    c, a1, a2, vinv = tables(n)
+    w = 0.5 * np.polynomial.legendre.leggauss(n)[1]
+    mom = _log_moment_end if at_end else _log_moment
+    node_log = np.log(1.0 - c) if at_end else np.log(c)
+    l1 = np.zeros((n, n))
+    l2 = np.zeros((n, n))
+    for i, ci in enumerate(c):
+        for j in range(n):
+            l1[i, j] = sum(vinv[k, j] * mom(k, ci) for k in range(n))
+            l2[i, j] = sum(vinv[k, j] * (ci * mom(k, ci) - mom(k + 1, ci)) for k in range(n))
+    e1 = np.array([sum(vinv[k, j] * mom(k, 1.0) for k in range(n)) for j in range(n)])
+    e2 = np.array([sum(vinv[k, j] * (mom(k, 1.0) - mom(k + 1, 1.0)) for k in range(n))
+                   for j in range(n)])
+    return (l1 - a1 * node_log, l2 - a2 * node_log, e1 - w * node_log,
+            e2 - w * (1.0 - c) * node_log)
+
+
 def sweep_source(n=NODES):
     """
     Return the source of ``sweep`` and ``dense`` over n nodes (straight-line code).
