@@ -25,12 +25,15 @@ samples the drag along its motion can do that:
   (compiled, along real flights), i.e. how many evaluations the bar pays for if the rest of
   the throw cost nothing;
 * the need: how many evaluations the present default makes per throw (counted in pure Python
-  with numba off), and how many an adaptive Gauss-Kronrod quadrature (scipy's ``quad_vec``,
-  21 points a panel) takes for one sweep alone, the drag's double integral along the
+  with numba off), and how many one sweep alone takes, the drag's double integral along the
   ballistic flight to the contact, int_0^T (T - t) (fx, fy, size tq)(t) dt, to a given
-  absolute error in metres.
+  absolute error in metres: by adaptive Gauss-Kronrod (scipy's ``quad_vec``, 21 points a
+  panel) and by 5-node Gauss on equal pieces, each of the drag as it is and of the drag less
+  its logarithm where the instantaneous centre crosses the outline
+  (``crossing_log_coefficient``; subtracted everywhere, or corrected only on the pieces
+  that touch a crossing by ``picard.log_tables``).
 
-Prints figures; asserts nothing.
+Prints figures; asserts nothing. About 2 minutes.
 
     python bench/plate_floor.py [--states 30]
 """
