@@ -54,9 +54,14 @@ sys.path.insert(0, str(HERE))
 import accuracy_vs_time as avt  # noqa: E402
 from throwmap.effects.backplate_friction import plate_drag_exact  # noqa: E402
 from throwmap.internal import carry_release_state  # noqa: E402
+from throwmap import picard  # noqa: E402
 from throwmap.jit import njit  # noqa: E402
 
 TOLS = (1e-8, 1e-9, 1e-10)      # m: the sweep's double integral's absolute error
+# 5-node Gauss on [0, 1]: nodes, weights, and log_tables' end corrections (E1, E2) for a
+# logarithm at a piece's start (False) and end (True)
+GAUSS5 = (picard.tables(5)[0], 0.5 * np.polynomial.legendre.leggauss(5)[1],
+          {False: picard.log_tables(5)[2:], True: picard.log_tables(5, at_end=True)[2:]})
 
 
 @njit
@@ -106,33 +111,20 @@ def crossings(model, e, phi0, vx, vy, om, T, samples=2000):
     from scipy.optimize import brentq
     p = model.prm.backplate_friction
     ou, ov = p.OU[e], p.OV[e]
-    n = ou.shape[0]
 
-    def centre(t):
-        phi = phi0 + om * t
-        c, s = math.cos(phi), math.sin(phi)
-        vyt = vy + model.g * t
-        return -(-s * vx + c * vyt) / om, (c * vx + s * vyt) / om
-
-    def side(t, k):
-        px, py = centre(t)
-        kn = (k + 1) % n
-        return (ou[k] - px) * (ov[kn] - py) - (ov[k] - py) * (ou[kn] - px)
-
-    def along(t, k):
-        px, py = centre(t)
-        kn = (k + 1) % n
-        ex, ey = ou[kn] - ou[k], ov[kn] - ov[k]
-        return ((px - ou[k]) * ex + (py - ov[k]) * ey) / (ex * ex + ey * ey)
+    def side_along(t, k):
+        # om times (the side of edge k's line, the position along it) of the centre
+        bx, by = picard.body_velocity(vx, vy + model.g * t, phi0 + om * t)
+        return picard.centre_edge(bx, by, om, ou, ov, k)
 
     ts = np.linspace(0.0, T, samples + 1)
     out = []
-    for k in range(n):
-        sv = [side(t, k) for t in ts]
+    for k in range(ou.shape[0]):
+        sv = [side_along(t, k)[0] for t in ts]
         for i in range(samples):
             if sv[i] * sv[i + 1] < 0.0:
-                tk = brentq(side, ts[i], ts[i + 1], args=(k,), xtol=1e-15)
-                if 0.0 < along(tk, k) < 1.0:
+                tk = brentq(lambda t, k=k: side_along(t, k)[0], ts[i], ts[i + 1], xtol=1e-15)
+                if 0.0 < side_along(tk, k)[1] / om < 1.0:
                     out.append((tk, k))
     return out
 
@@ -145,10 +137,7 @@ def gauss_pieces(f, T, bounds_of, tol, ref, most=400, log_part=None, cross=()):
     ``cross``; a piece that starts or ends at t_k is corrected for B ln|t - t_k| by
     picard.log_tables, as a piece of the series flight would be (B costs no drag evaluation).
     """
-    from throwmap.picard import log_tables, tables
-    c = tables(5)[0]
-    w = 0.5 * np.polynomial.legendre.leggauss(5)[1]
-    corrections = {False: log_tables(5)[2:], True: log_tables(5, at_end=True)[2:]}
+    c, w, corrections = GAUSS5
     run = 0
     for n in range(1, most + 1):
         bounds = bounds_of(n)
@@ -214,6 +203,9 @@ def quadrature_counts(model, fl):
         def smooth(t):
             return drag(t) - log_part(t)
 
+        def ended_at_crossings(n):
+            return np.unique(np.r_[np.linspace(0.0, T, n + 1), at_cross])
+
         ref = quad_vec(lambda t: (T - t) * drag(t), 0.0, T, epsabs=1e-14, epsrel=0.0,
                        norm='max', limit=100000, points=at_cross or None)[0]
         logs = quad_vec(lambda t: (T - t) * log_part(t), 0.0, T, epsabs=1e-15, epsrel=0.0,
@@ -227,14 +219,11 @@ def quadrature_counts(model, fl):
             counts['gk less'][tol].append(b[2].neval)
             if tol == TOLS[-1]:
                 agree = max(agree, float(np.max(np.abs(ref - (b[0] + logs)))))
-            counts['gauss'][tol].append(gauss_pieces(
-                drag, T, lambda n: np.unique(np.r_[np.linspace(0.0, T, n + 1), at_cross]), tol,
-                ref))
+            counts['gauss'][tol].append(gauss_pieces(drag, T, ended_at_crossings, tol, ref))
             counts['gauss less'][tol].append(gauss_pieces(
                 smooth, T, lambda n: np.linspace(0.0, T, n + 1), tol, ref - logs))
             counts['gauss corrected'][tol].append(gauss_pieces(
-                drag, T, lambda n: np.unique(np.r_[np.linspace(0.0, T, n + 1), at_cross]), tol,
-                ref, log_part=coefficient, cross=cross))
+                drag, T, ended_at_crossings, tol, ref, log_part=coefficient, cross=cross))
     return counts, agree, n_cross
 
 

@@ -57,6 +57,15 @@ def case(request):
     return request.param, (e, r), model.f_batch(e, r)
 
 
+def rounding_tol(c, n):
+    """1e-13, times the interpolant's Vandermonde condition over 1e4 where that is larger.
+
+    Its inverse (condition 1.5e5 at 8 nodes) rounds to about 1e-13 on some CPUs (AVX-512 BLAS
+    kernels: 1.02e-13 seen); a wrong table is off by 1e-6 or more.
+    """
+    return 1e-13 * max(1.0, np.linalg.cond(np.vander(c, n, increasing=True)) / 1e4)
+
+
 def generated(n=NODES, rhs=None):
     space = {'rhs': rhs}
     exec(compile(sweep_source(n), '<test>', 'exec'), space)  # noqa: S102
@@ -75,9 +84,7 @@ def test_dense_motion_is_exact_for_polynomial_accelerations(n):
     h, q0, v0 = 0.07, 0.3, -1.2
     acc = tuple(float(np.polyval(coef[::-1], ci * h)) for ci in c)
     poly = dense(q0, v0, h, acc)
-    # the interpolant's Vandermonde inverse (condition 1.5e5 at 8 nodes) rounds the rate to
-    # about 1e-13 on some CPUs (AVX-512 BLAS kernels: 1.02e-13 seen); a wrong table is 1e-3 off
-    rate_tol = 1e-13 * max(1.0, np.linalg.cond(np.vander(c, n, increasing=True)) / 1e4)
+    rate_tol = rounding_tol(c, n)
     for s in (0.0, 0.13, 0.5, 0.87, 1.0, 1.2):
         t = s * h
         exact = q0 + v0 * t + sum(coef[k] * t ** (k + 2) / ((k + 1) * (k + 2))
@@ -96,7 +103,7 @@ def test_log_tables_integrate_a_log_term_exactly(n, at_end):
 
     The node values of a and of Q, through A1, A2 and log_tables' corrections, give the
     integrals of a at the nodes and at the piece's end as 40-digit quadrature does, for two h
-    (ln h cancels); without the corrections they are off by about 1e-3 of a's scale.
+    (ln h cancels); without the corrections the end's integral is off by more than 1e-6 h.
     """
     import mpmath
     from throwmap.picard import log_tables, tables
@@ -106,8 +113,7 @@ def test_log_tables_integrate_a_log_term_exactly(n, at_end):
     rng = np.random.default_rng(10 * n + at_end)
     p, q = rng.normal(size=n), rng.normal(size=n)
     mpmath.mp.dps = 40
-    # rounding: the interpolant's Vandermonde inverse (condition 1.5e5 at 8 nodes)
-    tol = 1e-13 * max(1.0, np.linalg.cond(np.vander(c, n, increasing=True)) / 1e4)
+    tol = rounding_tol(c, n)
     for h in (0.013, 0.4):
         def acc(t, h=h):
             s = t / h
