@@ -58,7 +58,8 @@ def case(request):
 
 
 def rounding_tol(c, n):
-    """1e-13, times the interpolant's Vandermonde condition over 1e4 where that is larger.
+    """
+    Return 1e-13, times the interpolant's Vandermonde condition over 1e4 where that is larger.
 
     Its inverse (condition 1.5e5 at 8 nodes) rounds to about 1e-13 on some CPUs (AVX-512 BLAS
     kernels: 1.02e-13 seen); a wrong table is off by 1e-6 or more.
