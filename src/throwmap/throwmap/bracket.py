@@ -24,11 +24,36 @@ instantaneous centre is on) is located by the Illinois variant of regula falsi
 Each is made over the function it brackets, as the rest of the simulator is made over its
 hooks: numba caches no function that takes another as an argument. The functions take their
 constants as one tuple, ``fn(tau, args)``, so that both inline into their callers.
+
+A walk toward a crossing steps as far as a lower bound proves safe (:func:`parabola_exit`).
 """
+
+import math
 
 from .jit import njit
 
 NO_EVENT = 0
+
+
+@njit(inline=True)
+def parabola_exit(f, d, bound):
+    """
+    Return how far in h > 0 the parabola f + d h - bound h^2 / 2 stays >= 0 (0: it falls at once).
+
+    A value f >= 0 with slope d whose second derivative stays above -``bound`` lies above that
+    parabola, so it cannot turn negative sooner: the safe step of a walk that must not step over
+    a crossing. Each sign of d has its own form, free of the cancellation the other one has
+    (f tiny against d^2 / bound loses the step to rounding in the other).
+    """
+    if f < 0.0:
+        return 0.0
+    root = math.sqrt(d * d + 2.0 * bound * f)
+    if d > 0.0:
+        return (d + root) / bound if bound > 0.0 else math.inf
+    den = root - d
+    if den > 0.0:
+        return 2.0 * f / den
+    return math.inf if f > 0.0 else 0.0     # d = 0 and f bound = 0: a constant
 
 
 def make_first_event(event_at):

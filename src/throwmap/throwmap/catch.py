@@ -29,7 +29,7 @@ settling rule (:func:`stays_on_edge`), and the jog/flip classifier (:func:`is_jo
 
 import math
 
-from .bracket import make_crossing
+from .bracket import make_crossing, parabola_exit
 from .jit import njit
 from .status import (ERR_SETTLE_CAP, EV_FLAT_LANDING, EV_FLIGHT_IMPACT, EV_LANDING,
                      EV_LIFTOFF, EV_TIP_FROM_REST, OK)
@@ -364,13 +364,6 @@ _cone_crossing = make_crossing(_cone_value)
 
 
 @njit
-def _safe_step(f, d, bound):
-    # The first zero of f + d h - bound h^2 / 2 (a lower bound of f, f > 0) in h > 0.
-    den = math.sqrt(d * d + 2.0 * bound * f) - d
-    return 2.0 * f / den if den > 0.0 else math.inf
-
-
-@njit
 def first_cone_exit(theta0, sd, length, energy_k, lp, inertia, g_abs, mu, floor, tol):
     """
     Return the first arc u in [0, length] where a roll leaves the cone |Ft| <= mu N, else -1.
@@ -404,10 +397,10 @@ def first_cone_exit(theta0, sd, length, energy_k, lp, inertia, g_abs, mu, floor,
         a = b
         fa = fb
         if finite:
-            h = min(_safe_step(mu * n - ft, sd * (mu * dn - dft), bound),
-                    _safe_step(mu * n + ft, sd * (mu * dn + dft), bound))
+            h = min(parabola_exit(mu * n - ft, sd * (mu * dn - dft), bound),
+                    parabola_exit(mu * n + ft, sd * (mu * dn + dft), bound))
         else:
-            h = _safe_step(n, sd * dn, bound)
+            h = parabola_exit(n, sd * dn, bound)
         # (at least a few ulps: a floor below them, a tiny roll_step, must not stall the walk)
         b = min(length, a + max(h, floor, 1e-15 * (1.0 + a)))
 

@@ -62,7 +62,7 @@ import math
 
 import numpy as np
 
-from .bracket import make_crossing, make_first_event
+from .bracket import make_crossing, make_first_event, parabola_exit
 from .jit import njit
 from .status import ERR_NONFINITE, ERR_SIM_CAP, OK
 
@@ -440,9 +440,7 @@ def safe_step(y, phi, vy, om, bu, bv, skip, acc):
             continue
         hk = max(y + s * bu[k] + c * bv[k], 0.0)
         uk = vy + om * (c * bu[k] - s * bv[k])
-        disc = uk * uk + 2.0 * acc * hk
-        tk = (uk + math.sqrt(disc)) / acc if uk > 0.0 else 2.0 * hk / (math.sqrt(disc) - uk)
-        best = min(best, tk)
+        best = min(best, parabola_exit(hk, uk, acc))
     return best
 
 
