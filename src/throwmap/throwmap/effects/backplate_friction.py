@@ -209,6 +209,32 @@ def plate_drag(vx, vy, om, phi, qu, qv, qw, coef, vreg):
     return coef * fx, coef * fy, coef * tq
 
 
+@njit(inline=True)
+def twice_area(ou, ov):
+    """Twice the outline's signed area (the shoelace sum)."""
+    m = ou.shape[0]
+    area2 = 0.0
+    for k in range(m):
+        kn = (k + 1) % m
+        area2 += ou[k] * ov[kn] - ou[kn] * ov[k]
+    return area2
+
+
+@njit(inline=True)
+def drag_about_centre(mx, my, m3, p0x, p0y, scale, om, area2, c, s):
+    """
+    Return the drag (fx, fy, torque) in the arm's frame from polar moments about the centre p0.
+
+    (mx, my, m3) as :func:`polar_moments` returns them (or a part of them), in the part's
+    frame, which is the arm's turned by phi (c, s its cosine and sine); ``scale`` the drag's
+    mu_p g_n. The field turns with om, so the moments' unit field takes its sign.
+    """
+    sgn = scale * math.copysign(2.0, om) / area2
+    gx = -sgn * mx
+    gy = -sgn * my
+    return c * gx - s * gy, s * gx + c * gy, -sgn * (m3 + p0x * my - p0y * mx)
+
+
 @njit
 def polar_moments(p0x, p0y, xs, ys):
     """
@@ -367,21 +393,12 @@ def plate_drag_exact(vx, vy, om, phi, ou, ov, cu, cv, size, mom, coef, vreg):
         ux, uy, tu = plate_drag_series(bx, by, om, size, mom)
         gx = -scale * ux
         gy = -scale * uy
-        tq = -scale * tu
-    else:
-        inv = 1.0 / om
-        p0x = -by * inv
-        p0y = bx * inv
-        area2 = 0.0
-        for k in range(m):
-            kn = (k + 1) % m
-            area2 += ou[k] * ov[kn] - ou[kn] * ov[k]
-        mx, my, m3 = polar_moments(p0x, p0y, ou, ov)
-        sgn = scale * math.copysign(2.0, om) / area2
-        gx = -sgn * mx
-        gy = -sgn * my
-        tq = -sgn * (m3 + p0x * my - p0y * mx)
-    return c * gx - s * gy, s * gx + c * gy, tq
+        return c * gx - s * gy, s * gx + c * gy, -scale * tu
+    inv = 1.0 / om
+    p0x = -by * inv
+    p0y = bx * inv
+    mx, my, m3 = polar_moments(p0x, p0y, ou, ov)
+    return drag_about_centre(mx, my, m3, p0x, p0y, scale, om, twice_area(ou, ov), c, s)
 
 
 @njit
@@ -404,12 +421,7 @@ def crossing_log_coefficient(vx, vy, om, phi, ou, ov, coef, k):
     inv = 1.0 / om
     p0x = -(-s * vx + c * vy) * inv
     p0y = (c * vx + s * vy) * inv
-    m = ou.shape[0]
-    area2 = 0.0
-    for j in range(m):
-        jn = (j + 1) % m
-        area2 += ou[j] * ov[jn] - ou[jn] * ov[j]
-    kn = (k + 1) % m
+    kn = (k + 1) % ou.shape[0]
     ax = ou[k] - p0x
     ay = ov[k] - p0y
     ex = ou[kn] - ou[k]
@@ -419,14 +431,8 @@ def crossing_log_coefficient(vx, vy, om, phi, ou, ov, coef, k):
     w = (ax * ex + ay * ey) / l2
     fx = ax - w * ex                            # the foot of p0 on the line, from p0
     fy = ay - w * ey
-    mx = fy * d
-    my = -fx * d
-    m3 = -d * d * d / 3.0
-    sgn = coef * math.copysign(2.0, om) / area2
-    gx = -sgn * mx
-    gy = -sgn * my
-    tq = -sgn * (m3 + p0x * my - p0y * mx)
-    return c * gx - s * gy, s * gx + c * gy, tq
+    return drag_about_centre(fy * d, -fx * d, -d * d * d / 3.0, p0x, p0y, coef, om,
+                             twice_area(ou, ov), c, s)
 
 
 @njit
@@ -442,12 +448,7 @@ def body_force(vx, vy, om, phi, edge, prm):
 def mean_distance(bu_p, bv_p, qu, qv, qw, ou, ov, exact):
     """<|r - P|>: the area average of the distance from P (exact, or by the quadrature)."""
     if exact:
-        m = ou.shape[0]
-        area2 = 0.0
-        for k in range(m):
-            kn = (k + 1) % m
-            area2 += ou[k] * ov[kn] - ou[kn] * ov[k]
-        return polar_moments(bu_p, bv_p, ou, ov)[2] / (0.5 * area2)
+        return polar_moments(bu_p, bv_p, ou, ov)[2] / (0.5 * twice_area(ou, ov))
     dmean = 0.0
     for k in range(qu.shape[0]):
         dx = qu[k] - bu_p
