@@ -334,6 +334,9 @@ def test_cli_json_and_files(tmp_path):
     assert set(d['figures']) >= {'bound', 'one-bit bound', 'fixed', 'open-loop', 'sensor-based'}
     assert len(d['per_start']['one_bit_bound']) == d['starts']
     assert d['one_bit_first_use']['240'] == 1
+    # a key per speed (the grid and the fixed design's 320.0027), each the speed to 1e-7
+    keys = sorted(d['one_bit_first_use'], key=float)
+    assert [float(k) for k in keys] == pytest.approx(sorted(d['speeds_deg']), rel=1e-9)
     assert d['figures']['fixed']['false_readies'] == 0
     assert (tmp_path / 'triangle_funnel.png').stat().st_size > 0
     policy = json.loads((tmp_path / 'triangle_funnel_policy.json').read_text())

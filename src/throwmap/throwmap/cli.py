@@ -784,8 +784,9 @@ def cmd_funnel(scene, args, out):
                'open_loop_speeds_deg': [None if k < 0 else math.degrees(s.speeds[k])
                                         for k in res.sequence[:50]],
                'safe_speeds_deg': [math.degrees(s.speeds[k]) for k in res.safe_speeds],
+               # keyed by speed in deg/s, to 10 digits: '%g' would join 120.0001 and 120.0002
                'one_bit_first_use': (None if res.one_bit is None else
-                                     {f'{math.degrees(w):g}': n for w, n in
+                                     {f'{math.degrees(w):.10g}': n for w, n in
                                       zip(s.speeds, res.one_bit.first_use)}),
                'per_start': {'edge': res.starts[0], 'R': res.starts[1],
                              'bound': res.bound, 'safe_speed_bound': res.safe_bound,
