@@ -305,6 +305,13 @@ def test_bad_speeds_are_refused_with_the_fix(speeds, capsys):
     assert err.count('\n') == 1 and '--speeds' in err and 'A:B:STEP' in err
 
 
+def test_a_range_has_the_speeds_it_counts():
+    assert np.degrees(F.parse_speeds('120:600:20')) == pytest.approx(np.arange(120, 601, 20))
+    assert np.degrees(F.parse_speeds('240:400:40')) == pytest.approx([240, 280, 320, 360, 400])
+    for a in ('1e15', '1e308'):         # A = B: one speed, however large
+        assert np.degrees(F.parse_speeds(f'{a}:{a}:1')) == pytest.approx([float(a)])
+
+
 def test_huge_ranges_and_cell_counts_are_refused_before_any_allocation(capsys):
     # 1e18 speeds: counted, not allocated.
     assert main(['funnel', TRIANGLE, '--speeds=1:1e9:1e-9', '--arm-length', '40']) == 2

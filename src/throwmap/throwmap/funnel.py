@@ -99,7 +99,9 @@ def parse_speeds(text):
         if count > MAX_SPEEDS:
             raise InputError('--speeds', f'{count} speeds: too many (each is a cell map)',
                              f'use a coarser STEP (at most {MAX_SPEEDS} speeds)')
-        deg = np.arange(a, b + 1e-9 * max(1.0, b), step)
+        # the counted speeds, not np.arange's: its padded end is a span of its own when A = B
+        # is huge (1e15:1e15:1 made a million speeds, 1e308 failed to allocate)
+        deg = a + step * np.arange(count)
     else:
         deg = np.array(sorted(set(parts)))
         if not deg.size or not np.all(np.isfinite(deg)) or np.any(deg <= 0):
