@@ -110,6 +110,10 @@ def test_plot_writes_pngs(tmp_path):
     (['throw', TRIANGLE, '--edge', '2', '--R', '0.01'], 'no dynamic grasp on edge 2'),
     (['throw', TRIANGLE, '--edge', '1'], '--edge and --R go together'),
     (['orbit', TRIANGLE, '--throws', '0'], '--throws must be >= 1'),
+    # 10^12 states would be 7 TiB: refused, not a MemoryError traceback
+    (['orbit', TRIANGLE, '--throws', str(10 ** 12)], '--throws must be at most 10,000,000'),
+    (['basin', TRIANGLE, '--radii', str(10 ** 9)], '--radii must be at most 100,000'),
+    (['plot', TRIANGLE, '--orbit-throws', str(10 ** 8)], '--orbit-throws must be at most'),
 ])
 def test_errors_exit_2_with_a_message(argv, words, capsys):
     code, _ = run(*argv)

@@ -940,11 +940,23 @@ def build_parser():
     return parser
 
 
+# The counts' upper ends, refused before anything is allocated: an orbit's states are kept
+# (16 bytes a throw: 160 MB at 10^7) and a basin's 10^5 radii per edge are finer than its plot.
+COUNT_LIMITS = {
+    'throws': (10_000_000, 'run a longer orbit in pieces, each from the last state'),
+    'radii': (100_000, 'a basin of more radii is not finer to see; give fewer'),
+    'orbit_throws': (10_000_000, 'plot fewer throws'),
+}
+
+
 def _positive(args):
-    for name in ('throws', 'radii', 'orbit_throws'):
+    for name, (most, fix) in COUNT_LIMITS.items():
         value = getattr(args, name, None)
+        flag = f'--{name.replace("_", "-")}'
         if value is not None and value < 1:
-            raise ThrowmapError(f'--{name.replace("_", "-")} must be >= 1, got {value}')
+            raise ThrowmapError(f'{flag} must be >= 1, got {value}')
+        if value is not None and value > most:
+            raise ThrowmapError(f'{flag} must be at most {most:,}, got {value:,}; {fix}')
 
 
 def main(argv=None, out=None):
