@@ -322,6 +322,14 @@ def test_huge_ranges_and_cell_counts_are_refused_before_any_allocation(capsys):
     assert '--cells: 20 to' in capsys.readouterr().err
 
 
+def test_an_arm_given_in_mm_is_named_as_the_likely_cause(capsys):
+    # 400 (mm meant, cm read): 2 cm cells, whose first cells escape at every speed
+    assert main(['funnel', TRIANGLE, '--speeds', '280,320', '--arm-length', '400']) == 2
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'the arm\'s end at 400 cm' in err
+    assert '--arm-length is in cm' in err and 'more --cells' in err
+
+
 def test_unknown_scene_and_missing_arm_are_refused(capsys):
     assert main(['funnel', str(SCENES / 'no_such_scene.yaml'), '--speeds', '120:600:20']) == 2
     err = capsys.readouterr().err

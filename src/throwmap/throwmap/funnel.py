@@ -573,9 +573,13 @@ def plan(scene, speeds, robust=0.005, cells=200, samples=5, radii_per_edge=20,
     starts = start_grid(scene, radii_per_edge)
     know0 = start_knowledge(system, starts)
     if not any(system.allowed(know0, k) for k in range(len(speeds))):
+        width = float(np.max((system.hi - system.lo) / system.m))
         raise InputError('--cells', 'every allowed speed may lose a part from the start cells '
-                         '(the first cells, at R_min itself, escape in the cell map)',
-                         'give more --cells (each then lies nearer R_min than the starts)')
+                         '(the first cells, at R_min itself, escape in the cell map); cells '
+                         f'are up to {width * 100:.3g} cm wide ({system.m} per edge up to '
+                         f"the arm's end at {system.arm_length * 100:.4g} cm)",
+                         'give more --cells (each then lies nearer R_min than the starts), or '
+                         "check the arm's length (--arm-length is in cm)")
     dist = full_knowledge_bound(system)
     cells0 = [system.cell(int(e), float(r)) for e, r in zip(*starts)]
     bound = dist[cells0]
