@@ -114,6 +114,10 @@ def test_plot_writes_pngs(tmp_path):
     (['orbit', TRIANGLE, '--throws', str(10 ** 12)], '--throws must be at most 10,000,000'),
     (['basin', TRIANGLE, '--radii', str(10 ** 9)], '--radii must be at most 100,000'),
     (['plot', TRIANGLE, '--orbit-throws', str(10 ** 8)], '--orbit-throws must be at most'),
+    # --out a file: refused before the work, for every command that writes there
+    (['plot', TRIANGLE, '--out', TRIANGLE], 'is a file, not a directory'),
+    (['design-search', TRIANGLE, '--out', TRIANGLE], 'is a file, not a directory'),
+    (['funnel', TRIANGLE, '--speeds', '320', '--out', TRIANGLE], 'is a file, not a directory'),
 ])
 def test_errors_exit_2_with_a_message(argv, words, capsys):
     code, _ = run(*argv)

@@ -499,10 +499,6 @@ def cmd_design(scene, args, out):
 
 def cmd_plot(scene, args, out):
     from .plots import plot_all
-    if os.path.exists(args.out) and not os.path.isdir(args.out):
-        # Checked before the analysis, which takes a while, rather than failing after it.
-        raise ThrowmapError(f'--out {args.out}: is a file, not a directory; give a directory '
-                            '(it is created if missing)')
     an = analyse(scene, grid_throws=args.throws + 1, progress=Progress('plot', args.quiet))
     edge, R = an.start
     orb = orbit(scene.model, edge, R, args.orbit_throws)
@@ -959,11 +955,20 @@ def _positive(args):
             raise ThrowmapError(f'{flag} must be at most {most:,}, got {value:,}; {fix}')
 
 
+def _out_directory(args):
+    # Checked before the work (a design search may take an hour), not when the files are written.
+    path = getattr(args, 'out', None)
+    if path and os.path.exists(path) and not os.path.isdir(path):
+        raise ThrowmapError(f'--out {path}: is a file, not a directory; give a directory '
+                            '(it is created if missing)')
+
+
 def main(argv=None, out=None):
     out = out or sys.stdout
     args = build_parser().parse_args(argv)
     try:
         _positive(args)
+        _out_directory(args)
         if args.command == 'design-search':
             _search_options(args)
         if args.command == 'design-search' and os.path.isdir(args.scene):
