@@ -326,7 +326,7 @@ def test_an_arm_given_in_mm_is_named_as_the_likely_cause(capsys):
     # 400 (mm meant, cm read): 2 cm cells, whose first cells escape at every speed
     assert main(['funnel', TRIANGLE, '--speeds', '280,320', '--arm-length', '400']) == 2
     err = capsys.readouterr().err
-    assert err.count('\n') == 1 and 'the arm\'s end at 400 cm' in err
+    assert err.count('\n') == 1 and "the arm's end at 400 cm" in err
     assert '--arm-length is in cm' in err and 'more --cells' in err
 
 
